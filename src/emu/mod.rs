@@ -1,0 +1,26 @@
+//! The module emulator: a plant (the snake's body and actuators) behind either the
+//! UDP module endpoints (`snake-emu`) or the in-process `SimBus`.
+//!
+//! The plant is a trait so the rigid-body physics of a later stage can replace the
+//! joint-space model without touching the network side.
+
+pub mod faults;
+pub mod module;
+pub mod plant;
+pub mod servo;
+pub mod server;
+
+use crate::protocol::{Command, Feedback};
+
+/// A simulated snake: N series-elastic modules and the world they touch.
+pub trait Plant: Send {
+    fn module_count(&self) -> usize;
+    /// Advance the simulation by `dt_s`. `commands[i]` is what module `i` is
+    /// driving right now (already `Command::LIMP` when its lifetime expired or its
+    /// strategy is off).
+    fn step(&mut self, dt_s: f64, commands: &[Command]);
+    /// Simulated time since start, s.
+    fn time_s(&self) -> f64;
+    /// Feedback of module `i` as its sensors would report it now.
+    fn feedback(&self, i: usize) -> Feedback;
+}

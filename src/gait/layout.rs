@@ -1,0 +1,48 @@
+//! Where the joints are: their plane (lateral / dorsal) and normalised arc length.
+
+/// Joint plane. Neighbouring joints alternate.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Plane {
+    Lateral,
+    Dorsal,
+}
+
+/// The body as the gaits see it. Joint 0 is nearest the head.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BodyLayout {
+    /// Plane of each joint.
+    pub planes: Vec<Plane>,
+    /// Arc length of each joint from the head, normalised by body length (0..1).
+    pub s: Vec<f64>,
+    /// Length of one module, m.
+    pub module_length_m: f64,
+}
+
+impl BodyLayout {
+    /// `n` modules of `module_length_m` whose joint 0 lies in `first`; joint `i` sits at
+    /// `s_i = (i + 1) / (n + 1)` (joints between modules, head and tail caps at the ends).
+    pub fn alternating(n: usize, first: Plane, module_length_m: f64) -> Self {
+        let planes = (0..n)
+            .map(|i| match (i % 2 == 0, first) {
+                (true, p) => p,
+                (false, Plane::Lateral) => Plane::Dorsal,
+                (false, Plane::Dorsal) => Plane::Lateral,
+            })
+            .collect();
+        let s = (0..n).map(|i| (i as f64 + 1.0) / (n as f64 + 1.0)).collect();
+        BodyLayout {
+            planes,
+            s,
+            module_length_m,
+        }
+    }
+
+    pub fn len(&self) -> usize {
+        self.planes.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.planes.is_empty()
+    }
+}

@@ -1,0 +1,3 @@
+//! TODO
+/// Blends between gaits (to be implemented).
+pub struct GaitSelector;

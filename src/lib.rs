@@ -1,0 +1,20 @@
+//! snaked: a real-time control daemon for modular series-elastic snake robots.
+//!
+//! Layout, one folder per concern:
+//! - [`protocol`]: the module network's wire format.
+//! - [`bus`]: the loop's view of the modules (UDP or in-process emulator).
+//! - [`emu`]: the module emulator (plant, module endpoints, faults).
+//! - [`gait`]: open-loop gaits and the selector that blends between them.
+//! - [`safety`]: the failsafe state machine.
+//! - [`rt`]: pacing, the 1 kHz loop, statistics, telemetry.
+//! - [`control`]: the JSON control socket.
+//! - [`daemon`]: configuration and wiring of the service.
+
+pub mod bus;
+pub mod control;
+pub mod daemon;
+pub mod emu;
+pub mod gait;
+pub mod protocol;
+pub mod rt;
+pub mod safety;

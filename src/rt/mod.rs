@@ -1,0 +1,9 @@
+//! The real-time side: pacing, the 1 kHz loop, its statistics and the messages
+//! and telemetry that connect it to the rest of the daemon.
+
+pub mod control_loop;
+pub mod messages;
+pub mod pacer;
+pub mod stats;
+pub mod sys;
+pub mod telemetry;

@@ -1,0 +1,195 @@
+//! Per-cycle statistics in fixed-bucket histograms: `Copy`, sized at compile
+//! time, so recording and publishing them never allocates.
+use serde::Serialize;
+
+/// Sub-buckets per power of two (2^3 = 8): a bucket's width is at most 1/8 of its value.
+const SUB_BITS: u32 = 3;
+const SUB: u64 = 1 << SUB_BITS;
+/// Values up to 2^40 ns (about 18 minutes) have their own bucket; larger ones land in the last.
+const MAX_MSB: u32 = 40;
+pub const BUCKETS: usize = (((MAX_MSB - SUB_BITS + 1) as u64) * SUB + SUB) as usize;
+
+/// A histogram of nanosecond values with log-linear buckets (HDR-style, 3 significant bits).
+#[derive(Clone, Copy)]
+pub struct Histogram {
+    counts: [u32; BUCKETS],
+    count: u64,
+    sum_ns: u64,
+    min_ns: u64,
+    max_ns: u64,
+}
+
+impl Default for Histogram {
+    fn default() -> Self {
+        Self {
+            counts: [0; BUCKETS],
+            count: 0,
+            sum_ns: 0,
+            min_ns: u64::MAX,
+            max_ns: 0,
+        }
+    }
+}
+
+fn bucket_of(v: u64) -> usize {
+    if v < SUB {
+        return v as usize;
+    }
+    let msb = 63 - v.leading_zeros();
+    if msb > MAX_MSB {
+        return BUCKETS - 1;
+    }
+    let shift = msb - SUB_BITS;
+    (((msb - SUB_BITS + 1) as u64) * SUB + ((v >> shift) & (SUB - 1))) as usize
+}
+
+/// Largest value that falls in bucket `i`.
+fn bucket_upper(i: usize) -> u64 {
+    let i = i as u64;
+    if i < SUB {
+        return i;
+    }
+    let octave = i / SUB - 1; // msb - SUB_BITS
+    let sub = i % SUB;
+    let shift = octave as u32;
+    (((SUB + sub + 1) << shift) - 1).max(0)
+}
+
+impl Histogram {
+    pub fn record(&mut self, v_ns: u64) {
+        let b = bucket_of(v_ns);
+        self.counts[b] = self.counts[b].saturating_add(1);
+        self.count += 1;
+        self.sum_ns = self.sum_ns.saturating_add(v_ns);
+        self.min_ns = self.min_ns.min(v_ns);
+        self.max_ns = self.max_ns.max(v_ns);
+    }
+
+    pub fn count(&self) -> u64 {
+        self.count
+    }
+
+    /// Value below which a fraction `q` (0..=1) of the samples lie: the upper edge of
+    /// the bucket that holds that rank, capped by the exact maximum.
+    pub fn quantile_ns(&self, q: f64) -> u64 {
+        if self.count == 0 {
+            return 0;
+        }
+        let rank = ((q.clamp(0.0, 1.0) * self.count as f64).ceil() as u64).max(1);
+        let mut seen = 0u64;
+        for (i, &c) in self.counts.iter().enumerate() {
+            seen += c as u64;
+            if seen >= rank {
+                return bucket_upper(i).min(self.max_ns);
+            }
+        }
+        self.max_ns
+    }
+
+    pub fn summary(&self) -> Summary {
+        let us = |ns: u64| ns as f64 / 1000.0;
+        Summary {
+            count: self.count,
+            mean_us: if self.count == 0 { 0.0 } else { us(self.sum_ns) / self.count as f64 },
+            min_us: if self.count == 0 { 0.0 } else { us(self.min_ns) },
+            p50_us: us(self.quantile_ns(0.5)),
+            p99_us: us(self.quantile_ns(0.99)),
+            p999_us: us(self.quantile_ns(0.999)),
+            max_us: us(self.max_ns),
+        }
+    }
+}
+
+/// A histogram as the socket reports it, µs.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct Summary {
+    pub count: u64,
+    pub mean_us: f64,
+    pub min_us: f64,
+    pub p50_us: f64,
+    pub p99_us: f64,
+    pub p999_us: f64,
+    pub max_us: f64,
+}
+
+/// Everything the loop measures about itself.
+#[derive(Clone, Copy, Default)]
+pub struct LoopStats {
+    pub cycles: u64,
+    /// |cycle start − deadline|.
+    pub period_error: Histogram,
+    /// Time from cycle start to commands sent.
+    pub compute: Histogram,
+    /// Age of the oldest module's newest feedback at the cycle's start.
+    pub feedback_age: Histogram,
+    /// Cycles whose work ran past the next deadline (those periods are skipped).
+    pub overruns: u64,
+    /// Periods skipped after overruns.
+    pub skipped_periods: u64,
+    /// Module-cycles in which a module sent no new feedback.
+    pub late_feedback: u64,
+}
+
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct StatsReport {
+    pub cycles: u64,
+    pub period_error: Summary,
+    pub compute: Summary,
+    pub feedback_age: Summary,
+    pub overruns: u64,
+    pub skipped_periods: u64,
+    pub late_feedback: u64,
+}
+
+impl LoopStats {
+    pub fn report(&self) -> StatsReport {
+        StatsReport {
+            cycles: self.cycles,
+            period_error: self.period_error.summary(),
+            compute: self.compute.summary(),
+            feedback_age: self.feedback_age.summary(),
+            overruns: self.overruns,
+            skipped_periods: self.skipped_periods,
+            late_feedback: self.late_feedback,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn buckets_are_monotonic_and_tight() {
+        let mut prev = 0;
+        for v in (0..5_000_000u64).step_by(997) {
+            let b = bucket_of(v);
+            assert!(b >= prev, "bucket order at {v}");
+            prev = b;
+            assert!(bucket_upper(b) >= v, "{v} above its bucket's upper edge");
+            assert!(bucket_upper(b) as f64 <= v as f64 * 1.125 + 1.0, "bucket too wide at {v}");
+        }
+    }
+
+    #[test]
+    fn quantiles_of_a_uniform_sample() {
+        let mut h = Histogram::default();
+        for v in 1..=100_000u64 {
+            h.record(v * 10);
+        }
+        let p50 = h.quantile_ns(0.5) as f64;
+        assert!((p50 - 500_000.0).abs() / 500_000.0 < 0.13, "p50 {p50}");
+        assert_eq!(h.quantile_ns(1.0), 1_000_000);
+        let s = h.summary();
+        assert_eq!(s.count, 100_000);
+        assert!((s.mean_us - 500.005).abs() < 1e-6);
+        assert_eq!(s.max_us, 1000.0);
+    }
+
+    #[test]
+    fn huge_values_land_in_the_last_bucket() {
+        let mut h = Histogram::default();
+        h.record(u64::MAX / 2);
+        assert_eq!(h.quantile_ns(0.5), u64::MAX / 2);
+    }
+}

@@ -1,0 +1,2 @@
+//! Safety logic: pure state machines with time as input.
+pub mod failsafe;
