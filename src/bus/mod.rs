@@ -2,6 +2,7 @@
 //! modules over UDP; `SimBus` steps an in-process emulator. The loop and the
 //! controllers cannot tell them apart.
 
+pub mod echo;
 pub mod sim;
 pub mod udp;
 

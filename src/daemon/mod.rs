@@ -1,2 +1,241 @@
 //! Wiring of the daemon: configuration, discovery, the loop thread, the socket
 //! server and the service manager.
+
+pub mod bus_setup;
+pub mod config;
+pub mod paths;
+pub mod service;
+
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::time::Duration;
+
+use anyhow::{Context, Result};
+
+use crate::control::server::{self, LoopHandle, ServerConfig};
+use crate::gait::{BodyLayout, GaitSelector, GaitTable};
+use crate::rt::control_loop::{ControlLoop, LoopParts};
+use crate::rt::pacer::{LockstepPacer, Pacer, RealTimePacer};
+use crate::rt::telemetry::{self, Snapshot, TelemetryReader};
+use crate::rt::{messages, sys};
+use crate::safety::failsafe::{Failsafe, FailsafeConfig};
+use config::{Config, Pacing, StartMode};
+
+/// What the command line chose, over the configuration file.
+#[derive(Debug, Clone, Default)]
+pub struct Overrides {
+    pub emulated: bool,
+    pub socket: Option<PathBuf>,
+    pub tcp_port: Option<u16>,
+    pub start: Option<StartMode>,
+    pub pacing: Option<Pacing>,
+}
+
+/// Apply the command line to the configuration. `--emulated` starts the gait at once
+/// unless `--start` says otherwise: the emulator has nothing to break.
+pub fn apply_overrides(cfg: &mut Config, o: &Overrides) {
+    if let Some(s) = &o.socket {
+        cfg.control.socket = s.clone();
+    }
+    if let Some(p) = o.tcp_port {
+        cfg.control.tcp_port = p;
+    }
+    if let Some(p) = o.pacing {
+        cfg.loop_.pacing = p;
+    }
+    cfg.gait.start = match (o.start, o.emulated) {
+        (Some(s), _) => s,
+        (None, true) => StartMode::Run,
+        (None, false) => cfg.gait.start,
+    };
+}
+
+fn gait_table(cfg: &Config) -> Result<GaitTable> {
+    let mut table = GaitTable::default();
+    for (kind, patch) in &cfg.gait.params {
+        let p = table
+            .get(*kind)
+            .patched(*kind, patch)
+            .with_context(|| format!("[gait.params.{}]", kind.name()))?;
+        *table.get_mut(*kind) = p;
+    }
+    Ok(table)
+}
+
+/// Run the daemon until SIGINT/SIGTERM (or a `Shutdown` request) has brought the
+/// robot to a safe stop.
+pub fn run(cfg: Config, emulated: bool) -> Result<()> {
+    let stop = Arc::new(AtomicBool::new(false));
+    {
+        let stop = stop.clone();
+        ctrlc::set_handler(move || stop.store(true, Ordering::Relaxed))
+            .context("installing the SIGINT/SIGTERM handler")?;
+    }
+
+    let period_ns = (1e9 / cfg.loop_.rate_hz).round() as u64;
+    let built = bus_setup::build(&cfg, emulated, period_ns)?;
+    let n = built.bus.module_count();
+    tracing::info!(modules = n, bus = built.kind, names = ?built.names, "group ready");
+    service::notify_status(&format!("group of {n} modules found"));
+
+    let layout = BodyLayout::alternating(n, cfg.body.first_joint_plane, cfg.body.module_length_m);
+    let table = gait_table(&cfg)?;
+    let selector = GaitSelector::new(
+        layout,
+        table,
+        cfg.gait.initial,
+        cfg.gait.blend_time_s,
+        cfg.gait.max_joint_speed_rad_s,
+    );
+    let failsafe = Failsafe::new(FailsafeConfig {
+        feedback_timeout_s: cfg.failsafe.feedback_timeout_s,
+        limp_after_s: cfg.failsafe.limp_after_s,
+        auto_resume: cfg.failsafe.auto_resume,
+        shutdown_hold_s: cfg.failsafe.shutdown_hold_s,
+    });
+    let pacer: Box<dyn Pacer> = match cfg.loop_.pacing {
+        Pacing::Realtime => Box::new(RealTimePacer::new(period_ns)),
+        Pacing::Lockstep => Box::new(LockstepPacer::new(
+            period_ns,
+            (cfg.loop_.lockstep_timeout_s * 1e9) as u64,
+        )),
+    };
+
+    let (req_tx, req_rx) = crossbeam_channel::bounded::<messages::Envelope>(cfg.control.channel_capacity);
+    let (ack_tx, ack_rx) = crossbeam_channel::bounded::<messages::Ack>(cfg.control.channel_capacity);
+    let (tel_writer, tel_reader) =
+        telemetry::channel(Snapshot::new(n, cfg.gait.initial, table, cfg.gait.blend_time_s));
+    let heartbeat = Arc::new(AtomicU64::new(0));
+
+    let server = server::start(
+        server_config(&cfg),
+        LoopHandle {
+            requests: req_tx,
+            acks: ack_rx,
+            telemetry: tel_reader.clone(),
+            info: server::DaemonInfo {
+                version: env!("CARGO_PKG_VERSION").to_owned(),
+                module_count: n,
+                module_names: built.names.clone(),
+                rate_hz: cfg.loop_.rate_hz,
+                bus: built.kind.to_owned(),
+                pacing: match cfg.loop_.pacing {
+                    Pacing::Realtime => "realtime",
+                    Pacing::Lockstep => "lockstep",
+                }
+                .to_owned(),
+            },
+        },
+    )
+    .context("starting the control socket")?;
+
+    let parts = LoopParts {
+        bus: built.bus,
+        pacer,
+        selector,
+        failsafe,
+        requests: req_rx,
+        acks: ack_tx,
+        telemetry: tel_writer,
+        heartbeat: heartbeat.clone(),
+        stop: stop.clone(),
+        velocity_feedforward: cfg.loop_.velocity_feedforward,
+        hold_at_start: cfg.gait.start == StartMode::Hold,
+    };
+    let rt = cfg.loop_.clone();
+    let loop_thread = std::thread::Builder::new()
+        .name("snaked-rt".into())
+        .spawn(move || {
+            apply_realtime_settings(&rt);
+            ControlLoop::new(parts).run()
+        })
+        .context("spawning the loop thread")?;
+
+    supervise(&heartbeat, &tel_reader, &loop_thread, n);
+
+    let report = loop_thread
+        .join()
+        .map_err(|_| anyhow::anyhow!("the control loop panicked"))?;
+    service::notify_stopping();
+    server.shutdown();
+    tracing::info!(
+        cycles = report.cycles,
+        period_error_p99_us = report.period_error.p99_us,
+        compute_p99_us = report.compute.p99_us,
+        overruns = report.overruns,
+        "stopped safely"
+    );
+    Ok(())
+}
+
+fn server_config(cfg: &Config) -> ServerConfig {
+    let socket = &cfg.control.socket;
+    ServerConfig {
+        unix_path: if socket.as_os_str().is_empty() {
+            None
+        } else if socket.as_os_str() == "auto" {
+            Some(paths::daemon_socket())
+        } else {
+            Some(socket.clone())
+        },
+        tcp_port: (cfg.control.tcp_port != 0).then_some(cfg.control.tcp_port),
+        max_line_bytes: cfg.control.max_line_bytes,
+        max_clients: cfg.control.max_clients,
+        ack_timeout: Duration::from_secs_f64(cfg.control.ack_timeout_s),
+        ..ServerConfig::default()
+    }
+}
+
+/// Each real-time setting is attempted; a refusal is a warning, not a failure.
+fn apply_realtime_settings(rt: &config::LoopConfig) {
+    if rt.lock_memory {
+        if let Err(e) = sys::lock_memory() {
+            tracing::warn!("mlockall refused ({e}); carrying on without locked memory");
+        }
+    }
+    if let Some(cpu) = rt.cpu {
+        if let Err(e) = sys::pin_to_cpu(cpu) {
+            tracing::warn!("pinning the loop to CPU {cpu} refused ({e}); carrying on unpinned");
+        }
+    }
+    if rt.sched_fifo_priority > 0 {
+        if let Err(e) = sys::set_fifo_priority(rt.sched_fifo_priority) {
+            tracing::warn!(
+                "SCHED_FIFO priority {} refused ({e}); carrying on with the default scheduler",
+                rt.sched_fifo_priority
+            );
+        }
+    }
+}
+
+/// The main thread while the loop runs: READY once the loop turns, watchdog pings
+/// while it keeps turning, and a log line for every change of mode or gait (the loop
+/// itself never logs).
+fn supervise(
+    heartbeat: &Arc<AtomicU64>,
+    telemetry: &TelemetryReader,
+    loop_thread: &std::thread::JoinHandle<crate::rt::stats::StatsReport>,
+    n: usize,
+) {
+    let mut ready = false;
+    let mut last = None;
+    let mut watchdog = service::Watchdog::new(heartbeat.clone());
+    while !loop_thread.is_finished() {
+        std::thread::sleep(Duration::from_millis(20));
+        if !ready && heartbeat.load(Ordering::Acquire) > 0 {
+            ready = true;
+            service::notify_ready(&format!("running {n} modules"));
+            tracing::info!(watchdog = watchdog.enabled(), "loop running; READY");
+        }
+        if ready && !watchdog.poll() {
+            tracing::error!("control loop stalled; withholding watchdog pings");
+        }
+        let snap = telemetry.latest();
+        let now = (snap.mode, snap.reason, snap.gait);
+        if last != Some(now) {
+            tracing::info!(mode = ?snap.mode, reason = ?snap.reason, gait = snap.gait.name(), t_s = snap.t_s, "state");
+            last = Some(now);
+        }
+    }
+}

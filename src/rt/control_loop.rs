@@ -1,1 +1,352 @@
-//! TODO
+//! The control loop: read → update → write, once per cycle.
+//!
+//! Nothing in [`ControlLoop::cycle`] allocates, locks or logs: buffers are sized
+//! in [`ControlLoop::new`], requests arrive through `try_recv`, answers and
+//! telemetry leave through `try_send` and a triple buffer. The daemon's other
+//! threads log what the telemetry shows.
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+
+use crossbeam_channel::{Receiver, Sender};
+
+use crate::bus::{Bus, GroupFeedback};
+use crate::gait::GaitSelector;
+use crate::protocol::Command;
+use crate::rt::messages::{Ack, Envelope, LoopRequest, Rejection};
+use crate::rt::pacer::{Cycle, Pacer};
+use crate::rt::stats::{LoopStats, StatsReport};
+use crate::rt::telemetry::TelemetryWriter;
+use crate::safety::failsafe::{Event, Failsafe, Health, Output};
+
+/// Requests applied per cycle at most, so a flood cannot stretch a cycle.
+const MAX_REQUESTS_PER_CYCLE: usize = 8;
+
+/// Everything the loop is built from.
+pub struct LoopParts {
+    pub bus: Box<dyn Bus>,
+    pub pacer: Box<dyn Pacer>,
+    pub selector: GaitSelector,
+    pub failsafe: Failsafe,
+    pub requests: Receiver<Envelope>,
+    pub acks: Sender<Ack>,
+    pub telemetry: TelemetryWriter,
+    /// Incremented every cycle; the watchdog pings systemd only while it moves.
+    pub heartbeat: Arc<AtomicU64>,
+    /// Set by the signal handler: the loop runs its safe stop and exits.
+    pub stop: Arc<AtomicBool>,
+    pub velocity_feedforward: bool,
+    /// Hold the measured pose after start-up instead of running the gait.
+    pub hold_at_start: bool,
+}
+
+/// Whether the loop goes on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Flow {
+    Continue,
+    Finished,
+}
+
+pub struct ControlLoop {
+    p: LoopParts,
+    group: GroupFeedback,
+    commands: Vec<Command>,
+    positions: Vec<f64>,
+    velocities: Vec<f64>,
+    measured: Vec<f64>,
+    held: Vec<f64>,
+    held_valid: bool,
+    stats: LoopStats,
+    last_module_time_us: Option<u64>,
+    applied: u64,
+    refused: u64,
+    stop_seen: bool,
+    started: bool,
+}
+
+impl ControlLoop {
+    pub fn new(parts: LoopParts) -> Self {
+        let n = parts.bus.module_count();
+        Self {
+            p: parts,
+            group: GroupFeedback::new(n),
+            commands: vec![Command::LIMP; n],
+            positions: vec![0.0; n],
+            velocities: vec![0.0; n],
+            measured: vec![0.0; n],
+            held: vec![0.0; n],
+            held_valid: false,
+            stats: LoopStats::default(),
+            last_module_time_us: None,
+            applied: 0,
+            refused: 0,
+            stop_seen: false,
+            started: false,
+        }
+    }
+
+    /// Run until the safe stop finishes; hands the modules back and returns the statistics.
+    pub fn run(mut self) -> StatsReport {
+        loop {
+            let cycle = self.p.pacer.next_cycle();
+            if self.cycle(&cycle) == Flow::Finished {
+                break;
+            }
+        }
+        self.p.bus.release();
+        self.stats.report()
+    }
+
+    /// Wait for the next cycle and run it (what `run` does, one cycle at a time).
+    pub fn step(&mut self) -> Flow {
+        let cycle = self.p.pacer.next_cycle();
+        self.cycle(&cycle)
+    }
+
+    /// Commands sent in the last cycle, head first.
+    pub fn commands(&self) -> &[Command] {
+        &self.commands
+    }
+
+    pub fn stats(&self) -> &LoopStats {
+        &self.stats
+    }
+
+    /// One cycle: read feedback, apply requests, run the failsafe and the gait,
+    /// write commands, record statistics and telemetry.
+    pub fn cycle(&mut self, c: &Cycle) -> Flow {
+        let started_ns = self.p.pacer.elapsed_ns();
+        let now_s = c.clock_ns as f64 * 1e-9;
+        let t_s = c.t_ns as f64 * 1e-9;
+
+        // Read.
+        let wait = self.p.pacer.feedback_wait(c, self.last_module_time_us);
+        if self.p.bus.receive(&mut self.group, c.clock_ns, wait).is_err() {
+            self.stats.bus_errors += 1;
+        }
+        let health = self.assess(c);
+
+        // Operator requests, at the cycle boundary.
+        if self.p.stop.load(Ordering::Relaxed) && !self.stop_seen {
+            self.stop_seen = true;
+            let _ = self.p.failsafe.request(now_s, Event::Shutdown);
+        }
+        for _ in 0..MAX_REQUESTS_PER_CYCLE {
+            let Ok(env) = self.p.requests.try_recv() else { break };
+            let result = self.apply(env.request, now_s, t_s, &health);
+            if result.is_ok() {
+                self.applied += 1;
+            } else {
+                self.refused += 1;
+            }
+            // A full ack queue means nobody is waiting any more; the client times out.
+            let _ = self.p.acks.try_send(Ack {
+                ticket: env.ticket,
+                result,
+            });
+        }
+
+        // Update.
+        let output = self.p.failsafe.update(now_s, &health);
+        let flow = match output {
+            Output::Resync => {
+                self.p.selector.resync(&self.measured, t_s);
+                self.p.failsafe.resynced(now_s);
+                if self.p.hold_at_start && !self.started {
+                    let _ = self.p.failsafe.request(now_s, Event::Hold);
+                    self.hold_commands();
+                } else {
+                    self.run_commands(t_s);
+                }
+                self.started = true;
+                Flow::Continue
+            }
+            Output::Run => {
+                self.run_commands(t_s);
+                Flow::Continue
+            }
+            Output::Hold => {
+                self.hold_commands();
+                Flow::Continue
+            }
+            Output::Limp => {
+                self.limp_commands();
+                Flow::Continue
+            }
+            Output::Finished => {
+                self.limp_commands();
+                Flow::Finished
+            }
+        };
+
+        // Write.
+        if self.p.bus.send(&self.commands).is_err() {
+            self.stats.bus_errors += 1;
+        }
+
+        // Measure and publish.
+        let compute_ns = self.p.pacer.elapsed_ns().saturating_sub(started_ns);
+        self.record(c, compute_ns);
+        self.publish(c);
+        self.p.heartbeat.fetch_add(1, Ordering::Release);
+        flow
+    }
+
+    /// Feedback health and the measured pose; also lockstep's notion of module time.
+    fn assess(&mut self, c: &Cycle) -> Health {
+        let mut oldest_ns = 0u64;
+        let mut never = false;
+        let mut non_finite = false;
+        let mut late = 0u64;
+        let mut min_module_time: Option<u64> = None;
+        for (i, m) in self.group.modules.iter().enumerate() {
+            match m.received_ns {
+                Some(r) => oldest_ns = oldest_ns.max(c.clock_ns.saturating_sub(r)),
+                None => never = true,
+            }
+            if !m.fresh {
+                late += 1;
+            }
+            let f = &m.feedback;
+            let finite = f.position_rad.is_finite()
+                && f.velocity_rad_s.is_finite()
+                && f.torque_nm.is_finite()
+                && f.accel_m_s2.iter().chain(&f.gyro_rad_s).all(|v| v.is_finite());
+            if m.received_ns.is_some() && !finite {
+                non_finite = true;
+            }
+            self.measured[i] = f.position_rad as f64;
+            min_module_time = Some(min_module_time.map_or(f.module_time_us, |t| t.min(f.module_time_us)));
+        }
+        if !never {
+            self.last_module_time_us = min_module_time;
+        }
+        self.stats.late_feedback += late;
+        self.stats
+            .feedback_age
+            .record(if never { c.clock_ns } else { oldest_ns });
+        Health {
+            oldest_feedback_age_s: if never { f64::INFINITY } else { oldest_ns as f64 * 1e-9 },
+            non_finite,
+        }
+    }
+
+    fn apply(&mut self, req: LoopRequest, now_s: f64, t_s: f64, _health: &Health) -> Result<(), Rejection> {
+        let fs = &mut self.p.failsafe;
+        match req {
+            LoopRequest::SetGait(kind) => {
+                // Setting a gait also arms a held or limp robot (never an e-stopped one).
+                if fs.mode() != crate::safety::failsafe::Mode::Running {
+                    fs.request(now_s, Event::Arm)?;
+                }
+                self.p.selector.set_gait(kind, t_s);
+                Ok(())
+            }
+            LoopRequest::SetParams(kind, patch) => self
+                .p
+                .selector
+                .set_params(kind, &patch, t_s)
+                .map_err(|_| Rejection::InvalidParams),
+            LoopRequest::SetBlendTime(s) => self
+                .p
+                .selector
+                .set_blend_time(s)
+                .map_err(|_| Rejection::InvalidParams),
+            LoopRequest::Hold => fs.request(now_s, Event::Hold),
+            LoopRequest::Limp => fs.request(now_s, Event::Limp),
+            LoopRequest::EStop => fs.request(now_s, Event::EStop),
+            LoopRequest::Arm => fs.request(now_s, Event::Arm),
+            LoopRequest::Shutdown => {
+                self.stop_seen = true;
+                fs.request(now_s, Event::Shutdown)
+            }
+        }
+    }
+
+    fn run_commands(&mut self, t_s: f64) {
+        self.held_valid = false;
+        self.p
+            .selector
+            .update(t_s, &mut self.positions, &mut self.velocities);
+        for i in 0..self.commands.len() {
+            let velocity = if self.p.velocity_feedforward {
+                self.velocities[i] as f32
+            } else {
+                f32::NAN
+            };
+            self.commands[i] = Command {
+                position_rad: self.positions[i] as f32,
+                velocity_rad_s: velocity,
+                torque_nm: f32::NAN,
+            };
+        }
+    }
+
+    /// Freeze the set-points: the last commanded ones when there are any, else the
+    /// measured pose (coming out of limp).
+    fn hold_commands(&mut self) {
+        if !self.held_valid {
+            for i in 0..self.commands.len() {
+                let last = self.commands[i].position_rad;
+                self.held[i] = if last.is_finite() { last as f64 } else { self.measured[i] };
+            }
+            self.held_valid = true;
+        }
+        for i in 0..self.commands.len() {
+            self.commands[i] = Command {
+                position_rad: self.held[i] as f32,
+                velocity_rad_s: 0.0,
+                torque_nm: f32::NAN,
+            };
+        }
+    }
+
+    fn limp_commands(&mut self) {
+        self.held_valid = false;
+        self.commands.fill(Command::LIMP);
+    }
+
+    fn record(&mut self, c: &Cycle, compute_ns: u64) {
+        let s = &mut self.stats;
+        s.cycles += 1;
+        s.period_error.record(c.lateness_ns);
+        s.compute.record(compute_ns);
+        if c.skipped > 0 {
+            s.overruns += 1;
+            s.skipped_periods += c.skipped;
+        }
+    }
+
+    fn publish(&mut self, c: &Cycle) {
+        let (group, commands, stats) = (&self.group, &self.commands, &self.stats);
+        let (selector, failsafe, bus) = (&self.p.selector, &self.p.failsafe, &self.p.bus);
+        let (applied, refused) = (self.applied, self.refused);
+        self.p.telemetry.write(|snap| {
+            snap.cycle = c.index;
+            snap.t_s = c.t_ns as f64 * 1e-9;
+            snap.mode = failsafe.mode();
+            snap.reason = failsafe.reason();
+            snap.gait = selector.active();
+            snap.blend_progress = selector.blend_progress();
+            snap.blend_time_s = selector.blend_time_s();
+            snap.params = *selector.table();
+            for (j, (m, cmd)) in snap.joints.iter_mut().zip(group.modules.iter().zip(commands)) {
+                j.setpoint_rad = cmd.position_rad as f64;
+                j.position_rad = m.feedback.position_rad as f64;
+                j.velocity_rad_s = m.feedback.velocity_rad_s as f64;
+                j.torque_nm = m.feedback.torque_nm as f64;
+                j.feedback_age_s = match m.received_ns {
+                    Some(r) => c.clock_ns.saturating_sub(r) as f64 * 1e-9,
+                    None => f64::INFINITY,
+                };
+            }
+            snap.stats = *stats;
+            snap.bus = bus.counters();
+            snap.requests_applied = applied;
+            snap.requests_refused = refused;
+        });
+    }
+}
+
+#[cfg(test)]
+#[path = "control_loop_tests.rs"]
+mod tests;

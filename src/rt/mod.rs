@@ -2,6 +2,7 @@
 //! and telemetry that connect it to the rest of the daemon.
 
 pub mod control_loop;
+pub mod harness;
 pub mod messages;
 pub mod pacer;
 pub mod stats;

@@ -128,6 +128,8 @@ pub struct LoopStats {
     pub skipped_periods: u64,
     /// Module-cycles in which a module sent no new feedback.
     pub late_feedback: u64,
+    /// Bus send or receive calls that failed (including lockstep timeouts).
+    pub bus_errors: u64,
 }
 
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
@@ -139,6 +141,7 @@ pub struct StatsReport {
     pub overruns: u64,
     pub skipped_periods: u64,
     pub late_feedback: u64,
+    pub bus_errors: u64,
 }
 
 impl LoopStats {
@@ -151,6 +154,7 @@ impl LoopStats {
             overruns: self.overruns,
             skipped_periods: self.skipped_periods,
             late_feedback: self.late_feedback,
+            bus_errors: self.bus_errors,
         }
     }
 }

@@ -1,0 +1,364 @@
+//! `snaked.toml`: every key has a documented default (see `config/snaked.toml`,
+//! which a test keeps identical to these defaults); unknown keys are rejected.
+use std::net::SocketAddr;
+use std::path::{Path, PathBuf};
+
+use serde::Deserialize;
+
+use crate::gait::{GaitKind, Plane};
+
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Config {
+    #[serde(rename = "loop")]
+    pub loop_: LoopConfig,
+    pub body: BodyConfig,
+    pub network: NetworkConfig,
+    pub failsafe: FailsafeSection,
+    pub gait: GaitSection,
+    pub control: ControlConfig,
+    pub emulator: EmulatorConfig,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Pacing {
+    Realtime,
+    Lockstep,
+}
+
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct LoopConfig {
+    pub rate_hz: f64,
+    pub pacing: Pacing,
+    pub lockstep_timeout_s: f64,
+    /// SCHED_FIFO priority of the loop thread, 1..=99; 0 leaves the scheduler alone.
+    pub sched_fifo_priority: i32,
+    /// CPU to pin the loop thread to; absent = no pinning.
+    pub cpu: Option<usize>,
+    pub lock_memory: bool,
+    /// Send the gait's joint velocities as feed-forward with the positions.
+    pub velocity_feedforward: bool,
+}
+
+impl Default for LoopConfig {
+    fn default() -> Self {
+        Self {
+            rate_hz: 1000.0,
+            pacing: Pacing::Realtime,
+            lockstep_timeout_s: 1.0,
+            sched_fifo_priority: 0,
+            cpu: None,
+            lock_memory: false,
+            velocity_feedforward: true,
+        }
+    }
+}
+
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct BodyConfig {
+    pub first_joint_plane: Plane,
+    pub module_length_m: f64,
+}
+
+impl Default for BodyConfig {
+    fn default() -> Self {
+        Self {
+            first_joint_plane: Plane::Lateral,
+            module_length_m: 0.064,
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum LookupBy {
+    All,
+    Family,
+    Names,
+    Macs,
+}
+
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct NetworkConfig {
+    pub bind: SocketAddr,
+    /// Where lookups go: "ip:port", "ip:first-last" port ranges, or broadcast addresses.
+    pub targets: Vec<String>,
+    pub lookup: LookupBy,
+    pub family: String,
+    /// Module names head first (lookup = "names").
+    pub names: Vec<String>,
+    /// MAC addresses "02:53:4e:00:00:01" head first (lookup = "macs").
+    pub macs: Vec<String>,
+    /// Modules the group must have; 0 accepts whatever answers.
+    pub expected_modules: usize,
+    pub discovery_timeout_s: f64,
+    pub feedback_rate_hz: f64,
+    pub command_lifetime_s: f64,
+}
+
+impl Default for NetworkConfig {
+    fn default() -> Self {
+        Self {
+            bind: SocketAddr::from(([127, 0, 0, 1], 0)),
+            targets: vec!["127.0.0.1:7000-7017".into()],
+            lookup: LookupBy::Family,
+            family: "SEA".into(),
+            names: vec![],
+            macs: vec![],
+            expected_modules: 18,
+            discovery_timeout_s: 2.0,
+            feedback_rate_hz: 1000.0,
+            command_lifetime_s: 0.05,
+        }
+    }
+}
+
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct FailsafeSection {
+    pub feedback_timeout_s: f64,
+    pub limp_after_s: f64,
+    pub auto_resume: bool,
+    pub shutdown_hold_s: f64,
+}
+
+impl Default for FailsafeSection {
+    fn default() -> Self {
+        Self {
+            feedback_timeout_s: 0.05,
+            limp_after_s: 0.5,
+            auto_resume: false,
+            shutdown_hold_s: 0.2,
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StartMode {
+    /// Run the initial gait as soon as feedback is healthy.
+    Run,
+    /// Hold the measured pose until the operator arms or sets a gait.
+    Hold,
+}
+
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct GaitSection {
+    pub initial: GaitKind,
+    pub start: StartMode,
+    pub blend_time_s: f64,
+    pub max_joint_speed_rad_s: f64,
+    /// Per-gait parameter overrides, e.g. `[gait.params.sidewinding]`.
+    pub params: std::collections::HashMap<GaitKind, crate::gait::ParamPatch>,
+}
+
+impl Default for GaitSection {
+    fn default() -> Self {
+        Self {
+            initial: GaitKind::Sidewinding,
+            start: StartMode::Hold,
+            blend_time_s: 2.0,
+            max_joint_speed_rad_s: 3.46,
+            params: Default::default(),
+        }
+    }
+}
+
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ControlConfig {
+    /// Unix socket path; "auto" = see `daemon::paths`; empty = no Unix socket.
+    pub socket: PathBuf,
+    /// TCP port on 127.0.0.1; 0 = no TCP listener.
+    pub tcp_port: u16,
+    pub max_line_bytes: usize,
+    pub max_clients: usize,
+    pub channel_capacity: usize,
+    pub ack_timeout_s: f64,
+}
+
+impl Default for ControlConfig {
+    fn default() -> Self {
+        Self {
+            socket: PathBuf::from("auto"),
+            tcp_port: 0,
+            max_line_bytes: 65536,
+            max_clients: 64,
+            channel_capacity: 64,
+            ack_timeout_s: 1.0,
+        }
+    }
+}
+
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct EmulatorConfig {
+    /// Modules of the in-process emulator (`--emulated`).
+    pub modules: usize,
+    pub seed: u64,
+}
+
+impl Default for EmulatorConfig {
+    fn default() -> Self {
+        Self { modules: 18, seed: 1 }
+    }
+}
+
+impl Default for Config {
+    fn default() -> Self {
+        Self {
+            loop_: LoopConfig::default(),
+            body: BodyConfig::default(),
+            network: NetworkConfig::default(),
+            failsafe: FailsafeSection::default(),
+            gait: GaitSection::default(),
+            control: ControlConfig::default(),
+            emulator: EmulatorConfig::default(),
+        }
+    }
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum ConfigError {
+    #[error("cannot read {path}: {source}")]
+    Read {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("{path}: {message}")]
+    Parse { path: PathBuf, message: String },
+    #[error("{path}: {key} = {value}: {why}")]
+    Invalid {
+        path: PathBuf,
+        key: &'static str,
+        value: String,
+        why: String,
+    },
+}
+
+impl Config {
+    pub fn load(path: &Path) -> Result<Config, ConfigError> {
+        let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Read {
+            path: path.to_owned(),
+            source,
+        })?;
+        Self::parse(&text, path)
+    }
+
+    /// Parse and validate; `path` only labels the messages.
+    pub fn parse(text: &str, path: &Path) -> Result<Config, ConfigError> {
+        let cfg: Config = toml::from_str(text).map_err(|e| ConfigError::Parse {
+            path: path.to_owned(),
+            message: e.to_string(),
+        })?;
+        cfg.validate(path)?;
+        Ok(cfg)
+    }
+
+    pub fn validate(&self, path: &Path) -> Result<(), ConfigError> {
+        let bad = |key: &'static str, value: String, why: &str| ConfigError::Invalid {
+            path: path.to_owned(),
+            key,
+            value,
+            why: why.to_owned(),
+        };
+        let range = |key: &'static str, v: f64, lo: f64, hi: f64| {
+            if v.is_finite() && v >= lo && v <= hi {
+                Ok(())
+            } else {
+                Err(bad(key, v.to_string(), &format!("must be in [{lo}, {hi}]")))
+            }
+        };
+        range("loop.rate_hz", self.loop_.rate_hz, 1.0, 10_000.0)?;
+        range("loop.lockstep_timeout_s", self.loop_.lockstep_timeout_s, 0.001, 60.0)?;
+        range("loop.sched_fifo_priority", self.loop_.sched_fifo_priority as f64, 0.0, 99.0)?;
+        range("body.module_length_m", self.body.module_length_m, 0.01, 1.0)?;
+        range("network.discovery_timeout_s", self.network.discovery_timeout_s, 0.01, 60.0)?;
+        range("network.feedback_rate_hz", self.network.feedback_rate_hz, 1.0, 2000.0)?;
+        range("network.command_lifetime_s", self.network.command_lifetime_s, 0.001, 10.0)?;
+        range("failsafe.feedback_timeout_s", self.failsafe.feedback_timeout_s, 0.001, 10.0)?;
+        range("failsafe.limp_after_s", self.failsafe.limp_after_s, 0.0, 60.0)?;
+        range("failsafe.shutdown_hold_s", self.failsafe.shutdown_hold_s, 0.0, 10.0)?;
+        range("gait.blend_time_s", self.gait.blend_time_s, 0.1, 30.0)?;
+        range("gait.max_joint_speed_rad_s", self.gait.max_joint_speed_rad_s, 0.1, 3.46)?;
+        range("control.max_line_bytes", self.control.max_line_bytes as f64, 256.0, 16.0 * 1024.0 * 1024.0)?;
+        range("control.max_clients", self.control.max_clients as f64, 1.0, 4096.0)?;
+        range("control.channel_capacity", self.control.channel_capacity as f64, 1.0, 65536.0)?;
+        range("control.ack_timeout_s", self.control.ack_timeout_s, 0.01, 60.0)?;
+        range("emulator.modules", self.emulator.modules as f64, 2.0, 64.0)?;
+        if self.network.targets.is_empty() {
+            return Err(bad("network.targets", "[]".into(), "needs at least one target"));
+        }
+        match self.network.lookup {
+            LookupBy::Names if self.network.names.is_empty() => {
+                return Err(bad("network.names", "[]".into(), "lookup = \"names\" needs names"));
+            }
+            LookupBy::Macs if self.network.macs.is_empty() => {
+                return Err(bad("network.macs", "[]".into(), "lookup = \"macs\" needs MACs"));
+            }
+            _ => {}
+        }
+        for m in &self.network.macs {
+            parse_mac(m).ok_or_else(|| bad("network.macs", m.clone(), "not a MAC like 02:53:4e:00:00:01"))?;
+        }
+        Ok(())
+    }
+}
+
+/// Parse "02:53:4e:00:00:01".
+pub fn parse_mac(s: &str) -> Option<[u8; 6]> {
+    let mut out = [0u8; 6];
+    let mut parts = s.split(':');
+    for b in &mut out {
+        *b = u8::from_str_radix(parts.next()?, 16).ok()?;
+    }
+    parts.next().is_none().then_some(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shipped_example_equals_the_defaults() {
+        let path = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/config/snaked.toml"));
+        let cfg = Config::load(path).expect("config/snaked.toml parses");
+        assert_eq!(cfg, Config::default(), "config/snaked.toml must document the defaults");
+    }
+
+    #[test]
+    fn unknown_keys_are_rejected_with_their_name() {
+        let err = Config::parse("[loop]\nrate_hz = 500\nspeed = 3\n", Path::new("x.toml")).unwrap_err();
+        let msg = err.to_string();
+        assert!(msg.contains("x.toml") && msg.contains("speed"), "{msg}");
+    }
+
+    #[test]
+    fn out_of_range_values_are_rejected_with_key_and_range() {
+        let err = Config::parse("[loop]\nrate_hz = 0.0\n", Path::new("x.toml")).unwrap_err();
+        assert!(err.to_string().contains("loop.rate_hz"), "{err}");
+        let err = Config::parse("[gait]\nblend_time_s = nan\n", Path::new("x.toml")).unwrap_err();
+        assert!(err.to_string().contains("gait.blend_time_s"), "{err}");
+    }
+
+    #[test]
+    fn wrong_types_and_bad_gait_names_are_rejected() {
+        assert!(Config::parse("[loop]\nrate_hz = \"fast\"\n", Path::new("x")).is_err());
+        assert!(Config::parse("[gait]\ninitial = \"moonwalk\"\n", Path::new("x")).is_err());
+        assert!(Config::parse("[gait.params.sidewinding]\nwobble = 1.0\n", Path::new("x")).is_err());
+    }
+
+    #[test]
+    fn macs_parse_strictly() {
+        assert_eq!(parse_mac("02:53:4e:00:00:0a"), Some([2, 0x53, 0x4e, 0, 0, 10]));
+        assert_eq!(parse_mac("02:53:4e:00:00"), None);
+        assert_eq!(parse_mac("02:53:4e:00:00:0a:01"), None);
+        let err = Config::parse("[network]\nlookup = \"macs\"\nmacs = [\"zz\"]\n", Path::new("x")).unwrap_err();
+        assert!(err.to_string().contains("network.macs"));
+    }
+}
