@@ -256,6 +256,7 @@ fn command_golden_bytes() {
         0x00, 0x00, 0x20, 0xc0, // -2.5
     ];
     let crc = crc32fast::hash(&want);
+    assert_eq!(crc, 0x5B7D_667E, "the value docs/protocol.md quotes");
     want.extend_from_slice(&crc.to_le_bytes());
     assert_eq!(&buf[..n], &want[..]);
     assert_eq!(n, 32);
