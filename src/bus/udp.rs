@@ -1,1 +1,278 @@
-//! TODO
+//! `UdpBus`: the loop's view of modules reached over UDP (real modules or
+//! `snake-emu`), protocol v1 (`docs/protocol.md`).
+//!
+//! Start-up (may allocate and block): [`parse_targets`] → [`discover`] →
+//! [`UdpBus::connect`] (Acquire, then Settings). Per cycle ([`Bus::send`],
+//! [`Bus::receive`]): no allocation, no lock, no blocking except the lockstep wait.
+//! One non-blocking socket talks to every module; modules are told apart by the
+//! source address of what they send.
+
+mod connect;
+mod discovery;
+mod net;
+mod rx;
+mod targets;
+
+#[cfg(test)]
+mod fake;
+#[cfg(test)]
+mod tests;
+
+use std::io;
+use std::net::{SocketAddr, UdpSocket};
+use std::time::{Duration, Instant};
+
+pub use connect::{ConnectError, FailReason, FailedModule};
+pub use discovery::{DiscoveryError, FoundModule, discover, format_mac};
+pub use net::default_bind;
+pub use targets::{MAX_RANGE_PORTS, TargetError, parse_targets};
+
+use super::{Bus, BusCounters, BusError, FeedbackWait, GroupFeedback, ModuleState};
+use crate::protocol::{
+    Command, MAGIC, MAX_DATAGRAM, Message, MsgType, Settings, VERSION, decode, encode,
+};
+use rx::Slot;
+
+/// A group of modules acquired under one session.
+pub struct UdpBus {
+    socket: UdpSocket,
+    session: u32,
+    /// Head first.
+    modules: Vec<FoundModule>,
+    /// Parallel to `modules`.
+    slots: Vec<Slot>,
+    settings: Settings,
+    tx_buf: [u8; MAX_DATAGRAM],
+    /// One byte more than the largest datagram, to see oversized ones.
+    rx_buf: [u8; MAX_DATAGRAM + 1],
+    /// Header seq of the last Command cycle (0 before the first: "none").
+    command_seq: u32,
+    /// Header seq of control requests (Acquire, Settings, Release).
+    request_seq: u32,
+    counters: BusCounters,
+    released: bool,
+}
+
+impl UdpBus {
+    /// Session this bus drives the modules with.
+    pub fn session(&self) -> u32 {
+        self.session
+    }
+
+    /// The modules, head first.
+    pub fn modules(&self) -> &[FoundModule] {
+        &self.modules
+    }
+
+    /// Settings every module acknowledged.
+    pub fn settings(&self) -> Settings {
+        self.settings
+    }
+
+    /// Local address of the bus socket (where feedback arrives).
+    pub fn local_addr(&self) -> io::Result<SocketAddr> {
+        self.socket.local_addr()
+    }
+
+    /// Header seq of the last Command cycle sent (0 before the first).
+    pub fn command_seq(&self) -> u32 {
+        self.command_seq
+    }
+
+    fn next_request_seq(&mut self) -> u32 {
+        self.request_seq = self.request_seq.wrapping_add(1);
+        self.request_seq
+    }
+
+    /// Encode `msg` once and send it to the modules selected by `to`; failures are
+    /// counted as send errors.
+    fn send_control(&mut self, msg: &Message, to: impl Fn(usize) -> bool) {
+        let seq = self.next_request_seq();
+        let len = encode(self.session, seq, msg, &mut self.tx_buf)
+            .expect("control messages are small and valid");
+        for (i, m) in self.modules.iter().enumerate() {
+            if to(i) && self.socket.send_to(&self.tx_buf[..len], m.addr).is_err() {
+                self.counters.send_errors += 1;
+            }
+        }
+    }
+
+    /// Receive until the socket is empty. Feedback goes to the slots; any other
+    /// well-formed datagram from a module is offered to `reply` (index, message),
+    /// which returns whether it wanted it; unwanted ones count as unexpected.
+    fn drain(&mut self, reply: &mut dyn FnMut(usize, Message) -> bool) -> io::Result<()> {
+        loop {
+            let (n, src) = match self.socket.recv_from(&mut self.rx_buf) {
+                Ok(r) => r,
+                Err(e) if e.kind() == io::ErrorKind::WouldBlock => return Ok(()),
+                Err(e) if net::is_transient(&e) => continue,
+                Err(e) => return Err(e),
+            };
+            if let Some((i, msg)) = self.classify(n, src)
+                && !reply(i, msg)
+            {
+                self.counters.unexpected += 1;
+            }
+        }
+    }
+
+    /// Validate one received datagram; handle feedback, hand back anything else that
+    /// came well-formed from a module of the group.
+    fn classify(&mut self, n: usize, src: SocketAddr) -> Option<(usize, Message)> {
+        let c = &mut self.counters;
+        if n > MAX_DATAGRAM {
+            c.bad_length += 1;
+            return None;
+        }
+        let d = &self.rx_buf[..n];
+        // A Lookup is never meant for the bus, and decoding one could allocate.
+        if n >= 4 && d[..2] == MAGIC && d[2] == VERSION && d[3] == MsgType::Lookup as u8 {
+            c.unexpected += 1;
+            return None;
+        }
+        let (header, msg) = match decode(d) {
+            Ok(ok) => ok,
+            Err(e) => {
+                rx::count_decode_error(c, e);
+                return None;
+            }
+        };
+        let Some(i) = self.modules.iter().position(|m| m.addr == src) else {
+            c.unexpected += 1;
+            return None;
+        };
+        match msg {
+            Message::Feedback(fb) if header.session == self.session => {
+                self.slots[i].offer(header.seq, fb, c);
+                None
+            }
+            Message::Feedback(_) => {
+                c.wrong_session += 1;
+                None
+            }
+            other => Some((i, other)),
+        }
+    }
+
+    /// Every module has reported feedback at or after `min_module_time_us`.
+    fn all_reached(&self, min_module_time_us: u64) -> bool {
+        self.slots
+            .iter()
+            .all(|s| s.last_seq.is_some() && s.newest.module_time_us >= min_module_time_us)
+    }
+
+    /// Hand feedback that arrived since the last call to the loop.
+    fn publish(&mut self, group: &mut GroupFeedback, now_ns: u64) {
+        for (slot, state) in self.slots.iter_mut().zip(group.modules.iter_mut()) {
+            if slot.pending {
+                slot.pending = false;
+                *state = ModuleState {
+                    feedback: slot.newest,
+                    received_ns: Some(now_ns),
+                    fresh: true,
+                };
+            }
+        }
+    }
+}
+
+impl Bus for UdpBus {
+    fn module_count(&self) -> usize {
+        self.modules.len()
+    }
+
+    fn send(&mut self, commands: &[Command]) -> Result<(), BusError> {
+        if commands.len() != self.modules.len() {
+            return Err(BusError::WrongCount {
+                expected: self.modules.len(),
+                got: commands.len(),
+            });
+        }
+        // 0 means "no command yet" in feedback: skip it on wrap.
+        self.command_seq = self.command_seq.wrapping_add(1).max(1);
+        for (m, cmd) in self.modules.iter().zip(commands) {
+            let sent = encode(
+                self.session,
+                self.command_seq,
+                &Message::Command(*cmd),
+                &mut self.tx_buf,
+            )
+            .ok()
+            .and_then(|len| self.socket.send_to(&self.tx_buf[..len], m.addr).ok());
+            match sent {
+                Some(_) => self.counters.commands_sent += 1,
+                // Would block, unreachable, or an infinite set-point (not encodable).
+                None => self.counters.send_errors += 1,
+            }
+        }
+        Ok(())
+    }
+
+    fn receive(
+        &mut self,
+        group: &mut GroupFeedback,
+        now_ns: u64,
+        wait: FeedbackWait,
+    ) -> Result<(), BusError> {
+        if group.len() != self.modules.len() {
+            return Err(BusError::WrongCount {
+                expected: self.modules.len(),
+                got: group.len(),
+            });
+        }
+        for m in &mut group.modules {
+            m.fresh = false;
+        }
+        self.drain(&mut |_, _| false)?;
+        if let FeedbackWait::Lockstep {
+            min_module_time_us,
+            timeout_ns,
+        } = wait
+        {
+            let deadline = net::deadline_after(Duration::from_nanos(timeout_ns));
+            while !self.all_reached(min_module_time_us) {
+                let now = Instant::now();
+                if now >= deadline {
+                    self.publish(group, now_ns);
+                    return Err(BusError::LockstepTimeout);
+                }
+                net::wait_readable(&self.socket, deadline - now)?;
+                self.drain(&mut |_, _| false)?;
+            }
+        }
+        self.publish(group, now_ns);
+        Ok(())
+    }
+
+    fn counters(&self) -> BusCounters {
+        self.counters
+    }
+
+    /// Send Release to every module (once; also done on drop). Fire and forget: a
+    /// lost Release is covered by the modules' release timeout.
+    fn release(&mut self) {
+        if !self.released {
+            self.released = true;
+            self.send_control(&Message::Release, |_| true);
+        }
+    }
+}
+
+impl std::fmt::Debug for UdpBus {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("UdpBus")
+            .field("local_addr", &self.socket.local_addr().ok())
+            .field("session", &self.session)
+            .field("modules", &self.modules)
+            .field("settings", &self.settings)
+            .field("command_seq", &self.command_seq)
+            .field("counters", &self.counters)
+            .finish_non_exhaustive()
+    }
+}
+
+impl Drop for UdpBus {
+    fn drop(&mut self) {
+        self.release();
+    }
+}

@@ -1,0 +1,237 @@
+//! Start-up handshake of the bus: Acquire every module, then Settings.
+use std::fmt;
+use std::io;
+use std::net::SocketAddr;
+use std::time::{Duration, Instant};
+
+use super::{FoundModule, UdpBus, net};
+use crate::bus::{Bus, BusCounters};
+use crate::protocol::{MAX_DATAGRAM, Message, NO_SESSION, Settings};
+
+/// Valid feedback rates, Hz (docs/protocol.md §3.5).
+const FEEDBACK_RATE_RANGE_HZ: std::ops::RangeInclusive<f32> = 1.0..=2000.0;
+/// Valid command lifetimes, s (docs/protocol.md §3.5).
+const COMMAND_LIFETIME_RANGE_S: std::ops::RangeInclusive<f32> = 0.001..=10.0;
+/// Longest pause between resends of an unanswered request.
+const MAX_RESEND: Duration = Duration::from_millis(100);
+
+/// One module that failed the handshake, and why.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FailedModule {
+    pub name: String,
+    pub addr: SocketAddr,
+    pub reason: FailReason,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub enum FailReason {
+    /// Did not answer before the timeout.
+    NoAnswer,
+    /// Refused the Acquire: another session owns it.
+    OwnedBy(u32),
+    /// Acknowledged other settings than those sent (it refused them).
+    KeptSettings(Settings),
+}
+
+impl fmt::Display for FailedModule {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{} at {}: ", self.name, self.addr)?;
+        match self.reason {
+            FailReason::NoAnswer => write!(f, "no answer"),
+            FailReason::OwnedBy(s) => write!(f, "owned by session {s:#010x}"),
+            FailReason::KeptSettings(s) => write!(
+                f,
+                "refused the settings, kept {} Hz / {} s / {:?}",
+                s.feedback_rate_hz, s.command_lifetime_s, s.strategy
+            ),
+        }
+    }
+}
+
+fn list(failed: &[FailedModule]) -> String {
+    let parts: Vec<String> = failed.iter().map(ToString::to_string).collect();
+    parts.join("; ")
+}
+
+/// Why [`UdpBus::connect`] failed. Modules acquired before the failure are released.
+#[derive(Debug, thiserror::Error)]
+pub enum ConnectError {
+    #[error("bus socket: {0}")]
+    Io(#[from] io::Error),
+    #[error("no modules to connect to")]
+    NoModules,
+    #[error("session 0 is reserved (\"no session\")")]
+    NoSession,
+    #[error("two modules share the address {0}")]
+    DuplicateAddress(SocketAddr),
+    #[error("invalid settings: {0}")]
+    InvalidSettings(&'static str),
+    #[error("could not acquire {} of {total} modules: {}", .failed.len(), list(.failed))]
+    Acquire {
+        failed: Vec<FailedModule>,
+        total: usize,
+    },
+    #[error("settings not in force on {} of {total} modules: {}", .failed.len(), list(.failed))]
+    Settings {
+        failed: Vec<FailedModule>,
+        total: usize,
+    },
+}
+
+fn check_settings(s: &Settings) -> Result<(), ConnectError> {
+    if !FEEDBACK_RATE_RANGE_HZ.contains(&s.feedback_rate_hz) {
+        return Err(ConnectError::InvalidSettings(
+            "feedback rate outside 1..=2000 Hz",
+        ));
+    }
+    if !COMMAND_LIFETIME_RANGE_S.contains(&s.command_lifetime_s) {
+        return Err(ConnectError::InvalidSettings(
+            "command lifetime outside 0.001..=10 s",
+        ));
+    }
+    Ok(())
+}
+
+/// Bit-exact, as the module echoes what it holds.
+fn same_settings(a: &Settings, b: &Settings) -> bool {
+    a.feedback_rate_hz.to_bits() == b.feedback_rate_hz.to_bits()
+        && a.command_lifetime_s.to_bits() == b.command_lifetime_s.to_bits()
+        && a.strategy == b.strategy
+}
+
+impl UdpBus {
+    /// Acquire every module of `found` (head first) under `session`, then put
+    /// `settings` in force on each. One socket bound to `bind` (e.g. `127.0.0.1:0`,
+    /// see [`super::default_bind`]) talks to them all; it is where the modules will
+    /// stream feedback. Unanswered or refused requests are resent (at most every
+    /// 100 ms) until `timeout`, which applies to each of the two phases.
+    ///
+    /// Fails naming every module that refused (with its owner session) or did not
+    /// answer; anything acquired by then is released again.
+    pub fn connect(
+        found: &[FoundModule],
+        settings: Settings,
+        bind: SocketAddr,
+        session: u32,
+        timeout: Duration,
+    ) -> Result<UdpBus, ConnectError> {
+        if found.is_empty() {
+            return Err(ConnectError::NoModules);
+        }
+        if session == NO_SESSION {
+            return Err(ConnectError::NoSession);
+        }
+        for (i, m) in found.iter().enumerate() {
+            if found[..i].iter().any(|o| o.addr == m.addr) {
+                return Err(ConnectError::DuplicateAddress(m.addr));
+            }
+        }
+        check_settings(&settings)?;
+        let n = found.len();
+        let mut bus = UdpBus {
+            socket: net::open(bind, false)?,
+            session,
+            modules: found.to_vec(),
+            slots: vec![Default::default(); n],
+            settings,
+            tx_buf: [0; MAX_DATAGRAM],
+            rx_buf: [0; MAX_DATAGRAM + 1],
+            command_seq: 0,
+            request_seq: 0,
+            counters: BusCounters::default(),
+            // Nothing to release until something is acquired.
+            released: true,
+        };
+
+        let mut owners = vec![None; n];
+        let granted = bus.handshake(&Message::Acquire, timeout, &mut |i, msg| match msg {
+            Message::AcquireReply(r) => {
+                owners[i] = Some(r.owner_session);
+                // A refused module is asked again: its owner may time out meanwhile.
+                Some(r.granted)
+            }
+            _ => None,
+        })?;
+        bus.released = false;
+        if granted.iter().any(|g| !g) {
+            let failed = bus.failures(&granted, |i| match owners[i] {
+                Some(owner) => FailReason::OwnedBy(owner),
+                None => FailReason::NoAnswer,
+            });
+            bus.send_control(&Message::Release, |i| granted[i]);
+            bus.released = true;
+            return Err(ConnectError::Acquire { failed, total: n });
+        }
+
+        let mut in_force = vec![None; n];
+        let answered = bus.handshake(
+            &Message::Settings(settings),
+            timeout,
+            &mut |i, msg| match msg {
+                Message::SettingsAck(s) => {
+                    in_force[i] = Some(s);
+                    Some(true)
+                }
+                _ => None,
+            },
+        )?;
+        let ok: Vec<bool> = in_force
+            .iter()
+            .map(|s| s.is_some_and(|s| same_settings(&s, &settings)))
+            .collect();
+        if ok.iter().any(|o| !o) {
+            let failed = bus.failures(&ok, |i| match in_force[i] {
+                Some(s) if answered[i] => FailReason::KeptSettings(s),
+                _ => FailReason::NoAnswer,
+            });
+            bus.release();
+            return Err(ConnectError::Settings { failed, total: n });
+        }
+        Ok(bus)
+    }
+
+    /// Send `request` to every module until each has answered so that `on_reply`
+    /// says it is done, or `timeout` passes. `on_reply(i, msg)` returns `None` for a
+    /// message that is not an answer to this request, else whether module `i` is done.
+    /// Feedback arriving meanwhile is kept for the loop. Returns who is done.
+    fn handshake(
+        &mut self,
+        request: &Message,
+        timeout: Duration,
+        on_reply: &mut dyn FnMut(usize, Message) -> Option<bool>,
+    ) -> io::Result<Vec<bool>> {
+        let mut done = vec![false; self.modules.len()];
+        let resend = (timeout / 4).min(MAX_RESEND);
+        let deadline = net::deadline_after(timeout);
+        let mut next_send = Instant::now();
+        loop {
+            let now = Instant::now();
+            if done.iter().all(|&d| d) || now >= deadline {
+                return Ok(done);
+            }
+            if now >= next_send {
+                self.send_control(request, |i| !done[i]);
+                next_send = now + resend;
+            }
+            net::wait_readable(&self.socket, next_send.min(deadline) - now)?;
+            self.drain(&mut |i, msg| match on_reply(i, msg) {
+                None => false,
+                Some(d) => {
+                    done[i] |= d;
+                    true
+                }
+            })?;
+        }
+    }
+
+    fn failures(&self, ok: &[bool], reason: impl Fn(usize) -> FailReason) -> Vec<FailedModule> {
+        (0..self.modules.len())
+            .filter(|&i| !ok[i])
+            .map(|i| FailedModule {
+                name: self.modules[i].announce.name.to_string(),
+                addr: self.modules[i].addr,
+                reason: reason(i),
+            })
+            .collect()
+    }
+}
