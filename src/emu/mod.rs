@@ -7,6 +7,7 @@
 pub mod faults;
 pub mod module;
 pub mod plant;
+pub mod recorder;
 pub mod servo;
 pub mod server;
 

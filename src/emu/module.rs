@@ -324,6 +324,12 @@ impl Module {
         self.fresh_command = false;
     }
 
+    /// True when settings were just acknowledged and one feedback should go out at
+    /// once (lockstep sends nothing else outside a step).
+    pub fn feedback_requested(&self) -> bool {
+        self.owner.is_some() && self.feedback_now
+    }
+
     /// True when an owned module should send feedback now (its rate schedule is due,
     /// or settings were just acknowledged).
     pub fn feedback_due(&self, sim_s: f64) -> bool {
