@@ -30,7 +30,11 @@ impl Running {
         let stop = Arc::new(AtomicBool::new(false));
         let flag = stop.clone();
         let handle = std::thread::spawn(move || server.run(&flag).unwrap());
-        Self { addrs, stop, handle }
+        Self {
+            addrs,
+            stop,
+            handle,
+        }
     }
 
     fn stop(self) -> ServerCounters {
@@ -47,7 +51,8 @@ struct Client {
 impl Client {
     fn new() -> Self {
         let sock = UdpSocket::bind("127.0.0.1:0").unwrap();
-        sock.set_read_timeout(Some(Duration::from_millis(20))).unwrap();
+        sock.set_read_timeout(Some(Duration::from_millis(20)))
+            .unwrap();
         Self { sock, seq: 0 }
     }
 
@@ -85,15 +90,15 @@ impl Client {
         None
     }
 
-    /// Newest feedback of the module at `from` collected over `within`.
+    /// Every feedback from the module at `from` received during `within`.
     fn feedback_from(&self, from: SocketAddr, within: Duration) -> Vec<(Header, Feedback)> {
         let end = Instant::now() + within;
         let mut out = Vec::new();
         while Instant::now() < end {
-            if let Some((a, h, Message::Feedback(f))) = self.recv(Duration::from_millis(10)) {
-                if a == from {
-                    out.push((h, f));
-                }
+            if let Some((a, h, Message::Feedback(f))) = self.recv(Duration::from_millis(10))
+                && a == from
+            {
+                out.push((h, f));
             }
         }
         out
@@ -104,7 +109,13 @@ impl Client {
         let (from, h, msg) = self.reply().expect("acquire reply");
         assert_eq!(from, to);
         assert_eq!(h.session, S);
-        assert_eq!(msg, Message::AcquireReply(AcquireReply { granted: true, owner_session: S }));
+        assert_eq!(
+            msg,
+            Message::AcquireReply(AcquireReply {
+                granted: true,
+                owner_session: S
+            })
+        );
     }
 
     fn settings(&mut self, to: SocketAddr, s: Settings) {
@@ -144,11 +155,17 @@ fn realtime_protocol_end_to_end() {
     // Lookup → announce; a filter that does not match gets no answer.
     c.send(m1, 0, &Message::Lookup(LookupFilter::All));
     let (_, _, msg) = c.reply().expect("announce");
-    let Message::Announce(a) = msg else { panic!("{msg:?}") };
+    let Message::Announce(a) = msg else {
+        panic!("{msg:?}")
+    };
     assert_eq!(a.name.as_str(), "module-02");
     assert_eq!(a.family.as_str(), "SEA");
     assert_eq!(a.owner_session, 0);
-    c.send(m1, 0, &Message::Lookup(LookupFilter::Family(Name::new("X5").unwrap())));
+    c.send(
+        m1,
+        0,
+        &Message::Lookup(LookupFilter::Family(Name::new("X5").unwrap())),
+    );
     assert!(c.recv(Duration::from_millis(200)).is_none());
 
     // Acquire and configure.
@@ -171,8 +188,16 @@ fn realtime_protocol_end_to_end() {
     let held = c.feedback_from(m1, Duration::from_millis(30));
     let (_, f) = *held.last().expect("feedback while commanded");
     assert!((f.position_rad - 0.3).abs() < 0.02, "{}", f.position_rad);
-    assert!(f.torque_nm > 1.5, "holding against the obstacle: {}", f.torque_nm);
-    assert!(f.last_command_seq + 2 >= last_seq, "{} vs {last_seq}", f.last_command_seq);
+    assert!(
+        f.torque_nm > 1.5,
+        "holding against the obstacle: {}",
+        f.torque_nm
+    );
+    assert!(
+        f.last_command_seq + 2 >= last_seq,
+        "{} vs {last_seq}",
+        f.last_command_seq
+    );
 
     // Stop commanding: after the lifetime the module goes limp and the obstacle wins.
     let after = c.feedback_from(m1, Duration::from_millis(400));
@@ -221,7 +246,10 @@ fn lockstep_advances_one_step_per_command_round() {
     let mut acks = 0;
     let mut initial = Vec::new();
     while acks < 2 || initial.len() < 2 {
-        match c.recv(Duration::from_secs(2)).expect("ack and initial feedback") {
+        match c
+            .recv(Duration::from_secs(2))
+            .expect("ack and initial feedback")
+        {
             (_, _, Message::SettingsAck(got)) => {
                 assert_eq!(got, s);
                 acks += 1;
@@ -241,8 +269,12 @@ fn lockstep_advances_one_step_per_command_round() {
         c.send(b, S, &Message::Command(Command::position(0.1)));
         let mut got = Vec::new();
         while got.len() < 2 {
-            let (from, _, msg) = c.recv(Duration::from_secs(2)).expect("feedback after the round");
-            let Message::Feedback(f) = msg else { panic!("{msg:?}") };
+            let (from, _, msg) = c
+                .recv(Duration::from_secs(2))
+                .expect("feedback after the round");
+            let Message::Feedback(f) = msg else {
+                panic!("{msg:?}")
+            };
             got.push((from, f.module_time_us));
         }
         got.sort();
@@ -272,11 +304,21 @@ fn silenced_module_answers_nothing_and_loss_drops_feedback() {
     let emu = Running::start(config, exact_plant(2));
     let mut c = Client::new();
     c.send(emu.addrs[0], 0, &Message::Lookup(LookupFilter::All));
-    assert!(c.recv(Duration::from_millis(200)).is_none(), "silent module answered");
+    assert!(
+        c.recv(Duration::from_millis(200)).is_none(),
+        "silent module answered"
+    );
     // Module 1 answers (replies are never dropped) but all its feedback is lost.
     c.acquire(emu.addrs[1]);
-    assert!(c.recv(Duration::from_millis(200)).is_none(), "feedback got through");
+    assert!(
+        c.recv(Duration::from_millis(200)).is_none(),
+        "feedback got through"
+    );
     let counters = emu.stop();
     assert_eq!(counters.dropped_silent, 1);
-    assert!(counters.dropped_feedback_loss > 50, "{}", counters.dropped_feedback_loss);
+    assert!(
+        counters.dropped_feedback_loss > 50,
+        "{}",
+        counters.dropped_feedback_loss
+    );
 }

@@ -205,7 +205,14 @@ mod tests {
     #[test]
     fn parse_silence() {
         let s: Silence = "3@2.5".parse().unwrap();
-        assert_eq!(s, Silence { module: 3, start_s: 2.5, duration_s: None });
+        assert_eq!(
+            s,
+            Silence {
+                module: 3,
+                start_s: 2.5,
+                duration_s: None
+            }
+        );
         let s: Silence = "0@1+0.5".parse().unwrap();
         assert_eq!(s.duration_s, Some(0.5));
         for bad in ["", "3", "x@1", "1@", "1@2+", "1@-1", "1@nan", "1@1+-2"] {
@@ -254,11 +261,42 @@ mod tests {
 
     #[test]
     fn bad_configs_refused() {
-        assert!(Faults::new(FaultConfig { loss_pct: 101.0, ..FaultConfig::default() }, 1).is_err());
-        assert!(Faults::new(FaultConfig { delay_s: -1.0, ..FaultConfig::default() }, 1).is_err());
+        assert!(
+            Faults::new(
+                FaultConfig {
+                    loss_pct: 101.0,
+                    ..FaultConfig::default()
+                },
+                1
+            )
+            .is_err()
+        );
+        assert!(
+            Faults::new(
+                FaultConfig {
+                    delay_s: -1.0,
+                    ..FaultConfig::default()
+                },
+                1
+            )
+            .is_err()
+        );
         let silences = vec!["4@0".parse().unwrap()];
-        let err = Faults::new(FaultConfig { silences, ..FaultConfig::default() }, 4).unwrap_err();
-        assert_eq!(err, FaultError::NoSuchModule { module: 4, modules: 4 });
+        let err = Faults::new(
+            FaultConfig {
+                silences,
+                ..FaultConfig::default()
+            },
+            4,
+        )
+        .unwrap_err();
+        assert_eq!(
+            err,
+            FaultError::NoSuchModule {
+                module: 4,
+                modules: 4
+            }
+        );
     }
 
     #[test]

@@ -8,8 +8,9 @@ pub mod faults;
 pub mod module;
 pub mod plant;
 pub mod recorder;
-pub mod servo;
+pub mod scenario;
 pub mod server;
+pub mod servo;
 
 use crate::protocol::{Command, Feedback};
 

@@ -16,7 +16,7 @@
 use std::net::SocketAddr;
 
 use crate::protocol::{
-    Announce, AcquireReply, Command, ControlStrategy, Feedback, Header, LookupFilter, Mac, Message,
+    AcquireReply, Announce, Command, ControlStrategy, Feedback, Header, LookupFilter, Mac, Message,
     NO_SESSION, Name, Settings,
 };
 
@@ -243,8 +243,7 @@ impl Module {
                             self.settings = *s;
                             // One feedback right away (lockstep start), then the new rate.
                             self.feedback_now = true;
-                            self.next_feedback_s =
-                                now.sim_s + 1.0 / f64::from(s.feedback_rate_hz);
+                            self.next_feedback_s = now.sim_s + 1.0 / f64::from(s.feedback_rate_hz);
                         } else {
                             self.counters.settings_refused += 1;
                         }

@@ -24,14 +24,29 @@ fn hdr(msg: &Message, session: u32, seq: u32) -> Header {
     }
 }
 
-fn send(m: &mut Module, t: f64, from: u16, session: u32, seq: u32, msg: Message) -> Option<Outgoing> {
-    m.handle(ModuleTime::both(t), addr(from), &hdr(&msg, session, seq), &msg)
+fn send(
+    m: &mut Module,
+    t: f64,
+    from: u16,
+    session: u32,
+    seq: u32,
+    msg: Message,
+) -> Option<Outgoing> {
+    m.handle(
+        ModuleTime::both(t),
+        addr(from),
+        &hdr(&msg, session, seq),
+        &msg,
+    )
 }
 
 fn acquired(t: f64) -> Module {
     let mut m = module();
     let r = send(&mut m, t, 9000, S, 1, Message::Acquire).unwrap();
-    assert!(matches!(r.message, Message::AcquireReply(AcquireReply { granted: true, .. })));
+    assert!(matches!(
+        r.message,
+        Message::AcquireReply(AcquireReply { granted: true, .. })
+    ));
     m
 }
 
@@ -70,7 +85,9 @@ fn lookup_filters() {
         let r = r.unwrap_or_else(|| panic!("{f:?} did not answer"));
         assert_eq!(r.dest, addr(5555));
         assert_eq!(r.seq, 9);
-        let Message::Announce(a) = r.message else { panic!() };
+        let Message::Announce(a) = r.message else {
+            panic!()
+        };
         assert_eq!(a.name, id.name);
         assert_eq!(a.owner_session, NO_SESSION);
     }
@@ -87,8 +104,18 @@ fn lookup_filters() {
 #[test]
 fn announce_reports_owner() {
     let mut m = acquired(0.0);
-    let r = send(&mut m, 0.1, 5555, NO_SESSION, 1, Message::Lookup(LookupFilter::All)).unwrap();
-    let Message::Announce(a) = r.message else { panic!() };
+    let r = send(
+        &mut m,
+        0.1,
+        5555,
+        NO_SESSION,
+        1,
+        Message::Lookup(LookupFilter::All),
+    )
+    .unwrap();
+    let Message::Announce(a) = r.message else {
+        panic!()
+    };
     assert_eq!(a.owner_session, S);
 }
 
@@ -98,15 +125,33 @@ fn acquire_rules() {
     assert_eq!(m.owner_session(), S);
     // Same session again: granted.
     let r = send(&mut m, 0.5, 9000, S, 2, Message::Acquire).unwrap();
-    assert_eq!(r.message, Message::AcquireReply(AcquireReply { granted: true, owner_session: S }));
+    assert_eq!(
+        r.message,
+        Message::AcquireReply(AcquireReply {
+            granted: true,
+            owner_session: S
+        })
+    );
     // Another session while the owner is alive: denied, told who owns it.
     let r = send(&mut m, 1.4, 9001, OTHER, 1, Message::Acquire).unwrap();
     assert_eq!(r.session, OTHER);
-    assert_eq!(r.message, Message::AcquireReply(AcquireReply { granted: false, owner_session: S }));
+    assert_eq!(
+        r.message,
+        Message::AcquireReply(AcquireReply {
+            granted: false,
+            owner_session: S
+        })
+    );
     assert_eq!(m.counters().acquire_denied, 1);
     // Owner silent for more than 1 s (last heard at 0.5): taken over.
     let r = send(&mut m, 1.6, 9001, OTHER, 2, Message::Acquire).unwrap();
-    assert_eq!(r.message, Message::AcquireReply(AcquireReply { granted: true, owner_session: OTHER }));
+    assert_eq!(
+        r.message,
+        Message::AcquireReply(AcquireReply {
+            granted: true,
+            owner_session: OTHER
+        })
+    );
     assert_eq!(m.owner_session(), OTHER);
     // Session 0 can never own a module.
     assert!(send(&mut m, 1.7, 9002, NO_SESSION, 1, Message::Acquire).is_none());
@@ -117,19 +162,37 @@ fn acquire_rules() {
 fn commands_keep_the_session_alive() {
     let mut m = acquired(0.0);
     for i in 1..=30 {
-        send(&mut m, f64::from(i) * 0.1, 9000, S, i as u32, Message::Command(Command::position(0.1)));
+        send(
+            &mut m,
+            f64::from(i) * 0.1,
+            9000,
+            S,
+            i as u32,
+            Message::Command(Command::position(0.1)),
+        );
     }
     let r = send(&mut m, 3.05, 9001, OTHER, 1, Message::Acquire).unwrap();
-    assert!(matches!(r.message, Message::AcquireReply(AcquireReply { granted: false, .. })));
+    assert!(matches!(
+        r.message,
+        Message::AcquireReply(AcquireReply { granted: false, .. })
+    ));
 }
 
 #[test]
 fn release_timeout_uses_the_wall_clock() {
     let mut m = acquired(0.0);
-    let late_wall = ModuleTime { sim_s: 0.001, wall_s: 2.0 };
+    let late_wall = ModuleTime {
+        sim_s: 0.001,
+        wall_s: 2.0,
+    };
     let msg = Message::Acquire;
-    let r = m.handle(late_wall, addr(9001), &hdr(&msg, OTHER, 1), &msg).unwrap();
-    assert!(matches!(r.message, Message::AcquireReply(AcquireReply { granted: true, .. })));
+    let r = m
+        .handle(late_wall, addr(9001), &hdr(&msg, OTHER, 1), &msg)
+        .unwrap();
+    assert!(matches!(
+        r.message,
+        Message::AcquireReply(AcquireReply { granted: true, .. })
+    ));
 }
 
 #[test]
@@ -145,7 +208,14 @@ fn feedback_goes_to_the_acquirer() {
 #[test]
 fn release_frees_stops_streaming_and_goes_limp() {
     let mut m = acquired(0.0);
-    send(&mut m, 0.0, 9000, S, 2, Message::Command(Command::position(0.3)));
+    send(
+        &mut m,
+        0.0,
+        9000,
+        S,
+        2,
+        Message::Command(Command::position(0.3)),
+    );
     assert!(!m.applied_command(0.001).is_limp());
     // A stranger cannot release it.
     assert!(send(&mut m, 0.001, 9001, OTHER, 1, Message::Release).is_none());
@@ -192,7 +262,14 @@ fn settings_ack_is_followed_by_one_feedback_at_once() {
     // Drain the schedule so only the settings can make feedback due.
     m.make_feedback(0.0, Feedback::default());
     assert!(!m.feedback_due(0.0));
-    send(&mut m, 0.0, 9000, S, 2, Message::Settings(settings(10.0, 0.5)));
+    send(
+        &mut m,
+        0.0,
+        9000,
+        S,
+        2,
+        Message::Settings(settings(10.0, 0.5)),
+    );
     assert!(m.feedback_due(0.0));
     m.make_feedback(0.0, Feedback::default()).unwrap();
     assert!(!m.feedback_due(0.05));
@@ -202,7 +279,14 @@ fn settings_ack_is_followed_by_one_feedback_at_once() {
 #[test]
 fn command_is_applied_with_its_seq_until_its_lifetime_ends() {
     let mut m = acquired(0.0);
-    send(&mut m, 0.0, 9000, S, 2, Message::Settings(settings(1000.0, 0.05)));
+    send(
+        &mut m,
+        0.0,
+        9000,
+        S,
+        2,
+        Message::Settings(settings(1000.0, 0.05)),
+    );
     assert!(m.applied_command(0.0).is_limp(), "no command yet");
     let c = Command::position(0.25);
     send(&mut m, 1.0, 9000, S, 77, Message::Command(c));
@@ -210,7 +294,9 @@ fn command_is_applied_with_its_seq_until_its_lifetime_ends() {
     assert_eq!(m.applied_command(1.049).position_rad, 0.25);
     assert!(m.applied_command(1.0501).is_limp());
     let fb = m.make_feedback(1.0, Feedback::default()).unwrap();
-    let Message::Feedback(f) = fb.message else { panic!() };
+    let Message::Feedback(f) = fb.message else {
+        panic!()
+    };
     assert_eq!(f.last_command_seq, 77);
     // A fresh command drives again.
     send(&mut m, 2.0, 9000, S, 78, Message::Command(c));
@@ -225,20 +311,44 @@ fn strategy_off_is_limp() {
         ..settings(100.0, 1.0)
     };
     send(&mut m, 0.0, 9000, S, 2, Message::Settings(off));
-    send(&mut m, 0.0, 9000, S, 3, Message::Command(Command::position(0.2)));
+    send(
+        &mut m,
+        0.0,
+        9000,
+        S,
+        3,
+        Message::Command(Command::position(0.2)),
+    );
     assert!(m.applied_command(0.01).is_limp());
 }
 
 #[test]
 fn wrong_session_command_is_counted_and_ignored() {
     let mut m = acquired(0.0);
-    assert!(send(&mut m, 0.0, 9000, OTHER, 2, Message::Command(Command::position(0.2))).is_none());
+    assert!(
+        send(
+            &mut m,
+            0.0,
+            9000,
+            OTHER,
+            2,
+            Message::Command(Command::position(0.2))
+        )
+        .is_none()
+    );
     assert_eq!(m.counters().wrong_session, 1);
     assert!(m.applied_command(0.0).is_limp());
     assert!(!m.has_fresh_command());
     // Free module: every command is wrong-session.
     let mut free = module();
-    send(&mut free, 0.0, 9000, S, 1, Message::Command(Command::position(0.2)));
+    send(
+        &mut free,
+        0.0,
+        9000,
+        S,
+        1,
+        Message::Command(Command::position(0.2)),
+    );
     assert_eq!(free.counters().wrong_session, 1);
 }
 
@@ -246,7 +356,14 @@ fn wrong_session_command_is_counted_and_ignored() {
 fn fresh_command_flag_for_lockstep() {
     let mut m = acquired(0.0);
     assert!(!m.has_fresh_command());
-    send(&mut m, 0.0, 9000, S, 2, Message::Command(Command::position(0.2)));
+    send(
+        &mut m,
+        0.0,
+        9000,
+        S,
+        2,
+        Message::Command(Command::position(0.2)),
+    );
     assert!(m.has_fresh_command());
     m.clear_fresh_command();
     assert!(!m.has_fresh_command());
@@ -255,7 +372,14 @@ fn fresh_command_flag_for_lockstep() {
 #[test]
 fn feedback_at_the_configured_rate_with_consecutive_seq() {
     let mut m = acquired(0.0);
-    send(&mut m, 0.0, 9000, S, 2, Message::Settings(settings(100.0, 0.5)));
+    send(
+        &mut m,
+        0.0,
+        9000,
+        S,
+        2,
+        Message::Settings(settings(100.0, 0.5)),
+    );
     let mut seqs = Vec::new();
     for tick in 0..=1000 {
         let t = f64::from(tick) * 1e-3;
@@ -286,7 +410,10 @@ fn messages_a_module_never_takes_are_unexpected() {
     let msgs = [
         Message::Feedback(Feedback::default()),
         Message::SettingsAck(Settings::default()),
-        Message::AcquireReply(AcquireReply { granted: true, owner_session: S }),
+        Message::AcquireReply(AcquireReply {
+            granted: true,
+            owner_session: S,
+        }),
     ];
     for msg in msgs {
         assert!(send(&mut m, 0.0, 9000, S, 1, msg).is_none());
@@ -298,8 +425,22 @@ fn messages_a_module_never_takes_are_unexpected() {
 #[test]
 fn new_owner_starts_with_default_settings() {
     let mut m = acquired(0.0);
-    send(&mut m, 0.0, 9000, S, 2, Message::Settings(settings(10.0, 2.0)));
-    send(&mut m, 0.0, 9000, S, 3, Message::Command(Command::position(0.3)));
+    send(
+        &mut m,
+        0.0,
+        9000,
+        S,
+        2,
+        Message::Settings(settings(10.0, 2.0)),
+    );
+    send(
+        &mut m,
+        0.0,
+        9000,
+        S,
+        3,
+        Message::Command(Command::position(0.3)),
+    );
     send(&mut m, 5.0, 9001, OTHER, 1, Message::Acquire);
     assert_eq!(m.settings(), Settings::default());
     assert!(m.applied_command(5.0).is_limp());

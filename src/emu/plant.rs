@@ -259,7 +259,7 @@ impl JointSpacePlant {
 
 /// Plane of joint `i` when joint 0 lies in `first`.
 pub fn plane_of(first: Plane, i: usize) -> Plane {
-    match (i % 2 == 0, first) {
+    match (i.is_multiple_of(2), first) {
         (true, p) => p,
         (false, Plane::Lateral) => Plane::Dorsal,
         (false, Plane::Dorsal) => Plane::Lateral,
@@ -319,7 +319,9 @@ fn validate(c: &PlantConfig) -> Result<(), PlantError> {
             && o.damping_nm_s_per_rad.is_finite()
             && o.damping_nm_s_per_rad >= 0.0)
         {
-            return Err(PlantError::BadValue("obstacle (angle_rad, stiffness, damping)"));
+            return Err(PlantError::BadValue(
+                "obstacle (angle_rad, stiffness, damping)",
+            ));
         }
     }
     Ok(())

@@ -55,7 +55,10 @@ fn yaw_joint_rate_shows_on_downstream_gyros_only() {
         p.step(DT, &cmds);
     }
     for i in 0..2 {
-        assert!(p.feedback(i).gyro_rad_s.iter().all(|g| g.abs() < 1e-3), "{i}");
+        assert!(
+            p.feedback(i).gyro_rad_s.iter().all(|g| g.abs() < 1e-3),
+            "{i}"
+        );
     }
     for i in 2..n {
         let g = p.feedback(i).gyro_rad_s;
@@ -132,7 +135,11 @@ fn joint_driven_into_obstacle_reports_torque_of_the_right_sign() {
     }
     let f = p.feedback(1);
     // Stopped near the obstacle; the wall pushes negative, so the spring torque is positive.
-    assert!(f.position_rad > 0.2 && f.position_rad < 0.4, "{}", f.position_rad);
+    assert!(
+        f.position_rad > 0.2 && f.position_rad < 0.4,
+        "{}",
+        f.position_rad
+    );
     assert!(f.torque_nm > 1.0, "{}", f.torque_nm);
     assert!(p.feedback(0).torque_nm.abs() < 1e-3);
 }
@@ -151,12 +158,20 @@ fn scripted_torque_acts_only_in_its_window() {
     for _ in 0..250 {
         p.step(DT, &cmds);
     }
-    assert!(close(p.feedback(3).torque_nm, 2.0, 0.05), "{}", p.feedback(3).torque_nm);
+    assert!(
+        close(p.feedback(3).torque_nm, 2.0, 0.05),
+        "{}",
+        p.feedback(3).torque_nm
+    );
     assert!(p.ground_truth(3).torque_nm > 1.9);
     for _ in 0..250 {
         p.step(DT, &cmds);
     }
-    assert!(close(p.feedback(3).torque_nm, 0.0, 0.05), "{}", p.feedback(3).torque_nm);
+    assert!(
+        close(p.feedback(3).torque_nm, 0.0, 0.05),
+        "{}",
+        p.feedback(3).torque_nm
+    );
     assert!((p.time_s() - 0.5).abs() < 1e-9);
 }
 
@@ -189,7 +204,8 @@ fn noise_has_roughly_the_configured_spread() {
         })
         .collect();
     let mean = samples.iter().sum::<f64>() / samples.len() as f64;
-    let sd = (samples.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / samples.len() as f64).sqrt();
+    let sd =
+        (samples.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / samples.len() as f64).sqrt();
     assert!(mean.abs() < 0.02, "{mean}");
     assert!((sd - 0.1).abs() < 0.02, "{sd}");
 }
@@ -208,7 +224,10 @@ fn bad_configs_are_refused() {
         JointSpacePlant::new(c),
         Err(PlantError::NoSuchJoint { joint: 2, .. })
     ));
-    assert!(matches!(JointSpacePlant::new(exact(0)), Err(PlantError::NoModules)));
+    assert!(matches!(
+        JointSpacePlant::new(exact(0)),
+        Err(PlantError::NoModules)
+    ));
     let mut c = exact(2);
     c.noise.gyro_rad_s = -1.0;
     assert!(JointSpacePlant::new(c).is_err());

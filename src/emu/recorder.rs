@@ -64,10 +64,11 @@ impl Recorder {
 
     /// Append the row of one physics step.
     pub fn row(&mut self, plant: &dyn Plant, applied: &[Command]) -> Result<(), RecordError> {
-        self.write_row(plant, applied).map_err(|source| RecordError {
-            path: self.path.clone(),
-            source,
-        })
+        self.write_row(plant, applied)
+            .map_err(|source| RecordError {
+                path: self.path.clone(),
+                source,
+            })
     }
 
     fn write_row(&mut self, plant: &dyn Plant, applied: &[Command]) -> io::Result<()> {

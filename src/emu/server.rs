@@ -18,7 +18,9 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use super::Plant;
 use super::faults::{DelayQueue, FaultConfig, FaultError, Faults};
-use super::module::{EMULATOR_FIRMWARE, Module, ModuleConfig, ModuleIdentity, ModuleTime, Outgoing};
+use super::module::{
+    EMULATOR_FIRMWARE, Module, ModuleConfig, ModuleIdentity, ModuleTime, Outgoing,
+};
 use super::recorder::{RecordError, Recorder};
 use crate::protocol::{self, Command, DecodeError, Feedback, MAX_DATAGRAM, Message, Name};
 

@@ -96,20 +96,35 @@ impl ServoParams {
     /// Every parameter must be finite and positive (damping may be zero).
     pub fn validate(&self) -> Result<(), ServoParamError> {
         let positive = [
-            ("spring_stiffness_nm_per_rad", self.spring_stiffness_nm_per_rad),
+            (
+                "spring_stiffness_nm_per_rad",
+                self.spring_stiffness_nm_per_rad,
+            ),
             ("output_inertia_kg_m2", self.output_inertia_kg_m2),
             ("max_motor_speed_rad_s", self.max_motor_speed_rad_s),
             ("max_torque_nm", self.max_torque_nm),
             ("position_gain_per_s", self.position_gain_per_s),
-            ("velocity_gain_nm_s_per_rad", self.velocity_gain_nm_s_per_rad),
+            (
+                "velocity_gain_nm_s_per_rad",
+                self.velocity_gain_nm_s_per_rad,
+            ),
             ("torque_bandwidth_per_s", self.torque_bandwidth_per_s),
             ("limp_relax_per_s", self.limp_relax_per_s),
             ("max_substep_s", self.max_substep_s),
         ];
         let non_negative = [
-            ("spring_damping_nm_s_per_rad", self.spring_damping_nm_s_per_rad),
-            ("output_damping_nm_s_per_rad", self.output_damping_nm_s_per_rad),
-            ("velocity_integral_nm_per_rad", self.velocity_integral_nm_per_rad),
+            (
+                "spring_damping_nm_s_per_rad",
+                self.spring_damping_nm_s_per_rad,
+            ),
+            (
+                "output_damping_nm_s_per_rad",
+                self.output_damping_nm_s_per_rad,
+            ),
+            (
+                "velocity_integral_nm_per_rad",
+                self.velocity_integral_nm_per_rad,
+            ),
         ];
         for (name, value) in positive {
             if !(value.is_finite() && value > 0.0) {
@@ -226,7 +241,8 @@ impl Servo {
         };
         // Semi-implicit Euler: velocities from current forces, positions from new velocities.
         let damper_nm = p.spring_damping_nm_s_per_rad * (motor_rad_s - self.output_rad_s);
-        let accel = (tau_s + damper_nm + external_nm - p.output_damping_nm_s_per_rad * self.output_rad_s)
+        let accel = (tau_s + damper_nm + external_nm
+            - p.output_damping_nm_s_per_rad * self.output_rad_s)
             / p.output_inertia_kg_m2;
         self.output_rad_s += accel * h;
         self.output_rad += self.output_rad_s * h;

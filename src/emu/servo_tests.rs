@@ -15,7 +15,10 @@ fn default_params_are_valid() {
         spring_stiffness_nm_per_rad: f64::NAN,
         ..ServoParams::default()
     };
-    assert_eq!(bad.validate().unwrap_err().name, "spring_stiffness_nm_per_rad");
+    assert_eq!(
+        bad.validate().unwrap_err().name,
+        "spring_stiffness_nm_per_rad"
+    );
 }
 
 #[test]
@@ -32,7 +35,11 @@ fn small_step_tracks_within_tens_of_ms() {
     let settled_at = settled_at.expect("never reached 5 % of the step");
     assert!(settled_at < 40, "took {settled_at} ms");
     // Stays there: no oscillation, no steady-state error.
-    assert!((s.position_rad() - 0.05).abs() < 5e-4, "{}", s.position_rad());
+    assert!(
+        (s.position_rad() - 0.05).abs() < 5e-4,
+        "{}",
+        s.position_rad()
+    );
     assert!(s.velocity_rad_s().abs() < 1e-2);
 }
 
@@ -51,8 +58,15 @@ fn large_step_is_speed_limited_and_settles() {
     assert!(max_motor <= p.max_motor_speed_rad_s + 1e-9, "{max_motor}");
     // The output cannot outrun the motor by more than the spring lets it.
     assert!(max_out < p.max_motor_speed_rad_s * 1.1, "{max_out}");
-    assert!(max_out > p.max_motor_speed_rad_s * 0.9, "never reached full speed: {max_out}");
-    assert!((s.position_rad() - 1.0).abs() < 1e-3, "{}", s.position_rad());
+    assert!(
+        max_out > p.max_motor_speed_rad_s * 0.9,
+        "never reached full speed: {max_out}"
+    );
+    assert!(
+        (s.position_rad() - 1.0).abs() < 1e-3,
+        "{}",
+        s.position_rad()
+    );
 }
 
 #[test]
@@ -68,7 +82,11 @@ fn external_torque_shows_up_with_documented_sign() {
     let mut s = Servo::new(ServoParams::default(), 0.0);
     // Push the joint negative while it holds position zero.
     run(&mut s, Command::position(0.0), 1000, -2.0);
-    assert!((s.torque_nm() - 2.0).abs() < 0.05, "torque {}", s.torque_nm());
+    assert!(
+        (s.torque_nm() - 2.0).abs() < 0.05,
+        "torque {}",
+        s.torque_nm()
+    );
     assert!(s.deflection_rad() > 0.0);
     // The integrator holds the output at the set-point.
     assert!(s.position_rad().abs() < 2e-3, "{}", s.position_rad());
@@ -86,7 +104,11 @@ fn torque_limit_respected_under_overload() {
     assert!(max_torque <= p.max_torque_nm + 1e-9, "{max_torque}");
     // Overloaded, the joint gives way in the push's direction.
     assert!(s.position_rad() > 0.5, "{}", s.position_rad());
-    assert!((s.torque_nm() + p.max_torque_nm).abs() < 0.1, "{}", s.torque_nm());
+    assert!(
+        (s.torque_nm() + p.max_torque_nm).abs() < 0.1,
+        "{}",
+        s.torque_nm()
+    );
 }
 
 #[test]
@@ -113,7 +135,9 @@ fn torque_only_command_tracks_torque_against_a_wall() {
     };
     // A stiff wall at zero holds the output.
     for _ in 0..200 {
-        s.step(DT, &cmd, ControlStrategy::Cascaded, |x, v| -1000.0 * x - 1.0 * v);
+        s.step(DT, &cmd, ControlStrategy::Cascaded, |x, v| {
+            -1000.0 * x - 1.0 * v
+        });
     }
     assert!((s.torque_nm() - 1.5).abs() < 0.05, "{}", s.torque_nm());
 }
@@ -126,7 +150,11 @@ fn velocity_command_moves_at_that_speed() {
         ..Command::LIMP
     };
     run(&mut s, cmd, 500, 0.0);
-    assert!((s.velocity_rad_s() - 1.0).abs() < 0.02, "{}", s.velocity_rad_s());
+    assert!(
+        (s.velocity_rad_s() - 1.0).abs() < 0.02,
+        "{}",
+        s.velocity_rad_s()
+    );
 }
 
 #[test]
@@ -146,7 +174,9 @@ fn limp_has_no_spring_torque() {
 fn strategy_off_is_limp_whatever_is_commanded() {
     let mut s = Servo::new(ServoParams::default(), 0.3);
     for _ in 0..200 {
-        s.step(DT, &Command::position(0.0), ControlStrategy::Off, |_, _| 0.0);
+        s.step(DT, &Command::position(0.0), ControlStrategy::Off, |_, _| {
+            0.0
+        });
     }
     assert!((s.position_rad() - 0.3).abs() < 1e-9);
     assert!(s.torque_nm().abs() < 1e-9);
@@ -161,6 +191,10 @@ fn stable_at_one_ms_with_a_stiff_obstacle() {
         assert!(s.position_rad().is_finite());
     }
     // Rests against the wall, pushing with a bounded torque.
-    assert!((s.position_rad() - 0.2).abs() < 0.02, "{}", s.position_rad());
+    assert!(
+        (s.position_rad() - 0.2).abs() < 0.02,
+        "{}",
+        s.position_rad()
+    );
     assert!(s.torque_nm() > 0.0 && s.torque_nm() <= 7.0 + 1e-9);
 }
