@@ -225,9 +225,12 @@ fn realtime_protocol_end_to_end() {
 
 #[test]
 fn lockstep_advances_one_step_per_command_round() {
+    let dir = tempfile::tempdir().unwrap();
+    let record = dir.path().join("truth.csv");
     let config = ServerConfig {
         base_port: 0,
         mode: Mode::Lockstep,
+        record: Some(record.clone()),
         // Long enough that no step in this test comes from the timeout.
         lockstep_timeout_s: 30.0,
         ..ServerConfig::default()
@@ -287,6 +290,36 @@ fn lockstep_advances_one_step_per_command_round() {
     let counters = emu.stop();
     assert_eq!(counters.steps, 5);
     assert_eq!(counters.lockstep_timeouts, 0);
+    // The ground truth has one row per step with the applied set-points.
+    let text = std::fs::read_to_string(&record).unwrap();
+    let rows: Vec<&str> = text.lines().collect();
+    assert_eq!(rows[0], "t_s,cmd_0,cmd_1,pos_0,pos_1,torque_0,torque_1");
+    assert_eq!(rows.len(), 6);
+    assert!(rows[5].starts_with("0.005000,0.1,0.1,"), "{}", rows[5]);
+}
+
+#[test]
+fn lockstep_steps_on_timeout_without_a_controller() {
+    let config = ServerConfig {
+        base_port: 0,
+        mode: Mode::Lockstep,
+        lockstep_timeout_s: 0.02,
+        ..ServerConfig::default()
+    };
+    let emu = Running::start(config, exact_plant(1));
+    let mut c = Client::new();
+    c.acquire(emu.addrs[0]);
+    c.settings(emu.addrs[0], Settings::default());
+    // Owned but never commanded: the world still creeps on, one step per timeout.
+    let fb = c.feedback_from(emu.addrs[0], Duration::from_millis(300));
+    assert!(fb.len() >= 2, "{}", fb.len());
+    assert!(
+        fb.windows(2)
+            .all(|w| w[1].1.module_time_us == w[0].1.module_time_us + 1000)
+    );
+    let counters = emu.stop();
+    assert!(counters.lockstep_timeouts >= 2);
+    assert_eq!(counters.lockstep_timeouts, counters.steps);
 }
 
 #[test]
@@ -310,6 +343,7 @@ fn silenced_module_answers_nothing_and_loss_drops_feedback() {
     );
     // Module 1 answers (replies are never dropped) but all its feedback is lost.
     c.acquire(emu.addrs[1]);
+    c.settings(emu.addrs[1], Settings::default());
     assert!(
         c.recv(Duration::from_millis(200)).is_none(),
         "feedback got through"

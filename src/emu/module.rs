@@ -9,6 +9,8 @@
 //! controller frees its modules after 1 s of real time even while a lockstep world
 //! stands still. In real-time mode the two run together.
 //!
+//! An owned module streams feedback only after the first `SettingsAck` of its session
+//! (`docs/protocol.md` §5.6), and sends one at once with that ack.
 //! Replies (`Announce`, `AcquireReply`, `SettingsAck`) echo the request's header seq;
 //! feedback carries the module's own feedback counter (first feedback = 1, +1 per
 //! feedback sent, never reset, so a receiver can count gaps).
@@ -137,6 +139,8 @@ pub struct Module {
     feedback_seq: u32,
     next_feedback_s: f64,
     feedback_now: bool,
+    /// Streaming starts with the first SettingsAck of a session (protocol §5.6).
+    streaming: bool,
     fresh_command: bool,
     counters: ModuleCounters,
 }
@@ -158,6 +162,7 @@ impl Module {
             feedback_seq: 0,
             next_feedback_s: 0.0,
             feedback_now: false,
+            streaming: false,
             fresh_command: false,
             counters: ModuleCounters::default(),
         }
@@ -246,7 +251,9 @@ impl Module {
                             self.next_feedback_s = now.sim_s + 1.0 / f64::from(s.feedback_rate_hz);
                         } else {
                             self.counters.settings_refused += 1;
+                            self.feedback_now = true;
                         }
+                        self.streaming = true;
                         Some(reply(session, Message::SettingsAck(self.settings)))
                     }
                     Message::Command(c) => {
@@ -297,6 +304,7 @@ impl Module {
         self.last_command_seq = 0;
         self.fresh_command = false;
         self.feedback_now = false;
+        self.streaming = false;
     }
 
     /// What the plant should drive now: the newest command while it is younger than
@@ -326,19 +334,27 @@ impl Module {
     /// True when settings were just acknowledged and one feedback should go out at
     /// once (lockstep sends nothing else outside a step).
     pub fn feedback_requested(&self) -> bool {
-        self.owner.is_some() && self.feedback_now
+        self.is_streaming() && self.feedback_now
+    }
+
+    /// Owned and configured: the module sends feedback to its owner (protocol §5.6).
+    pub fn is_streaming(&self) -> bool {
+        self.owner.is_some() && self.streaming
     }
 
     /// True when an owned module should send feedback now (its rate schedule is due,
     /// or settings were just acknowledged).
     pub fn feedback_due(&self, sim_s: f64) -> bool {
         // A nanosecond of slack absorbs rounding of the accumulated schedule.
-        self.owner.is_some() && (self.feedback_now || sim_s + 1e-9 >= self.next_feedback_s)
+        self.is_streaming() && (self.feedback_now || sim_s + 1e-9 >= self.next_feedback_s)
     }
 
     /// Build the next feedback to the owner from the plant's sample and advance the
-    /// counter and the schedule; `None` when the module is free.
+    /// counter and the schedule; `None` unless the module is streaming.
     pub fn make_feedback(&mut self, sim_s: f64, sample: Feedback) -> Option<Outgoing> {
+        if !self.streaming {
+            return None;
+        }
         let owner = self.owner?;
         let period_s = 1.0 / f64::from(self.settings.feedback_rate_hz);
         if self.feedback_now {

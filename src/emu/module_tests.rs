@@ -196,8 +196,35 @@ fn release_timeout_uses_the_wall_clock() {
 }
 
 #[test]
+fn no_feedback_before_the_first_settings_ack() {
+    let mut m = acquired(0.0);
+    assert!(!m.is_streaming());
+    assert!(!m.feedback_due(0.5));
+    assert!(m.make_feedback(0.5, Feedback::default()).is_none());
+    // Even a refused settings request starts the stream (the ack says what is in force).
+    send(
+        &mut m,
+        0.5,
+        9000,
+        S,
+        2,
+        Message::Settings(settings(0.0, 0.2)),
+    );
+    assert!(m.is_streaming());
+    assert!(m.feedback_requested());
+}
+
+#[test]
 fn feedback_goes_to_the_acquirer() {
     let mut m = acquired(0.0);
+    send(
+        &mut m,
+        0.0,
+        9000,
+        S,
+        2,
+        Message::Settings(Settings::default()),
+    );
     assert!(m.feedback_due(0.0));
     let fb = m.make_feedback(0.0, Feedback::default()).unwrap();
     assert_eq!(fb.dest, addr(9000));
@@ -208,6 +235,15 @@ fn feedback_goes_to_the_acquirer() {
 #[test]
 fn release_frees_stops_streaming_and_goes_limp() {
     let mut m = acquired(0.0);
+    send(
+        &mut m,
+        0.0,
+        9000,
+        S,
+        1,
+        Message::Settings(Settings::default()),
+    );
+    assert!(m.feedback_due(0.0));
     send(
         &mut m,
         0.0,
@@ -259,8 +295,7 @@ fn settings_validated_and_acknowledged() {
 #[test]
 fn settings_ack_is_followed_by_one_feedback_at_once() {
     let mut m = acquired(0.0);
-    // Drain the schedule so only the settings can make feedback due.
-    m.make_feedback(0.0, Feedback::default());
+    // Not streaming before the first settings.
     assert!(!m.feedback_due(0.0));
     send(
         &mut m,
@@ -395,6 +430,14 @@ fn feedback_at_the_configured_rate_with_consecutive_seq() {
 #[test]
 fn default_rate_is_one_per_ms_tick() {
     let mut m = acquired(0.0);
+    send(
+        &mut m,
+        0.0,
+        9000,
+        S,
+        2,
+        Message::Settings(Settings::default()),
+    );
     let sent = (0..100)
         .filter(|&tick| {
             let t = f64::from(tick) * 1e-3;

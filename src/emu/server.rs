@@ -7,8 +7,9 @@
 //!   loop falls more than 20 periods behind it resynchronises instead of bursting.
 //! - **Lockstep**: waits in `poll(2)` until every owned (and not silenced) module has
 //!   received a command since the last step, or `lockstep_timeout_s` passed since it;
-//!   then steps once and every owned module sends exactly one feedback. Feedback delay
-//!   does not apply in lockstep (the simulated clock stands still while waiting).
+//!   then steps once and every owned (configured) module sends exactly one feedback.
+//!   Feedback delay does not apply in lockstep (the simulated clock stands still while
+//!   waiting).
 //!
 //! Replies (announce, acquire reply, settings ack) are never subject to faults.
 
@@ -356,7 +357,7 @@ impl Server {
             last_step_wall_s = self.wall_s();
             for i in 0..self.modules.len() {
                 self.modules[i].clear_fresh_command();
-                if self.modules[i].is_owned() {
+                if self.modules[i].is_streaming() {
                     self.send_feedback(i, false);
                 }
             }

@@ -530,3 +530,36 @@ impl<'a> Reader<'a> {
         Self::name(&field[..len])
     }
 }
+
+/// The full suite (round trips, every error, corruption) is `tests/protocol_codec.rs`.
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn header_fields_sit_at_their_offsets() {
+        let mut buf = [0u8; MAX_DATAGRAM];
+        let fb = Message::Feedback(Feedback::default());
+        let n = encode(0x0102_0304, 0x0a0b_0c0d, &fb, &mut buf).unwrap();
+        assert_eq!(n, HEADER_LEN + FEEDBACK_LEN + CRC_LEN);
+        assert_eq!(&buf[..4], b"SN\x01\x09");
+        assert_eq!(&buf[4..8], &[4, 3, 2, 1]);
+        assert_eq!(&buf[8..12], &[0x0d, 0x0c, 0x0b, 0x0a]);
+        assert_eq!(&buf[12..16], &[FEEDBACK_LEN as u8, 0, 0, 0]);
+        let crc = crc32fast::hash(&buf[..n - CRC_LEN]);
+        assert_eq!(&buf[n - CRC_LEN..n], &crc.to_le_bytes());
+        let (h, back) = decode(&buf[..n]).unwrap();
+        assert_eq!((h.session, h.seq, back), (0x0102_0304, 0x0a0b_0c0d, fb));
+    }
+
+    #[test]
+    fn checksum_covers_every_byte() {
+        let mut buf = [0u8; MAX_DATAGRAM];
+        let n = encode(1, 2, &Message::Command(Command::position(0.3)), &mut buf).unwrap();
+        for i in 16..n {
+            let mut d = buf;
+            d[i] ^= 0x80;
+            assert_eq!(decode(&d[..n]), Err(DecodeError::BadChecksum), "byte {i}");
+        }
+    }
+}
