@@ -356,3 +356,25 @@ fn silenced_module_answers_nothing_and_loss_drops_feedback() {
         counters.dropped_feedback_loss
     );
 }
+
+#[test]
+fn delayed_feedback_still_arrives_complete_and_in_order() {
+    let config = ServerConfig {
+        base_port: 0,
+        mode: Mode::Realtime,
+        faults: snaked::emu::faults::FaultConfig {
+            delay_s: 0.02,
+            ..Default::default()
+        },
+        ..ServerConfig::default()
+    };
+    let emu = Running::start(config, exact_plant(1));
+    let mut c = Client::new();
+    c.acquire(emu.addrs[0]);
+    c.settings(emu.addrs[0], Settings::default());
+    let fb = c.feedback_from(emu.addrs[0], Duration::from_millis(300));
+    assert!(fb.len() > 100, "{}", fb.len());
+    assert!(fb.windows(2).all(|w| w[1].0.seq == w[0].0.seq + 1));
+    let counters = emu.stop();
+    assert_eq!(counters.dropped_delay_full, 0);
+}
