@@ -1,1 +1,125 @@
-fn main() {}
+//! `snake-emu`: every module of a snake as its own UDP endpoint, with a joint-space
+//! physics model behind them. See `docs/emulator.md`.
+
+use std::net::IpAddr;
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use anyhow::Context;
+use clap::Parser;
+use snaked::emu::faults::{FaultConfig, Silence};
+use snaked::emu::module::ModuleConfig;
+use snaked::emu::plant::JointSpacePlant;
+use snaked::emu::scenario::Scenario;
+use snaked::emu::server::{Mode, Server, ServerConfig};
+use tracing::{info, warn};
+
+/// UDP emulator of a modular series-elastic snake robot (protocol v1).
+#[derive(Debug, Parser)]
+#[command(name = "snake-emu", version)]
+struct Args {
+    /// Number of modules.
+    #[arg(long, default_value_t = 18)]
+    modules: usize,
+    /// Address every module binds.
+    #[arg(long, default_value = "127.0.0.1")]
+    bind: IpAddr,
+    /// Module i listens on base-port + i (0: the OS picks each port; they are logged).
+    #[arg(long, default_value_t = 7000)]
+    base_port: u16,
+    /// realtime: 1 kHz physics on the wall clock; lockstep: one step per command round.
+    #[arg(long, value_enum, default_value_t = Mode::Realtime)]
+    mode: Mode,
+    /// Lockstep: step anyway after this long without a complete command round, s.
+    #[arg(long, default_value_t = 1.0)]
+    lockstep_timeout: f64,
+    /// Module family reported in announcements.
+    #[arg(long, default_value = "SEA")]
+    family: String,
+    /// Loss of feedback sent and commands received, percent.
+    #[arg(long, default_value_t = 0.0)]
+    loss: f64,
+    /// Extra feedback latency, ms (real-time mode only).
+    #[arg(long, default_value_t = 0.0)]
+    delay_ms: f64,
+    /// Silence module K (0-based) from T s, for D s or for good: K@T[+D]. Repeatable.
+    #[arg(long, value_name = "K@T[+D]")]
+    silence: Vec<Silence>,
+    /// Scenario file (TOML): scripted torques, obstacles, servo and noise parameters.
+    #[arg(long, value_name = "FILE.toml")]
+    scenario: Option<PathBuf>,
+    /// Write the ground truth (one CSV row per physics step) to this file.
+    #[arg(long, value_name = "FILE.csv")]
+    record: Option<PathBuf>,
+    /// Seed of the sensor noise and the faults.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Stop after this much simulated time, s.
+    #[arg(long)]
+    duration: Option<f64>,
+}
+
+fn main() -> anyhow::Result<()> {
+    tracing_subscriber::fmt()
+        .with_env_filter(
+            tracing_subscriber::EnvFilter::try_from_default_env()
+                .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("info")),
+        )
+        .init();
+    let args = Args::parse();
+
+    let scenario = match &args.scenario {
+        Some(path) => Scenario::load(path)?,
+        None => Scenario::default(),
+    };
+    let plant = JointSpacePlant::new(scenario.plant_config(args.modules, args.seed))
+        .context("invalid plant configuration")?;
+    if args.mode == Mode::Lockstep && args.delay_ms > 0.0 {
+        warn!("--delay-ms has no effect in lockstep mode");
+    }
+    let config = ServerConfig {
+        bind_ip: args.bind,
+        base_port: args.base_port,
+        mode: args.mode,
+        lockstep_timeout_s: args.lockstep_timeout,
+        family: args.family.clone(),
+        module: ModuleConfig::default(),
+        faults: FaultConfig {
+            loss_pct: args.loss,
+            delay_s: args.delay_ms * 1e-3,
+            silences: args.silence.clone(),
+            // Decorrelated from the noise seed.
+            seed: args.seed ^ 0x5EED_FA17,
+            ..FaultConfig::default()
+        },
+        record: args.record.clone(),
+        duration_s: args.duration,
+        ..ServerConfig::default()
+    };
+    let mut server = Server::new(config, Box::new(plant)).context("cannot start the emulator")?;
+    let addrs = server.local_addrs()?;
+    info!(
+        modules = args.modules,
+        first = %addrs[0],
+        last = %addrs[addrs.len() - 1],
+        mode = ?args.mode,
+        "snake-emu serving"
+    );
+
+    let stop = Arc::new(AtomicBool::new(false));
+    let flag = stop.clone();
+    ctrlc::set_handler(move || flag.store(true, Ordering::Relaxed))
+        .context("cannot install the SIGINT/SIGTERM handler")?;
+
+    let counters = server.run(&stop)?;
+    info!(
+        sim_time_s = server.time_s(),
+        counters = %serde_json::to_string(&counters)?,
+        "snake-emu stopped"
+    );
+    if let Some(path) = &args.record {
+        info!(path = %path.display(), "ground truth written");
+    }
+    Ok(())
+}

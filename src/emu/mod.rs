@@ -7,8 +7,10 @@
 pub mod faults;
 pub mod module;
 pub mod plant;
-pub mod servo;
+pub mod recorder;
+pub mod scenario;
 pub mod server;
+pub mod servo;
 
 use crate::protocol::{Command, Feedback};
 
@@ -23,4 +25,21 @@ pub trait Plant: Send {
     fn time_s(&self) -> f64;
     /// Feedback of module `i` as its sensors would report it now.
     fn feedback(&self, i: usize) -> Feedback;
+    /// Exact (noise-free) state of joint `i`, for ground-truth recordings. The
+    /// default reports the sensors' values.
+    fn ground_truth(&self, i: usize) -> GroundTruth {
+        let f = self.feedback(i);
+        GroundTruth {
+            position_rad: f64::from(f.position_rad),
+            torque_nm: f64::from(f.torque_nm),
+        }
+    }
+}
+
+/// Exact joint state of a plant, as recorded out of band.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct GroundTruth {
+    pub position_rad: f64,
+    /// Spring torque, N·m (same sign convention as [`Feedback::torque_nm`]).
+    pub torque_nm: f64,
 }

@@ -1,1 +1,289 @@
-//! TODO
+//! A series-elastic servo: motor → spring (+ damper) → output link.
+//!
+//! Pure model, time step as an argument. The module's own controller is a cascade
+//! on the output side: position (P) → velocity (PI) → spring torque (P), and the
+//! torque loop is closed through the motor's speed: the motor moves the spring's
+//! input end so the deflection makes the wanted torque. The motor is modelled as a
+//! speed source (its own current loop is much faster than anything here), limited
+//! to [`ServoParams::max_motor_speed_rad_s`].
+//!
+//! # Sign convention
+//! Spring torque `τ_s = k · (θ_motor − θ_output)` acts on the output in the joint's
+//! positive direction when positive. An external torque that pushes the joint
+//! negative while the motor holds position therefore appears as a *positive* spring
+//! torque (the spring is wound up against the push). The reported torque is the spring
+//! torque; the deflection is `θ_motor − θ_output`.
+//!
+//! # Limits
+//! - Motor speed `|θ̇_motor| ≤ 3.46 rad/s` while driving.
+//! - Spring torque `|τ_s| ≤ 7 N·m`: the controller never asks for more, and an
+//!   external load that would deflect the spring further back-drives the motor
+//!   (the deflection is clamped), as a real actuator at stall would slip.
+//! - Limp: the motor is unpowered and back-drives freely, so the deflection (and the
+//!   spring torque) relaxes to zero within a few ms; the output then moves only under
+//!   external torque and viscous damping.
+//!
+//! Integration is semi-implicit Euler on substeps of at most
+//! [`ServoParams::max_substep_s`] (0.1 ms), so a 1 ms plant step is stable for springs
+//! and obstacle contacts far stiffer than the defaults.
+
+use crate::protocol::{Command, ControlStrategy};
+
+/// Physical and controller parameters of one servo. Defaults are SEA-Snake-like
+/// (SPEC §1: 205 g, 6.4 cm, 7 N·m, 3.46 rad/s).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Deserialize, serde::Serialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct ServoParams {
+    /// Spring stiffness, N·m/rad.
+    pub spring_stiffness_nm_per_rad: f64,
+    /// Damper in parallel with the spring, N·m·s/rad (not part of the reported torque).
+    pub spring_damping_nm_s_per_rad: f64,
+    /// Output-side inertia, kg·m² (default: one module as a rod about its end, m·L²/3).
+    pub output_inertia_kg_m2: f64,
+    /// Viscous damping of the output, N·m·s/rad.
+    pub output_damping_nm_s_per_rad: f64,
+    /// Motor speed limit while driving, rad/s.
+    pub max_motor_speed_rad_s: f64,
+    /// Spring torque limit, N·m.
+    pub max_torque_nm: f64,
+    /// Position loop gain: velocity reference per rad of error, 1/s.
+    pub position_gain_per_s: f64,
+    /// Velocity loop proportional gain, N·m·s/rad.
+    pub velocity_gain_nm_s_per_rad: f64,
+    /// Velocity loop integral gain, N·m/rad.
+    pub velocity_integral_nm_per_rad: f64,
+    /// Torque loop bandwidth, 1/s (spring torque follows its reference with this rate).
+    pub torque_bandwidth_per_s: f64,
+    /// Rate at which a limp motor lets the spring unwind, 1/s.
+    pub limp_relax_per_s: f64,
+    /// Longest internal integration substep, s.
+    pub max_substep_s: f64,
+}
+
+/// Module mass (SPEC §1), kg.
+pub const MODULE_MASS_KG: f64 = 0.205;
+/// Module length (SPEC §1), m.
+pub const MODULE_LENGTH_M: f64 = 0.064;
+
+impl Default for ServoParams {
+    fn default() -> Self {
+        Self {
+            spring_stiffness_nm_per_rad: 100.0,
+            spring_damping_nm_s_per_rad: 0.01,
+            output_inertia_kg_m2: MODULE_MASS_KG * MODULE_LENGTH_M * MODULE_LENGTH_M / 3.0,
+            output_damping_nm_s_per_rad: 0.02,
+            max_motor_speed_rad_s: 3.46,
+            max_torque_nm: 7.0,
+            position_gain_per_s: 150.0,
+            velocity_gain_nm_s_per_rad: 0.2,
+            velocity_integral_nm_per_rad: 10.0,
+            torque_bandwidth_per_s: 2000.0,
+            limp_relax_per_s: 500.0,
+            max_substep_s: 1e-4,
+        }
+    }
+}
+
+/// Why a parameter set was refused.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("servo parameter {name} = {value} is out of range (finite, positive)")]
+pub struct ServoParamError {
+    pub name: &'static str,
+    pub value: f64,
+}
+
+impl ServoParams {
+    /// Every parameter must be finite and positive (damping may be zero).
+    pub fn validate(&self) -> Result<(), ServoParamError> {
+        let positive = [
+            (
+                "spring_stiffness_nm_per_rad",
+                self.spring_stiffness_nm_per_rad,
+            ),
+            ("output_inertia_kg_m2", self.output_inertia_kg_m2),
+            ("max_motor_speed_rad_s", self.max_motor_speed_rad_s),
+            ("max_torque_nm", self.max_torque_nm),
+            ("position_gain_per_s", self.position_gain_per_s),
+            (
+                "velocity_gain_nm_s_per_rad",
+                self.velocity_gain_nm_s_per_rad,
+            ),
+            ("torque_bandwidth_per_s", self.torque_bandwidth_per_s),
+            ("limp_relax_per_s", self.limp_relax_per_s),
+            ("max_substep_s", self.max_substep_s),
+        ];
+        let non_negative = [
+            (
+                "spring_damping_nm_s_per_rad",
+                self.spring_damping_nm_s_per_rad,
+            ),
+            (
+                "output_damping_nm_s_per_rad",
+                self.output_damping_nm_s_per_rad,
+            ),
+            (
+                "velocity_integral_nm_per_rad",
+                self.velocity_integral_nm_per_rad,
+            ),
+        ];
+        for (name, value) in positive {
+            if !(value.is_finite() && value > 0.0) {
+                return Err(ServoParamError { name, value });
+            }
+        }
+        for (name, value) in non_negative {
+            if !(value.is_finite() && value >= 0.0) {
+                return Err(ServoParamError { name, value });
+            }
+        }
+        // The torque loop is integrated explicitly on substeps.
+        if self.torque_bandwidth_per_s * self.max_substep_s > 0.5 {
+            return Err(ServoParamError {
+                name: "torque_bandwidth_per_s * max_substep_s (must be <= 0.5)",
+                value: self.torque_bandwidth_per_s * self.max_substep_s,
+            });
+        }
+        Ok(())
+    }
+}
+
+/// State of one servo. Angles in rad, joint zero = straight.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Servo {
+    params: ServoParams,
+    motor_rad: f64,
+    output_rad: f64,
+    output_rad_s: f64,
+    motor_rad_s: f64,
+    /// Velocity-loop integrator, N·m.
+    integral_nm: f64,
+}
+
+/// A set-point is commanded when it is finite (NaN, and defensively ±inf, are not).
+fn commanded(x: f32) -> Option<f64> {
+    x.is_finite().then_some(x as f64)
+}
+
+impl Servo {
+    /// A servo at rest with motor and output at `angle_rad` (zero deflection).
+    pub fn new(params: ServoParams, angle_rad: f64) -> Self {
+        Self {
+            params,
+            motor_rad: angle_rad,
+            output_rad: angle_rad,
+            output_rad_s: 0.0,
+            motor_rad_s: 0.0,
+            integral_nm: 0.0,
+        }
+    }
+
+    pub fn params(&self) -> &ServoParams {
+        &self.params
+    }
+    /// Output (joint) angle, rad.
+    pub fn position_rad(&self) -> f64 {
+        self.output_rad
+    }
+    /// Output (joint) velocity, rad/s.
+    pub fn velocity_rad_s(&self) -> f64 {
+        self.output_rad_s
+    }
+    /// Motor-side angle, rad.
+    pub fn motor_rad(&self) -> f64 {
+        self.motor_rad
+    }
+    /// Motor-side velocity over the last substep, rad/s.
+    pub fn motor_rad_s(&self) -> f64 {
+        self.motor_rad_s
+    }
+    /// Spring deflection `θ_motor − θ_output`, rad.
+    pub fn deflection_rad(&self) -> f64 {
+        self.motor_rad - self.output_rad
+    }
+    /// Spring torque `k · deflection`, N·m (see the module docs for the sign).
+    pub fn torque_nm(&self) -> f64 {
+        self.params.spring_stiffness_nm_per_rad * self.deflection_rad()
+    }
+
+    /// Advance by `dt_s` applying `cmd` (`strategy` Off or an all-NaN command = limp).
+    /// `external_nm(position_rad, velocity_rad_s)` is the torque the world puts on the
+    /// output; it is evaluated every substep so stiff contacts stay stable.
+    pub fn step<F>(&mut self, dt_s: f64, cmd: &Command, strategy: ControlStrategy, external_nm: F)
+    where
+        F: Fn(f64, f64) -> f64,
+    {
+        if !(dt_s.is_finite() && dt_s > 0.0) {
+            return;
+        }
+        let n = (dt_s / self.params.max_substep_s).ceil().max(1.0);
+        let h = dt_s / n;
+        let limp = strategy == ControlStrategy::Off || cmd.is_limp();
+        if limp {
+            self.integral_nm = 0.0;
+        }
+        for _ in 0..n as u64 {
+            let ext = external_nm(self.output_rad, self.output_rad_s);
+            self.substep(h, cmd, limp, ext);
+        }
+    }
+
+    fn substep(&mut self, h: f64, cmd: &Command, limp: bool, external_nm: f64) {
+        let p = self.params;
+        let k = p.spring_stiffness_nm_per_rad;
+        let tau_s = self.torque_nm();
+        // Motor speed: keep up with the output, plus what closes the torque loop.
+        let motor_rad_s = if limp {
+            self.output_rad_s - p.limp_relax_per_s * tau_s / k
+        } else {
+            let tau_ref = self.torque_reference(h, cmd);
+            let w = self.output_rad_s + p.torque_bandwidth_per_s * (tau_ref - tau_s) / k;
+            w.clamp(-p.max_motor_speed_rad_s, p.max_motor_speed_rad_s)
+        };
+        // Semi-implicit Euler: velocities from current forces, positions from new velocities.
+        let damper_nm = p.spring_damping_nm_s_per_rad * (motor_rad_s - self.output_rad_s);
+        let accel = (tau_s + damper_nm + external_nm
+            - p.output_damping_nm_s_per_rad * self.output_rad_s)
+            / p.output_inertia_kg_m2;
+        self.output_rad_s += accel * h;
+        self.output_rad += self.output_rad_s * h;
+        self.motor_rad += motor_rad_s * h;
+        self.motor_rad_s = motor_rad_s;
+        // The motor cannot hold more than its torque limit: beyond it, it is back-driven.
+        let max_defl = p.max_torque_nm / k;
+        let defl = self.motor_rad - self.output_rad;
+        if defl.abs() > max_defl {
+            self.motor_rad = self.output_rad + defl.clamp(-max_defl, max_defl);
+        }
+    }
+
+    /// Cascade: position (P) → velocity (PI) → torque reference, clamped to the limit.
+    fn torque_reference(&mut self, h: f64, cmd: &Command) -> f64 {
+        let p = self.params;
+        let pos = commanded(cmd.position_rad);
+        let vel = commanded(cmd.velocity_rad_s);
+        let tau_ff = commanded(cmd.torque_nm).unwrap_or(0.0);
+        let v_ref = match (pos, vel) {
+            (Some(x), v) => p.position_gain_per_s * (x - self.output_rad) + v.unwrap_or(0.0),
+            (None, Some(v)) => v,
+            (None, None) => {
+                // Torque only: no motion loop.
+                self.integral_nm = 0.0;
+                return tau_ff.clamp(-p.max_torque_nm, p.max_torque_nm);
+            }
+        };
+        let v_ref = v_ref.clamp(-p.max_motor_speed_rad_s, p.max_motor_speed_rad_s);
+        let err = v_ref - self.output_rad_s;
+        let unclamped = p.velocity_gain_nm_s_per_rad * err + self.integral_nm + tau_ff;
+        // Anti-windup: integrate only while the output is not saturated (or it unwinds).
+        if unclamped.abs() < p.max_torque_nm || unclamped.signum() != err.signum() {
+            self.integral_nm += p.velocity_integral_nm_per_rad * err * h;
+            self.integral_nm = self.integral_nm.clamp(-p.max_torque_nm, p.max_torque_nm);
+        }
+        (p.velocity_gain_nm_s_per_rad * err + self.integral_nm + tau_ff)
+            .clamp(-p.max_torque_nm, p.max_torque_nm)
+    }
+}
+
+#[cfg(test)]
+#[path = "servo_tests.rs"]
+mod tests;
