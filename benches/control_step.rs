@@ -13,7 +13,9 @@ fn control_step(c: &mut Criterion) {
             for _ in 0..3000 {
                 h.control.step(); // past start-up and the blend
             }
-            group.bench_function(BenchmarkId::new(gait.name(), n), |b| b.iter(|| h.control.step()));
+            group.bench_function(BenchmarkId::new(gait.name(), n), |b| {
+                b.iter(|| h.control.step())
+            });
         }
     }
     group.finish();

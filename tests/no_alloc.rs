@@ -35,7 +35,13 @@ static GLOBAL: Counting = Counting;
 
 #[test]
 fn control_cycles_allocate_nothing() {
-    let mut h = echo_harness(18, None, GaitKind::Sidewinding, false, FailsafeConfig::default());
+    let mut h = echo_harness(
+        18,
+        None,
+        GaitKind::Sidewinding,
+        false,
+        FailsafeConfig::default(),
+    );
     for _ in 0..100 {
         h.control.step();
     }
@@ -54,7 +60,12 @@ fn control_cycles_allocate_nothing() {
     ];
     COUNTING.store(true, Ordering::SeqCst);
     for (k, r) in reqs.iter().enumerate() {
-        h.requests.try_send(Envelope { ticket: k as u64, request: *r }).unwrap();
+        h.requests
+            .try_send(Envelope {
+                ticket: k as u64,
+                request: *r,
+            })
+            .unwrap();
         for _ in 0..700 {
             h.control.step();
         }

@@ -69,7 +69,12 @@ impl Bus for EchoBus {
         Ok(())
     }
 
-    fn receive(&mut self, group: &mut GroupFeedback, now_ns: u64, _wait: FeedbackWait) -> Result<(), BusError> {
+    fn receive(
+        &mut self,
+        group: &mut GroupFeedback,
+        now_ns: u64,
+        _wait: FeedbackWait,
+    ) -> Result<(), BusError> {
         self.time_us += self.period_us;
         self.seq = self.seq.wrapping_add(1);
         for (i, m) in group.modules.iter_mut().enumerate() {

@@ -68,7 +68,10 @@ pub enum FeedbackWait {
     None,
     /// Lockstep: block until every module has reported feedback with
     /// `module_time_us >= min_module_time_us`, or until `timeout_ns` elapses.
-    Lockstep { min_module_time_us: u64, timeout_ns: u64 },
+    Lockstep {
+        min_module_time_us: u64,
+        timeout_ns: u64,
+    },
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -90,8 +93,12 @@ pub trait Bus: Send {
     fn send(&mut self, commands: &[Command]) -> Result<(), BusError>;
     /// Update `group` with feedback that arrived since the last call (newest per
     /// module; `fresh` set for modules that reported). `now_ns` is the loop's clock.
-    fn receive(&mut self, group: &mut GroupFeedback, now_ns: u64, wait: FeedbackWait)
-        -> Result<(), BusError>;
+    fn receive(
+        &mut self,
+        group: &mut GroupFeedback,
+        now_ns: u64,
+        wait: FeedbackWait,
+    ) -> Result<(), BusError>;
     fn counters(&self) -> BusCounters;
     /// Hand the modules back (release the session). Called once at shutdown.
     fn release(&mut self) {}

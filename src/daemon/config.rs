@@ -84,7 +84,8 @@ pub enum LookupBy {
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct NetworkConfig {
-    pub bind: SocketAddr,
+    /// Local address of the loop's socket; absent = loopback when every target is, else 0.0.0.0:0.
+    pub bind: Option<SocketAddr>,
     /// Where lookups go: "ip:port", "ip:first-last" port ranges, or broadcast addresses.
     pub targets: Vec<String>,
     pub lookup: LookupBy,
@@ -103,7 +104,7 @@ pub struct NetworkConfig {
 impl Default for NetworkConfig {
     fn default() -> Self {
         Self {
-            bind: SocketAddr::from(([127, 0, 0, 1], 0)),
+            bind: None,
             targets: vec!["127.0.0.1:7000-7017".into()],
             lookup: LookupBy::Family,
             family: "SEA".into(),
@@ -205,7 +206,10 @@ pub struct EmulatorConfig {
 
 impl Default for EmulatorConfig {
     fn default() -> Self {
-        Self { modules: 18, seed: 1 }
+        Self {
+            modules: 18,
+            seed: 1,
+        }
     }
 }
 
@@ -275,36 +279,119 @@ impl Config {
             }
         };
         range("loop.rate_hz", self.loop_.rate_hz, 1.0, 10_000.0)?;
-        range("loop.lockstep_timeout_s", self.loop_.lockstep_timeout_s, 0.001, 60.0)?;
-        range("loop.sched_fifo_priority", self.loop_.sched_fifo_priority as f64, 0.0, 99.0)?;
+        range(
+            "loop.lockstep_timeout_s",
+            self.loop_.lockstep_timeout_s,
+            0.001,
+            60.0,
+        )?;
+        range(
+            "loop.sched_fifo_priority",
+            self.loop_.sched_fifo_priority as f64,
+            0.0,
+            99.0,
+        )?;
         range("body.module_length_m", self.body.module_length_m, 0.01, 1.0)?;
-        range("network.discovery_timeout_s", self.network.discovery_timeout_s, 0.01, 60.0)?;
-        range("network.feedback_rate_hz", self.network.feedback_rate_hz, 1.0, 2000.0)?;
-        range("network.command_lifetime_s", self.network.command_lifetime_s, 0.001, 10.0)?;
-        range("failsafe.feedback_timeout_s", self.failsafe.feedback_timeout_s, 0.001, 10.0)?;
-        range("failsafe.limp_after_s", self.failsafe.limp_after_s, 0.0, 60.0)?;
-        range("failsafe.shutdown_hold_s", self.failsafe.shutdown_hold_s, 0.0, 10.0)?;
+        range(
+            "network.discovery_timeout_s",
+            self.network.discovery_timeout_s,
+            0.01,
+            60.0,
+        )?;
+        range(
+            "network.feedback_rate_hz",
+            self.network.feedback_rate_hz,
+            1.0,
+            2000.0,
+        )?;
+        range(
+            "network.command_lifetime_s",
+            self.network.command_lifetime_s,
+            0.001,
+            10.0,
+        )?;
+        range(
+            "failsafe.feedback_timeout_s",
+            self.failsafe.feedback_timeout_s,
+            0.001,
+            10.0,
+        )?;
+        range(
+            "failsafe.limp_after_s",
+            self.failsafe.limp_after_s,
+            0.0,
+            60.0,
+        )?;
+        range(
+            "failsafe.shutdown_hold_s",
+            self.failsafe.shutdown_hold_s,
+            0.0,
+            10.0,
+        )?;
         range("gait.blend_time_s", self.gait.blend_time_s, 0.1, 30.0)?;
-        range("gait.max_joint_speed_rad_s", self.gait.max_joint_speed_rad_s, 0.1, 3.46)?;
-        range("control.max_line_bytes", self.control.max_line_bytes as f64, 256.0, 16.0 * 1024.0 * 1024.0)?;
-        range("control.max_clients", self.control.max_clients as f64, 1.0, 4096.0)?;
-        range("control.channel_capacity", self.control.channel_capacity as f64, 1.0, 65536.0)?;
-        range("control.ack_timeout_s", self.control.ack_timeout_s, 0.01, 60.0)?;
+        range(
+            "gait.max_joint_speed_rad_s",
+            self.gait.max_joint_speed_rad_s,
+            0.1,
+            3.46,
+        )?;
+        range(
+            "control.max_line_bytes",
+            self.control.max_line_bytes as f64,
+            256.0,
+            16.0 * 1024.0 * 1024.0,
+        )?;
+        range(
+            "control.max_clients",
+            self.control.max_clients as f64,
+            1.0,
+            4096.0,
+        )?;
+        range(
+            "control.channel_capacity",
+            self.control.channel_capacity as f64,
+            1.0,
+            65536.0,
+        )?;
+        range(
+            "control.ack_timeout_s",
+            self.control.ack_timeout_s,
+            0.01,
+            60.0,
+        )?;
         range("emulator.modules", self.emulator.modules as f64, 2.0, 64.0)?;
         if self.network.targets.is_empty() {
-            return Err(bad("network.targets", "[]".into(), "needs at least one target"));
+            return Err(bad(
+                "network.targets",
+                "[]".into(),
+                "needs at least one target",
+            ));
         }
         match self.network.lookup {
             LookupBy::Names if self.network.names.is_empty() => {
-                return Err(bad("network.names", "[]".into(), "lookup = \"names\" needs names"));
+                return Err(bad(
+                    "network.names",
+                    "[]".into(),
+                    "lookup = \"names\" needs names",
+                ));
             }
             LookupBy::Macs if self.network.macs.is_empty() => {
-                return Err(bad("network.macs", "[]".into(), "lookup = \"macs\" needs MACs"));
+                return Err(bad(
+                    "network.macs",
+                    "[]".into(),
+                    "lookup = \"macs\" needs MACs",
+                ));
             }
             _ => {}
         }
         for m in &self.network.macs {
-            parse_mac(m).ok_or_else(|| bad("network.macs", m.clone(), "not a MAC like 02:53:4e:00:00:01"))?;
+            parse_mac(m).ok_or_else(|| {
+                bad(
+                    "network.macs",
+                    m.clone(),
+                    "not a MAC like 02:53:4e:00:00:01",
+                )
+            })?;
         }
         Ok(())
     }
@@ -328,12 +415,17 @@ mod tests {
     fn shipped_example_equals_the_defaults() {
         let path = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/config/snaked.toml"));
         let cfg = Config::load(path).expect("config/snaked.toml parses");
-        assert_eq!(cfg, Config::default(), "config/snaked.toml must document the defaults");
+        assert_eq!(
+            cfg,
+            Config::default(),
+            "config/snaked.toml must document the defaults"
+        );
     }
 
     #[test]
     fn unknown_keys_are_rejected_with_their_name() {
-        let err = Config::parse("[loop]\nrate_hz = 500\nspeed = 3\n", Path::new("x.toml")).unwrap_err();
+        let err =
+            Config::parse("[loop]\nrate_hz = 500\nspeed = 3\n", Path::new("x.toml")).unwrap_err();
         let msg = err.to_string();
         assert!(msg.contains("x.toml") && msg.contains("speed"), "{msg}");
     }
@@ -350,15 +442,24 @@ mod tests {
     fn wrong_types_and_bad_gait_names_are_rejected() {
         assert!(Config::parse("[loop]\nrate_hz = \"fast\"\n", Path::new("x")).is_err());
         assert!(Config::parse("[gait]\ninitial = \"moonwalk\"\n", Path::new("x")).is_err());
-        assert!(Config::parse("[gait.params.sidewinding]\nwobble = 1.0\n", Path::new("x")).is_err());
+        assert!(
+            Config::parse("[gait.params.sidewinding]\nwobble = 1.0\n", Path::new("x")).is_err()
+        );
     }
 
     #[test]
     fn macs_parse_strictly() {
-        assert_eq!(parse_mac("02:53:4e:00:00:0a"), Some([2, 0x53, 0x4e, 0, 0, 10]));
+        assert_eq!(
+            parse_mac("02:53:4e:00:00:0a"),
+            Some([2, 0x53, 0x4e, 0, 0, 10])
+        );
         assert_eq!(parse_mac("02:53:4e:00:00"), None);
         assert_eq!(parse_mac("02:53:4e:00:00:0a:01"), None);
-        let err = Config::parse("[network]\nlookup = \"macs\"\nmacs = [\"zz\"]\n", Path::new("x")).unwrap_err();
+        let err = Config::parse(
+            "[network]\nlookup = \"macs\"\nmacs = [\"zz\"]\n",
+            Path::new("x"),
+        )
+        .unwrap_err();
         assert!(err.to_string().contains("network.macs"));
     }
 }

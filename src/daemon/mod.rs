@@ -102,10 +102,16 @@ pub fn run(cfg: Config, emulated: bool) -> Result<()> {
         )),
     };
 
-    let (req_tx, req_rx) = crossbeam_channel::bounded::<messages::Envelope>(cfg.control.channel_capacity);
-    let (ack_tx, ack_rx) = crossbeam_channel::bounded::<messages::Ack>(cfg.control.channel_capacity);
-    let (tel_writer, tel_reader) =
-        telemetry::channel(Snapshot::new(n, cfg.gait.initial, table, cfg.gait.blend_time_s));
+    let (req_tx, req_rx) =
+        crossbeam_channel::bounded::<messages::Envelope>(cfg.control.channel_capacity);
+    let (ack_tx, ack_rx) =
+        crossbeam_channel::bounded::<messages::Ack>(cfg.control.channel_capacity);
+    let (tel_writer, tel_reader) = telemetry::channel(Snapshot::new(
+        n,
+        cfg.gait.initial,
+        table,
+        cfg.gait.blend_time_s,
+    ));
     let heartbeat = Arc::new(AtomicU64::new(0));
 
     let server = server::start(

@@ -23,7 +23,12 @@ fn user_dir() -> PathBuf {
 pub fn daemon_socket() -> PathBuf {
     if let Some(d) = std::env::var_os("RUNTIME_DIRECTORY").filter(|d| !d.is_empty()) {
         // systemd may list several directories separated by ':'; the first is ours.
-        let first = d.to_string_lossy().split(':').next().unwrap_or_default().to_owned();
+        let first = d
+            .to_string_lossy()
+            .split(':')
+            .next()
+            .unwrap_or_default()
+            .to_owned();
         return PathBuf::from(first).join(FILE);
     }
     if euid() == 0 {

@@ -45,7 +45,9 @@ impl Watchdog {
     /// Call often (every few tens of ms); pings when due and the loop is alive.
     /// Returns false when the loop has not advanced since the last due ping.
     pub fn poll(&mut self) -> bool {
-        let Some(interval) = self.interval else { return true };
+        let Some(interval) = self.interval else {
+            return true;
+        };
         if self.last_ping.elapsed() < interval {
             return true;
         }

@@ -30,7 +30,9 @@ impl BodyLayout {
                 (false, Plane::Dorsal) => Plane::Lateral,
             })
             .collect();
-        let s = (0..n).map(|i| (i as f64 + 1.0) / (n as f64 + 1.0)).collect();
+        let s = (0..n)
+            .map(|i| (i as f64 + 1.0) / (n as f64 + 1.0))
+            .collect();
         BodyLayout {
             planes,
             s,

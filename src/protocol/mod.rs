@@ -11,8 +11,8 @@
 mod codec;
 mod name;
 
-pub use codec::{decode, encode, DecodeError, EncodeError, MAX_DATAGRAM};
-pub use name::{Name, NAME_CAPACITY};
+pub use codec::{DecodeError, EncodeError, MAX_DATAGRAM, decode, encode};
+pub use name::{NAME_CAPACITY, Name};
 
 /// First two bytes of every datagram: ASCII "SN".
 pub const MAGIC: [u8; 2] = *b"SN";

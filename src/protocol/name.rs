@@ -22,7 +22,10 @@ impl Name {
         }
         let mut bytes = [0u8; NAME_CAPACITY];
         bytes[..b.len()].copy_from_slice(b);
-        Ok(Name { len: b.len() as u8, bytes })
+        Ok(Name {
+            len: b.len() as u8,
+            bytes,
+        })
     }
 
     /// Build from raw bytes received off the wire; `None` if too long or not UTF-8.

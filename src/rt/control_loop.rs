@@ -120,7 +120,12 @@ impl ControlLoop {
 
         // Read.
         let wait = self.p.pacer.feedback_wait(c, self.last_module_time_us);
-        if self.p.bus.receive(&mut self.group, c.clock_ns, wait).is_err() {
+        if self
+            .p
+            .bus
+            .receive(&mut self.group, c.clock_ns, wait)
+            .is_err()
+        {
             self.stats.bus_errors += 1;
         }
         let health = self.assess(c);
@@ -131,7 +136,9 @@ impl ControlLoop {
             let _ = self.p.failsafe.request(now_s, Event::Shutdown);
         }
         for _ in 0..MAX_REQUESTS_PER_CYCLE {
-            let Ok(env) = self.p.requests.try_recv() else { break };
+            let Ok(env) = self.p.requests.try_recv() else {
+                break;
+            };
             let result = self.apply(env.request, now_s, t_s, &health);
             if result.is_ok() {
                 self.applied += 1;
@@ -210,12 +217,16 @@ impl ControlLoop {
             let finite = f.position_rad.is_finite()
                 && f.velocity_rad_s.is_finite()
                 && f.torque_nm.is_finite()
-                && f.accel_m_s2.iter().chain(&f.gyro_rad_s).all(|v| v.is_finite());
+                && f.accel_m_s2
+                    .iter()
+                    .chain(&f.gyro_rad_s)
+                    .all(|v| v.is_finite());
             if m.received_ns.is_some() && !finite {
                 non_finite = true;
             }
             self.measured[i] = f.position_rad as f64;
-            min_module_time = Some(min_module_time.map_or(f.module_time_us, |t| t.min(f.module_time_us)));
+            min_module_time =
+                Some(min_module_time.map_or(f.module_time_us, |t| t.min(f.module_time_us)));
         }
         if !never {
             self.last_module_time_us = min_module_time;
@@ -225,12 +236,22 @@ impl ControlLoop {
             .feedback_age
             .record(if never { c.clock_ns } else { oldest_ns });
         Health {
-            oldest_feedback_age_s: if never { f64::INFINITY } else { oldest_ns as f64 * 1e-9 },
+            oldest_feedback_age_s: if never {
+                f64::INFINITY
+            } else {
+                oldest_ns as f64 * 1e-9
+            },
             non_finite,
         }
     }
 
-    fn apply(&mut self, req: LoopRequest, now_s: f64, t_s: f64, _health: &Health) -> Result<(), Rejection> {
+    fn apply(
+        &mut self,
+        req: LoopRequest,
+        now_s: f64,
+        t_s: f64,
+        _health: &Health,
+    ) -> Result<(), Rejection> {
         let fs = &mut self.p.failsafe;
         match req {
             LoopRequest::SetGait(kind) => {
@@ -287,7 +308,11 @@ impl ControlLoop {
         if !self.held_valid {
             for i in 0..self.commands.len() {
                 let last = self.commands[i].position_rad;
-                self.held[i] = if last.is_finite() { last as f64 } else { self.measured[i] };
+                self.held[i] = if last.is_finite() {
+                    last as f64
+                } else {
+                    self.measured[i]
+                };
             }
             self.held_valid = true;
         }
@@ -329,7 +354,11 @@ impl ControlLoop {
             snap.blend_progress = selector.blend_progress();
             snap.blend_time_s = selector.blend_time_s();
             snap.params = *selector.table();
-            for (j, (m, cmd)) in snap.joints.iter_mut().zip(group.modules.iter().zip(commands)) {
+            for (j, (m, cmd)) in snap
+                .joints
+                .iter_mut()
+                .zip(group.modules.iter().zip(commands))
+            {
                 j.setpoint_rad = cmd.position_rad as f64;
                 j.position_rad = m.feedback.position_rad as f64;
                 j.velocity_rad_s = m.feedback.velocity_rad_s as f64;

@@ -6,9 +6,14 @@ use crate::rt::messages::{Envelope, LoopRequest, Rejection};
 use crate::safety::failsafe::{FailsafeConfig, Mode, Reason};
 
 fn request(h: &mut Harness, ticket: u64, r: LoopRequest) -> Result<(), Rejection> {
-    h.requests.try_send(Envelope { ticket, request: r }).expect("queue has room");
+    h.requests
+        .try_send(Envelope { ticket, request: r })
+        .expect("queue has room");
     h.control.step();
-    let ack = h.acks.try_recv().expect("the loop answers within the cycle");
+    let ack = h
+        .acks
+        .try_recv()
+        .expect("the loop answers within the cycle");
     assert_eq!(ack.ticket, ticket);
     ack.result
 }
@@ -22,19 +27,42 @@ fn steps(h: &mut Harness, k: usize) {
 #[test]
 fn starts_from_the_measured_pose_without_a_step() {
     let pose: Vec<f32> = (0..18).map(|i| 0.3 * ((i as f32) * 0.7).sin()).collect();
-    let mut h = echo_harness(18, Some(&pose), GaitKind::Sidewinding, false, FailsafeConfig::default());
+    let mut h = echo_harness(
+        18,
+        Some(&pose),
+        GaitKind::Sidewinding,
+        false,
+        FailsafeConfig::default(),
+    );
     // Cycle 0 sees feedback for the first time and re-syncs.
     h.control.step();
     for (c, p) in h.control.commands().iter().zip(&pose) {
-        assert!((c.position_rad - p).abs() < 3.46e-3 * 1.01, "first set-point {} vs pose {p}", c.position_rad);
+        assert!(
+            (c.position_rad - p).abs() < 3.46e-3 * 1.01,
+            "first set-point {} vs pose {p}",
+            c.position_rad
+        );
     }
-    let mut prev: Vec<f32> = h.control.commands().iter().map(|c| c.position_rad).collect();
+    let mut prev: Vec<f32> = h
+        .control
+        .commands()
+        .iter()
+        .map(|c| c.position_rad)
+        .collect();
     for _ in 0..4000 {
         h.control.step();
         for (c, p) in h.control.commands().iter().zip(&prev) {
-            assert!((c.position_rad - p).abs() <= 3.46e-3 * 1.001, "set-point step");
+            assert!(
+                (c.position_rad - p).abs() <= 3.46e-3 * 1.001,
+                "set-point step"
+            );
         }
-        prev = h.control.commands().iter().map(|c| c.position_rad).collect();
+        prev = h
+            .control
+            .commands()
+            .iter()
+            .map(|c| c.position_rad)
+            .collect();
     }
     let snap = h.telemetry.latest();
     assert_eq!(snap.mode, Mode::Running);
@@ -44,11 +72,25 @@ fn starts_from_the_measured_pose_without_a_step() {
 #[test]
 fn hold_at_start_holds_the_measured_pose_until_a_gait_is_set() {
     let pose = [0.2f32; 8];
-    let mut h = echo_harness(8, Some(&pose), GaitKind::Slithering, true, FailsafeConfig::default());
+    let mut h = echo_harness(
+        8,
+        Some(&pose),
+        GaitKind::Slithering,
+        true,
+        FailsafeConfig::default(),
+    );
     steps(&mut h, 100);
     assert_eq!(h.telemetry.latest().mode, Mode::Hold);
-    assert!(h.control.commands().iter().all(|c| (c.position_rad - 0.2).abs() < 1e-6));
-    assert_eq!(request(&mut h, 1, LoopRequest::SetGait(GaitKind::Rolling)), Ok(()));
+    assert!(
+        h.control
+            .commands()
+            .iter()
+            .all(|c| (c.position_rad - 0.2).abs() < 1e-6)
+    );
+    assert_eq!(
+        request(&mut h, 1, LoopRequest::SetGait(GaitKind::Rolling)),
+        Ok(())
+    );
     steps(&mut h, 10);
     let snap = h.telemetry.latest();
     assert_eq!((snap.mode, snap.gait), (Mode::Running, GaitKind::Rolling));
@@ -66,17 +108,37 @@ fn a_silent_module_holds_then_goes_limp_and_is_reported() {
     assert_eq!(h.telemetry.latest().mode, Mode::Running);
     h.faults.set_silent(7, true);
     steps(&mut h, 49);
-    assert_eq!(h.telemetry.latest().mode, Mode::Running, "within the timeout");
+    assert_eq!(
+        h.telemetry.latest().mode,
+        Mode::Running,
+        "within the timeout"
+    );
     steps(&mut h, 3);
     let snap = h.telemetry.latest();
-    assert_eq!((snap.mode, snap.reason), (Mode::Hold, Reason::FeedbackTimeout));
-    let held: Vec<f32> = h.control.commands().iter().map(|c| c.position_rad).collect();
+    assert_eq!(
+        (snap.mode, snap.reason),
+        (Mode::Hold, Reason::FeedbackTimeout)
+    );
+    let held: Vec<f32> = h
+        .control
+        .commands()
+        .iter()
+        .map(|c| c.position_rad)
+        .collect();
     steps(&mut h, 100);
-    let still: Vec<f32> = h.control.commands().iter().map(|c| c.position_rad).collect();
+    let still: Vec<f32> = h
+        .control
+        .commands()
+        .iter()
+        .map(|c| c.position_rad)
+        .collect();
     assert_eq!(held, still, "hold freezes the set-points");
     steps(&mut h, 450);
     let snap = h.telemetry.latest();
-    assert_eq!((snap.mode, snap.reason), (Mode::Limp, Reason::FeedbackTimeout));
+    assert_eq!(
+        (snap.mode, snap.reason),
+        (Mode::Limp, Reason::FeedbackTimeout)
+    );
     assert!(h.control.commands().iter().all(|c| c.is_limp()));
     assert!(snap.joints[7].feedback_age_s > 0.5);
     // Back, but not re-armed until the operator says so (auto_resume is off).
@@ -95,7 +157,10 @@ fn non_finite_feedback_holds() {
     h.faults.set_corrupt(2, true);
     steps(&mut h, 2);
     let snap = h.telemetry.latest();
-    assert_eq!((snap.mode, snap.reason), (Mode::Hold, Reason::NonFiniteFeedback));
+    assert_eq!(
+        (snap.mode, snap.reason),
+        (Mode::Hold, Reason::NonFiniteFeedback)
+    );
 }
 
 #[test]
@@ -108,7 +173,11 @@ fn estop_latches_and_only_arm_releases_it() {
         request(&mut h, 2, LoopRequest::SetGait(GaitKind::Sidewinding)),
         Err(Rejection::EStopLatched)
     );
-    assert_eq!(request(&mut h, 3, LoopRequest::Hold).is_err(), false, "hold is always allowed");
+    assert_eq!(
+        request(&mut h, 3, LoopRequest::Hold).is_err(),
+        false,
+        "hold is always allowed"
+    );
     assert_eq!(h.telemetry.latest().mode, Mode::EStop);
     assert_eq!(request(&mut h, 4, LoopRequest::Arm), Ok(()));
     steps(&mut h, 2);
@@ -128,12 +197,21 @@ fn invalid_params_are_refused_by_the_loop_too() {
         request(&mut h, 1, LoopRequest::SetParams(GaitKind::Rolling, patch)),
         Err(Rejection::InvalidParams)
     );
-    assert_eq!(request(&mut h, 2, LoopRequest::SetBlendTime(1e9)), Err(Rejection::InvalidParams));
+    assert_eq!(
+        request(&mut h, 2, LoopRequest::SetBlendTime(1e9)),
+        Err(Rejection::InvalidParams)
+    );
 }
 
 #[test]
 fn stop_holds_then_goes_limp_then_finishes() {
-    let mut h = echo_harness(6, None, GaitKind::Sidewinding, false, FailsafeConfig::default());
+    let mut h = echo_harness(
+        6,
+        None,
+        GaitKind::Sidewinding,
+        false,
+        FailsafeConfig::default(),
+    );
     steps(&mut h, 100);
     h.stop.store(true, std::sync::atomic::Ordering::Relaxed);
     h.control.step();
@@ -144,5 +222,8 @@ fn stop_holds_then_goes_limp_then_finishes() {
         assert!(cycles < 5000, "the safe stop finishes");
     }
     assert!(h.control.commands().iter().all(|c| c.is_limp()));
-    assert!(cycles >= 200, "held for shutdown_hold_s before going limp ({cycles} cycles)");
+    assert!(
+        cycles >= 200,
+        "held for shutdown_hold_s before going limp ({cycles} cycles)"
+    );
 }

@@ -154,11 +154,17 @@ mod tests {
         assert_eq!(c1.clock_ns, c1.t_ns);
         assert_eq!(
             p.feedback_wait(&c0, None),
-            FeedbackWait::Lockstep { min_module_time_us: 0, timeout_ns: 5 }
+            FeedbackWait::Lockstep {
+                min_module_time_us: 0,
+                timeout_ns: 5
+            }
         );
         assert_eq!(
             p.feedback_wait(&c1, Some(7000)),
-            FeedbackWait::Lockstep { min_module_time_us: 8000, timeout_ns: 5 }
+            FeedbackWait::Lockstep {
+                min_module_time_us: 8000,
+                timeout_ns: 5
+            }
         );
     }
 

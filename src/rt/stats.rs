@@ -52,7 +52,7 @@ fn bucket_upper(i: usize) -> u64 {
     let octave = i / SUB - 1; // msb - SUB_BITS
     let sub = i % SUB;
     let shift = octave as u32;
-    (((SUB + sub + 1) << shift) - 1).max(0)
+    ((SUB + sub + 1) << shift) - 1
 }
 
 impl Histogram {
@@ -80,6 +80,10 @@ impl Histogram {
         for (i, &c) in self.counts.iter().enumerate() {
             seen += c as u64;
             if seen >= rank {
+                // The last bucket is open-ended: only the exact maximum bounds it.
+                if i == BUCKETS - 1 {
+                    return self.max_ns;
+                }
                 return bucket_upper(i).min(self.max_ns);
             }
         }
@@ -90,8 +94,16 @@ impl Histogram {
         let us = |ns: u64| ns as f64 / 1000.0;
         Summary {
             count: self.count,
-            mean_us: if self.count == 0 { 0.0 } else { us(self.sum_ns) / self.count as f64 },
-            min_us: if self.count == 0 { 0.0 } else { us(self.min_ns) },
+            mean_us: if self.count == 0 {
+                0.0
+            } else {
+                us(self.sum_ns) / self.count as f64
+            },
+            min_us: if self.count == 0 {
+                0.0
+            } else {
+                us(self.min_ns)
+            },
             p50_us: us(self.quantile_ns(0.5)),
             p99_us: us(self.quantile_ns(0.99)),
             p999_us: us(self.quantile_ns(0.999)),
@@ -171,7 +183,10 @@ mod tests {
             assert!(b >= prev, "bucket order at {v}");
             prev = b;
             assert!(bucket_upper(b) >= v, "{v} above its bucket's upper edge");
-            assert!(bucket_upper(b) as f64 <= v as f64 * 1.125 + 1.0, "bucket too wide at {v}");
+            assert!(
+                bucket_upper(b) as f64 <= v as f64 * 1.125 + 1.0,
+                "bucket too wide at {v}"
+            );
         }
     }
 

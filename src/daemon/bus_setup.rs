@@ -1,0 +1,110 @@
+//! Building the loop's bus: the module network (discovery, acquire, settings) or
+//! the in-process emulator.
+use std::time::Duration;
+
+use anyhow::{Context, Result, bail};
+
+use crate::bus::Bus;
+use crate::bus::sim::{SimBus, SimBusConfig};
+use crate::bus::udp::{self, UdpBus};
+use crate::daemon::config::{Config, LookupBy, parse_mac};
+use crate::emu::module::{EMULATOR_FIRMWARE, ModuleIdentity};
+use crate::emu::plant::{JointSpacePlant, PlantConfig};
+use crate::protocol::{ControlStrategy, LookupFilter, Name, Settings};
+
+pub struct BuiltBus {
+    pub bus: Box<dyn Bus>,
+    /// Module names, head first.
+    pub names: Vec<String>,
+    /// "udp" or "emulated".
+    pub kind: &'static str,
+}
+
+pub fn build(cfg: &Config, emulated: bool, period_ns: u64) -> Result<BuiltBus> {
+    if emulated {
+        emulated_bus(cfg, period_ns)
+    } else {
+        udp_bus(cfg)
+    }
+}
+
+fn name(s: &str, key: &str) -> Result<Name> {
+    Name::new(s).map_err(|e| anyhow::anyhow!("{key}: {s:?}: {e}"))
+}
+
+fn udp_bus(cfg: &Config) -> Result<BuiltBus> {
+    let net = &cfg.network;
+    let mut targets = Vec::new();
+    for t in &net.targets {
+        targets.extend(udp::parse_targets(t).with_context(|| format!("network.targets: {t:?}"))?);
+    }
+    let filter = match net.lookup {
+        LookupBy::All => LookupFilter::All,
+        LookupBy::Family => LookupFilter::Family(name(&net.family, "network.family")?),
+        LookupBy::Names => LookupFilter::Names(
+            net.names
+                .iter()
+                .map(|n| name(n, "network.names"))
+                .collect::<Result<_>>()?,
+        ),
+        LookupBy::Macs => LookupFilter::Macs(
+            net.macs
+                .iter()
+                .map(|m| parse_mac(m).with_context(|| format!("network.macs: {m:?}")))
+                .collect::<Result<_>>()?,
+        ),
+    };
+    let bind = net.bind.unwrap_or_else(|| udp::default_bind(&targets));
+    let timeout = Duration::from_secs_f64(net.discovery_timeout_s);
+    let expected = (net.expected_modules > 0).then_some(net.expected_modules);
+    tracing::info!(targets = targets.len(), ?filter, "looking up modules");
+    let found =
+        udp::discover(&targets, &filter, expected, bind, timeout).context("module discovery")?;
+    if found.is_empty() {
+        bail!("no modules answered");
+    }
+    let settings = Settings {
+        feedback_rate_hz: net.feedback_rate_hz as f32,
+        command_lifetime_s: net.command_lifetime_s as f32,
+        strategy: ControlStrategy::Cascaded,
+    };
+    let session = loop {
+        let s: u32 = rand::random();
+        if s != crate::protocol::NO_SESSION {
+            break s;
+        }
+    };
+    let bus =
+        UdpBus::connect(&found, settings, bind, session, timeout).context("taking the modules")?;
+    let names = found.iter().map(|f| f.announce.name.to_string()).collect();
+    Ok(BuiltBus {
+        bus: Box::new(bus),
+        names,
+        kind: "udp",
+    })
+}
+
+/// `--emulated`: the same plant as `snake-emu`, stepped in process once per cycle.
+fn emulated_bus(cfg: &Config, period_ns: u64) -> Result<BuiltBus> {
+    let n = cfg.emulator.modules;
+    let mut plant_cfg = PlantConfig::new(n);
+    plant_cfg.first_plane = cfg.body.first_joint_plane;
+    plant_cfg.seed = cfg.emulator.seed;
+    let plant = JointSpacePlant::new(plant_cfg).context("building the emulated snake")?;
+    let bus = SimBus::new(
+        Box::new(plant),
+        SimBusConfig {
+            period_s: period_ns as f64 * 1e-9,
+            command_lifetime_s: cfg.network.command_lifetime_s,
+        },
+    );
+    let family = name(&cfg.network.family, "network.family")?;
+    let names = (0..n)
+        .map(|i| ModuleIdentity::emulated(i, n, family, EMULATOR_FIRMWARE).name.to_string())
+        .collect();
+    Ok(BuiltBus {
+        bus: Box::new(bus),
+        names,
+        kind: "emulated",
+    })
+}
