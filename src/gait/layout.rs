@@ -47,4 +47,34 @@ impl BodyLayout {
     pub fn is_empty(&self) -> bool {
         self.planes.is_empty()
     }
+
+    /// The length, m, that normalised arc length 1 stands for: one module length per
+    /// mean joint spacing (`(n + 1) · l` for [`BodyLayout::alternating`]).
+    pub fn body_length_m(&self) -> f64 {
+        let n = self.s.len();
+        if n >= 2 {
+            let spacing = (self.s[n - 1] - self.s[0]) / (n as f64 - 1.0);
+            if spacing.is_finite() && spacing > 0.0 {
+                return self.module_length_m / spacing;
+            }
+        }
+        (n as f64 + 1.0) * self.module_length_m
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn alternating_layout_planes_and_body_length() {
+        let l = BodyLayout::alternating(18, Plane::Lateral, 0.064);
+        assert_eq!(l.len(), 18);
+        assert_eq!(l.planes[0], Plane::Lateral);
+        assert_eq!(l.planes[1], Plane::Dorsal);
+        assert_eq!(l.planes[17], Plane::Dorsal);
+        assert!((l.body_length_m() - 19.0 * 0.064).abs() < 1e-12);
+        let one = BodyLayout::alternating(1, Plane::Dorsal, 0.05);
+        assert!((one.body_length_m() - 0.1).abs() < 1e-12);
+    }
 }

@@ -2,7 +2,7 @@
 //! and the selector that blends between them.
 //!
 //! Everything here is pure: time comes in as an argument, nothing allocates after
-//! construction, nothing reads a clock.
+//! construction, nothing reads a clock. See `docs/gaits.md`.
 
 pub mod layout;
 pub mod params;
@@ -10,5 +10,9 @@ pub mod selector;
 pub mod serpenoid;
 
 pub use layout::{BodyLayout, Plane};
-pub use params::{GaitKind, GaitParams, GaitTable, ParamError, ParamPatch};
-pub use selector::GaitSelector;
+pub use params::{
+    Field, GaitKind, GaitParams, GaitTable, JOINT_LIMIT_RAD, ParamError, ParamPatch,
+    SEA_MAX_JOINT_SPEED_RAD_S, SEA_MODULE_LENGTH_M,
+};
+pub use selector::{BLEND_TIME_RANGE_S, DEFAULT_BLEND_TIME_S, GaitSelector};
+pub use serpenoid::{Serpenoid, Wave, helix_wave};
