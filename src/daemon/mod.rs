@@ -51,15 +51,21 @@ pub fn apply_overrides(cfg: &mut Config, o: &Overrides) {
     };
 }
 
+/// The default gait parameters with the configuration's overrides, validated for
+/// this body's module length.
 fn gait_table(cfg: &Config) -> Result<GaitTable> {
+    let l = cfg.body.module_length_m;
     let mut table = GaitTable::default();
     for (kind, patch) in &cfg.gait.params {
         let p = table
             .get(*kind)
-            .patched(*kind, patch)
-            .with_context(|| format!("[gait.params.{}]", kind.name()))?;
+            .patched_for(*kind, patch, l)
+            .with_context(|| format!("bad configuration: [gait.params.{}]", kind.name()))?;
         *table.get_mut(*kind) = p;
     }
+    table
+        .validate_for(l)
+        .map_err(|(kind, e)| anyhow::anyhow!("bad configuration: gait {}: {e}", kind.name()))?;
     Ok(table)
 }
 
@@ -73,6 +79,8 @@ pub fn run(cfg: Config, emulated: bool) -> Result<()> {
             .context("installing the SIGINT/SIGTERM handler")?;
     }
 
+    // Everything that can be refused without the robot is checked before discovery.
+    let table = gait_table(&cfg)?;
     let period_ns = (1e9 / cfg.loop_.rate_hz).round() as u64;
     let built = bus_setup::build(&cfg, emulated, period_ns)?;
     let n = built.bus.module_count();
@@ -80,7 +88,6 @@ pub fn run(cfg: Config, emulated: bool) -> Result<()> {
     service::notify_status(&format!("group of {n} modules found"));
 
     let layout = BodyLayout::alternating(n, cfg.body.first_joint_plane, cfg.body.module_length_m);
-    let table = gait_table(&cfg)?;
     let selector = GaitSelector::new(
         layout,
         table,

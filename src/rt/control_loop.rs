@@ -16,7 +16,7 @@ use crate::rt::messages::{Ack, Envelope, LoopRequest, Rejection};
 use crate::rt::pacer::{Cycle, Pacer};
 use crate::rt::stats::{LoopStats, StatsReport};
 use crate::rt::telemetry::TelemetryWriter;
-use crate::safety::failsafe::{Event, Failsafe, Health, Output};
+use crate::safety::failsafe::{Event, Failsafe, Health, Mode, Output};
 
 /// Requests applied per cycle at most, so a flood cannot stretch a cycle.
 const MAX_REQUESTS_PER_CYCLE: usize = 8;
@@ -255,9 +255,12 @@ impl ControlLoop {
         let fs = &mut self.p.failsafe;
         match req {
             LoopRequest::SetGait(kind) => {
-                // Setting a gait also arms a held or limp robot (never an e-stopped one).
-                if fs.mode() != crate::safety::failsafe::Mode::Running {
-                    fs.request(now_s, Event::Arm)?;
+                // Setting a gait also arms a held or limp robot, never an e-stopped one:
+                // only an explicit arm releases the e-stop.
+                match fs.mode() {
+                    Mode::EStop => return Err(Rejection::EStopLatched),
+                    Mode::Running => {}
+                    Mode::Hold | Mode::Limp => fs.request(now_s, Event::Arm)?,
                 }
                 self.p.selector.set_gait(kind, t_s);
                 Ok(())

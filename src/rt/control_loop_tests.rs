@@ -173,16 +173,12 @@ fn estop_latches_and_only_arm_releases_it() {
         request(&mut h, 2, LoopRequest::SetGait(GaitKind::Sidewinding)),
         Err(Rejection::EStopLatched)
     );
-    assert_eq!(
-        request(&mut h, 3, LoopRequest::Hold).is_err(),
-        false,
-        "hold is always allowed"
-    );
+    assert_eq!(request(&mut h, 3, LoopRequest::Hold), Err(Rejection::EStopLatched));
     assert_eq!(h.telemetry.latest().mode, Mode::EStop);
     assert_eq!(request(&mut h, 4, LoopRequest::Arm), Ok(()));
     steps(&mut h, 2);
     assert_eq!(h.telemetry.latest().mode, Mode::Running);
-    assert_eq!(h.telemetry.latest().requests_refused, 1);
+    assert_eq!(h.telemetry.latest().requests_refused, 2);
 }
 
 #[test]

@@ -1,0 +1,79 @@
+//! `snaked` as an operator starts it: bad configurations, no modules, and the
+//! embedded emulator from start to safe stop.
+mod common;
+
+use std::process::Command;
+use std::time::Duration;
+
+use common::{Client, Proc, exe};
+use serde_json::json;
+
+fn run_with_config(text: &str) -> (i32, String) {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("bad.toml");
+    std::fs::write(&path, text).unwrap();
+    let out = Command::new(exe("snaked"))
+        .args(["--config", path.to_str().unwrap()])
+        .env("RUST_LOG", "off")
+        .output()
+        .unwrap();
+    (out.status.code().unwrap_or(-1), String::from_utf8_lossy(&out.stderr).into_owned())
+}
+
+#[test]
+fn a_bad_configuration_is_named_and_exits_non_zero() {
+    let (code, err) = run_with_config("[loop]\nrate_hz = 1000\nratee = 5\n");
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("bad.toml") && err.contains("ratee"), "{err}");
+    let (code, err) = run_with_config("[failsafe]\nlimp_after_s = -1.0\n");
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("failsafe.limp_after_s"), "{err}");
+    let (code, err) = run_with_config("[gait.params.slithering]\namplitude_lat_rad = 9.0\n");
+    assert_ne!(code, 0, "{err}");
+    assert!(err.contains("slithering"), "{err}");
+}
+
+#[test]
+fn no_modules_on_the_network_is_a_clear_failure() {
+    let port = common::free_udp_ports(2);
+    let (code, err) = run_with_config(&format!(
+        "[network]\ntargets = [\"127.0.0.1:{port}-{}\"]\ndiscovery_timeout_s = 0.3\n[control]\nsocket = \"\"\n",
+        port + 1
+    ));
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("discovery"), "{err}");
+}
+
+#[test]
+fn emulated_daemon_runs_switches_and_stops_safely() {
+    let dir = tempfile::tempdir().unwrap();
+    let sock = dir.path().join("s.sock");
+    let mut d = Proc::spawn(
+        "snaked",
+        &exe("snaked"),
+        &["--emulated".into(), "--socket".into(), sock.display().to_string()],
+    );
+    let mut c = Client::connect(&sock, Duration::from_secs(20));
+    let s = c.wait_status(Duration::from_secs(20), "running", |s| s["mode"] == "running");
+    assert_eq!(s["gait"], "sidewinding");
+    assert_eq!(s["modules"], 18);
+    c.call("gait.set", json!({"gait": "rolling"}));
+    c.wait_status(Duration::from_secs(20), "blend done", |s| {
+        s["gait"] == "rolling" && s["blend_progress"] == 1.0
+    });
+    let stats = c.call("stats", json!({}));
+    assert!(stats["cycles"].as_u64().unwrap() > 1000, "{stats}");
+    assert_eq!(stats["loop"]["period_error"]["count"], stats["cycles"]);
+    // snakectl talks to the same socket.
+    let out = Command::new(exe("snakectl"))
+        .args(["--socket", sock.to_str().unwrap(), "--json", "status"])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["gait"], "rolling");
+
+    d.signal(libc::SIGINT);
+    assert!(d.wait(Duration::from_secs(20)).success(), "exit 0 after the safe stop");
+    assert!(!sock.exists(), "socket removed");
+}
