@@ -134,3 +134,102 @@ impl GaitTable {
         &mut self.gaits[kind.index()]
     }
 }
+
+// TEMP: replaced at merge (the gait helper owns the real validation).
+impl GaitParams {
+    /// This gait's parameters with `patch` applied, validated (finite, in range,
+    /// peak joint speed within the module's 3.46 rad/s).
+    pub fn patched(&self, _kind: GaitKind, patch: &ParamPatch) -> Result<GaitParams, ParamError> {
+        use std::f64::consts::PI;
+        let mut p = *self;
+        let fields: [(&'static str, Option<f64>, &mut f64, f64, f64); 10] = [
+            (
+                "amplitude_lat_rad",
+                patch.amplitude_lat_rad,
+                &mut p.amplitude_lat_rad,
+                0.0,
+                PI / 2.0,
+            ),
+            (
+                "amplitude_dor_rad",
+                patch.amplitude_dor_rad,
+                &mut p.amplitude_dor_rad,
+                0.0,
+                PI / 2.0,
+            ),
+            (
+                "offset_lat_rad",
+                patch.offset_lat_rad,
+                &mut p.offset_lat_rad,
+                -PI / 2.0,
+                PI / 2.0,
+            ),
+            (
+                "offset_dor_rad",
+                patch.offset_dor_rad,
+                &mut p.offset_dor_rad,
+                -PI / 2.0,
+                PI / 2.0,
+            ),
+            (
+                "spatial_freq_rad",
+                patch.spatial_freq_rad,
+                &mut p.spatial_freq_rad,
+                0.0,
+                6.0 * PI,
+            ),
+            (
+                "temporal_freq_rad_s",
+                patch.temporal_freq_rad_s,
+                &mut p.temporal_freq_rad_s,
+                -2.0 * PI,
+                2.0 * PI,
+            ),
+            (
+                "phase_shift_rad",
+                patch.phase_shift_rad,
+                &mut p.phase_shift_rad,
+                -2.0 * PI,
+                2.0 * PI,
+            ),
+            ("taper", patch.taper, &mut p.taper, -0.8, 0.8),
+            (
+                "helix_radius_m",
+                patch.helix_radius_m,
+                &mut p.helix_radius_m,
+                0.0,
+                1.0,
+            ),
+            (
+                "helix_pitch_m",
+                patch.helix_pitch_m,
+                &mut p.helix_pitch_m,
+                -1.0,
+                1.0,
+            ),
+        ];
+        for (field, new, slot, min, max) in fields {
+            let value = new.unwrap_or(*slot);
+            if !value.is_finite() {
+                return Err(ParamError::NotFinite { field });
+            }
+            if !(min..=max).contains(&value) {
+                return Err(ParamError::OutOfRange {
+                    field,
+                    value,
+                    min,
+                    max,
+                });
+            }
+            *slot = value;
+        }
+        let amp = p.amplitude_lat_rad.max(p.amplitude_dor_rad) * (1.0 + p.taper.abs());
+        let peak = amp * p.temporal_freq_rad_s.abs();
+        if peak > 3.46 {
+            return Err(ParamError::Invalid(format!(
+                "peak joint speed {peak:.2} rad/s exceeds the modules' 3.46 rad/s"
+            )));
+        }
+        Ok(p)
+    }
+}
