@@ -1,1 +1,429 @@
-fn main() {}
+//! snakectl: command-line client of the snaked control socket.
+//!
+//! Exit status: 0 success, 1 the daemon answered with an error, 2 usage error,
+//! 3 cannot reach the daemon (not running, connection lost, no answer).
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::Duration;
+
+use clap::{Parser, Subcommand};
+use serde_json::{Map, Value, json};
+use snaked::control::DEFAULT_SOCKET_PATH;
+use snaked::control::api::PATCH_FIELDS;
+use snaked::control::client::{Client, ClientError, Endpoint};
+
+/// Control a running snaked through its control socket.
+#[derive(Parser, Debug)]
+#[command(name = "snakectl", version)]
+struct Cli {
+    /// Unix socket of the daemon [default: $SNAKED_SOCKET, else /run/snaked/snaked.sock].
+    #[arg(long, value_name = "PATH", global = true, conflicts_with = "tcp")]
+    socket: Option<PathBuf>,
+    /// Talk to the daemon's TCP listener instead.
+    #[arg(long, value_name = "HOST:PORT", global = true)]
+    tcp: Option<String>,
+    /// Print the daemon's raw JSON result instead of text.
+    #[arg(long, global = true)]
+    json: bool,
+    /// Seconds to wait for an answer.
+    #[arg(long, value_name = "S", default_value_t = 5.0, global = true)]
+    timeout: f64,
+    #[command(subcommand)]
+    cmd: Cmd,
+}
+
+#[derive(Subcommand, Debug)]
+enum Cmd {
+    /// Mode, gait, loop time, counters and a joint summary.
+    Status,
+    /// List gaits or switch gait.
+    Gait {
+        #[command(subcommand)]
+        cmd: GaitCmd,
+    },
+    /// Show or change gait parameters and the blend time.
+    Params {
+        #[command(subcommand)]
+        cmd: ParamsCmd,
+    },
+    /// Freeze the joints where they are.
+    Hold,
+    /// Stop driving the joints.
+    Limp,
+    /// Emergency stop: limp and latched until `arm`.
+    Estop,
+    /// Leave hold / limp / e-stop and blend into the active gait.
+    Arm,
+    /// Loop timing statistics and bus counters.
+    Stats,
+    /// Live telemetry.
+    Watch {
+        /// Messages per second (1..=200).
+        #[arg(long, default_value_t = 10.0)]
+        rate: f64,
+        /// Stop after this many messages.
+        #[arg(long)]
+        count: Option<u64>,
+    },
+    /// Call any method with raw JSON params; prints the JSON result.
+    Call {
+        method: String,
+        /// A JSON object, e.g. '{"gait":"rolling"}'.
+        params: Option<String>,
+    },
+}
+
+#[derive(Subcommand, Debug)]
+enum GaitCmd {
+    /// Every gait, the active one marked with `*`.
+    List,
+    /// Blend into gait NAME.
+    Set { name: String },
+}
+
+#[derive(Subcommand, Debug)]
+enum ParamsCmd {
+    /// One gait's parameters, or all of them.
+    Get { gait: Option<String> },
+    /// `params set GAIT key=value ...` or `params set --blend-time S`.
+    Set {
+        /// Gait blend time, s (0.1..=30).
+        #[arg(long, value_name = "S", conflicts_with_all = ["gait", "assignments"])]
+        blend_time: Option<f64>,
+        #[arg(required_unless_present = "blend_time")]
+        gait: Option<String>,
+        /// key=value pairs, e.g. amplitude_lat_rad=0.6 temporal_freq_rad_s=1.2
+        #[arg(value_name = "KEY=VALUE", allow_hyphen_values = true)]
+        assignments: Vec<String>,
+    },
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match run(&cli) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(Failure::Usage(msg)) => {
+            eprintln!("snakectl: {msg}");
+            ExitCode::from(2)
+        }
+        Err(Failure::Client(e @ ClientError::Rpc(_))) => {
+            eprintln!("snakectl: snaked refused: {e}");
+            ExitCode::from(1)
+        }
+        Err(Failure::Client(e)) => {
+            eprintln!("snakectl: {e}");
+            ExitCode::from(3)
+        }
+    }
+}
+
+enum Failure {
+    Usage(String),
+    Client(ClientError),
+}
+
+impl From<ClientError> for Failure {
+    fn from(e: ClientError) -> Self {
+        Failure::Client(e)
+    }
+}
+
+fn endpoint(cli: &Cli) -> Endpoint {
+    if let Some(addr) = &cli.tcp {
+        return Endpoint::Tcp(addr.clone());
+    }
+    let path = cli
+        .socket
+        .clone()
+        .or_else(|| std::env::var_os("SNAKED_SOCKET").map(PathBuf::from))
+        .unwrap_or_else(|| PathBuf::from(DEFAULT_SOCKET_PATH));
+    Endpoint::Unix(path)
+}
+
+fn run(cli: &Cli) -> Result<(), Failure> {
+    if !(cli.timeout.is_finite() && cli.timeout > 0.0) {
+        return Err(Failure::Usage("--timeout must be a positive number".into()));
+    }
+    // Build the request first: usage errors must not need a daemon.
+    let (method, params) = request(&cli.cmd)?;
+    let timeout = Duration::from_secs_f64(cli.timeout);
+    let mut client = Client::connect(&endpoint(cli), Some(timeout))?;
+    let result = client.call(method, params)?;
+    match &cli.cmd {
+        Cmd::Watch { count, .. } => return watch(&mut client, cli.json, *count),
+        Cmd::Call { .. } if !cli.json => println!("{}", pretty(&result)),
+        _ if cli.json => println!("{result}"),
+        cmd => print_human(cmd, &result),
+    }
+    Ok(())
+}
+
+/// The method and params a command sends.
+fn request(cmd: &Cmd) -> Result<(&str, Option<Value>), Failure> {
+    Ok(match cmd {
+        Cmd::Status => ("status", None),
+        Cmd::Gait { cmd: GaitCmd::List } => ("gait.list", None),
+        Cmd::Gait {
+            cmd: GaitCmd::Set { name },
+        } => ("gait.set", Some(json!({ "gait": name }))),
+        Cmd::Params {
+            cmd: ParamsCmd::Get { gait },
+        } => ("params.get", gait.as_ref().map(|g| json!({ "gait": g }))),
+        Cmd::Params {
+            cmd:
+                ParamsCmd::Set {
+                    blend_time,
+                    gait,
+                    assignments,
+                },
+        } => (
+            "params.set",
+            Some(params_set(*blend_time, gait, assignments)?),
+        ),
+        Cmd::Hold => ("hold", None),
+        Cmd::Limp => ("limp", None),
+        Cmd::Estop => ("estop", None),
+        Cmd::Arm => ("arm", None),
+        Cmd::Stats => ("stats", None),
+        Cmd::Watch { rate, .. } => ("telemetry.subscribe", Some(json!({ "rate_hz": rate }))),
+        Cmd::Call { method, params } => {
+            let params = match params {
+                None => None,
+                Some(text) => Some(
+                    serde_json::from_str(text)
+                        .map_err(|e| Failure::Usage(format!("params are not valid JSON: {e}")))?,
+                ),
+            };
+            (method.as_str(), params)
+        }
+    })
+}
+
+fn params_set(
+    blend_time: Option<f64>,
+    gait: &Option<String>,
+    assignments: &[String],
+) -> Result<Value, Failure> {
+    if let Some(t) = blend_time {
+        return Ok(json!({ "blend_time_s": t }));
+    }
+    let mut p = Map::new();
+    p.insert("gait".into(), json!(gait));
+    if assignments.is_empty() {
+        return Err(Failure::Usage(
+            "give at least one KEY=VALUE, e.g. amplitude_lat_rad=0.6".into(),
+        ));
+    }
+    for a in assignments {
+        let (key, value) = a
+            .split_once('=')
+            .ok_or_else(|| Failure::Usage(format!("`{a}` is not KEY=VALUE")))?;
+        let v: f64 = value
+            .trim()
+            .parse()
+            .ok()
+            .filter(|v: &f64| v.is_finite())
+            .ok_or_else(|| Failure::Usage(format!("`{key}`: `{value}` is not a finite number")))?;
+        p.insert(key.trim().to_owned(), json!(v));
+    }
+    Ok(Value::Object(p))
+}
+
+fn watch(client: &mut Client, json_lines: bool, count: Option<u64>) -> Result<(), Failure> {
+    let mut seen = 0u64;
+    while count.is_none_or(|n| seen < n) {
+        let msg = client.next_message()?;
+        if msg["method"] != "telemetry" {
+            continue;
+        }
+        seen += 1;
+        let p = &msg["params"];
+        if json_lines {
+            println!("{p}");
+        } else {
+            println!("{}", telemetry_line(p));
+        }
+    }
+    Ok(())
+}
+
+fn pretty(v: &Value) -> String {
+    serde_json::to_string_pretty(v).unwrap_or_else(|_| v.to_string())
+}
+
+/// A number with `digits` decimals, or "-" for null (non-finite on the daemon's side).
+fn num(v: &Value, digits: usize) -> String {
+    v.as_f64()
+        .map_or_else(|| "-".to_owned(), |x| format!("{x:.digits$}"))
+}
+
+fn text(v: &Value) -> String {
+    v.as_str().map_or_else(|| v.to_string(), str::to_owned)
+}
+
+fn print_human(cmd: &Cmd, r: &Value) {
+    match cmd {
+        Cmd::Status => print_status(r),
+        Cmd::Gait { cmd: GaitCmd::List } => {
+            for g in r["gaits"].as_array().into_iter().flatten() {
+                let mark = if g["active"] == true { "*" } else { " " };
+                let line = format!(
+                    "{mark} {:<20} {}",
+                    text(&g["name"]),
+                    params_inline(&g["params"])
+                );
+                println!("{}", line.trim_end());
+            }
+        }
+        Cmd::Gait { .. } => println!("gait: blending into {}", text(&r["gait"])),
+        Cmd::Params {
+            cmd: ParamsCmd::Get { .. },
+        } => {
+            if let Some(all) = r["gaits"].as_object() {
+                for (name, p) in all {
+                    println!("{name}");
+                    print_params(p, "  ");
+                }
+            } else {
+                println!("{}", text(&r["gait"]));
+                print_params(&r["params"], "  ");
+            }
+            println!("blend_time_s  {}", num(&r["blend_time_s"], 2));
+        }
+        Cmd::Params { .. } => match r.get("blend_time_s") {
+            Some(t) => println!("blend_time_s = {}", num(t, 2)),
+            None => {
+                println!("{} (applied)", text(&r["gait"]));
+                print_params(&r["params"], "  ");
+            }
+        },
+        Cmd::Stats => print_stats(r),
+        _ => println!("ok"),
+    }
+}
+
+/// A gait's non-zero params on one line, in the struct's order.
+fn params_inline(p: &Value) -> String {
+    PATCH_FIELDS
+        .iter()
+        .filter(|k| p[**k].as_f64().is_some_and(|x| x != 0.0))
+        .map(|k| format!("{k}={}", num(&p[*k], 3)))
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+fn print_params(p: &Value, indent: &str) {
+    let width = PATCH_FIELDS.iter().map(|k| k.len()).max().unwrap_or(0);
+    for k in PATCH_FIELDS {
+        println!("{indent}{k:<width$}  {:>9}", num(&p[k], 4));
+    }
+}
+
+fn print_status(r: &Value) {
+    let j = &r["joints"];
+    let d = &r["daemon"];
+    println!("mode      {} ({})", text(&r["mode"]), text(&r["reason"]));
+    println!(
+        "gait      {}  blend {:.0}%  blend time {} s",
+        text(&r["gait"]),
+        r["blend_progress"].as_f64().unwrap_or(0.0) * 100.0,
+        num(&r["blend_time_s"], 1)
+    );
+    println!(
+        "loop      t {} s  cycle {}  {} Hz {}  bus {}",
+        num(&r["t_s"], 3),
+        r["cycle"],
+        num(&d["loop_rate_hz"], 0),
+        text(&d["pacing"]),
+        text(&d["bus"])
+    );
+    println!("modules   {}", r["modules"]);
+    println!(
+        "requests  {} applied, {} refused",
+        r["requests_applied"], r["requests_refused"]
+    );
+    println!(
+        "joints    max |torque| {} N·m  max |velocity| {} rad/s  max tracking error {} rad  \
+         max feedback age {} s",
+        num(&j["max_abs_torque_nm"], 2),
+        num(&j["max_abs_velocity_rad_s"], 2),
+        num(&j["max_tracking_error_rad"], 3),
+        num(&j["max_feedback_age_s"], 4)
+    );
+    println!("position  {}", joined(&j["position_rad"], 2));
+    println!("torque    {}", joined(&j["torque_nm"], 2));
+    println!("daemon    snaked {}", text(&d["version"]));
+}
+
+fn joined(arr: &Value, digits: usize) -> String {
+    arr.as_array()
+        .into_iter()
+        .flatten()
+        .map(|v| format!("{:>w$}", num(v, digits), w = digits + 4))
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+fn print_stats(r: &Value) {
+    let l = &r["loop"];
+    println!(
+        "cycles {}  overruns {}  skipped periods {}  late feedback {}",
+        r["cycles"], l["overruns"], l["skipped_periods"], l["late_feedback"]
+    );
+    println!();
+    let cols = ["count", "mean", "min", "p50", "p99", "p99.9", "max"];
+    let keys = [
+        "count", "mean_us", "min_us", "p50_us", "p99_us", "p999_us", "max_us",
+    ];
+    print!("{:<14}", "µs");
+    for c in cols {
+        print!("{c:>10}");
+    }
+    println!();
+    for (label, key) in [
+        ("period error", "period_error"),
+        ("compute", "compute"),
+        ("feedback age", "feedback_age"),
+    ] {
+        print!("{label:<14}");
+        for k in keys {
+            let v = &l[key][k];
+            let cell = if k == "count" {
+                v.to_string()
+            } else {
+                num(v, 1)
+            };
+            print!("{cell:>10}");
+        }
+        println!();
+    }
+    println!();
+    println!("bus");
+    let bus = r["bus"].as_object().cloned().unwrap_or_default();
+    let width = bus.keys().map(String::len).max().unwrap_or(0);
+    for (k, v) in &bus {
+        println!("  {k:<width$}  {v:>12}");
+    }
+}
+
+fn telemetry_line(p: &Value) -> String {
+    let joints = p["joints"].as_array().cloned().unwrap_or_default();
+    let max_torque = joints
+        .iter()
+        .filter_map(|j| j["torque_nm"].as_f64())
+        .fold(0.0f64, |m, t| m.max(t.abs()));
+    let positions: Vec<String> = joints
+        .iter()
+        .map(|j| format!("{:>6}", num(&j["position_rad"], 2)))
+        .collect();
+    format!(
+        "t {:>10} s  cycle {:>9}  {:<8} {:<20} blend {:>3.0}%  max|τ| {:>5.2} N·m  θ {}",
+        num(&p["t_s"], 3),
+        p["cycle"],
+        text(&p["mode"]),
+        text(&p["gait"]),
+        p["blend_progress"].as_f64().unwrap_or(0.0) * 100.0,
+        max_torque,
+        positions.join(" ")
+    )
+}

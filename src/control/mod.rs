@@ -1,2 +1,115 @@
 //! The control socket: newline-delimited JSON over a Unix socket (and optionally
 //! TCP on 127.0.0.1), served by tokio, feeding the loop through a bounded channel.
+//!
+//! The protocol is documented in `docs/control-socket.md`. In short: one request
+//! per line, `{"id": 1, "method": "status", "params": {...}}`, one answer per
+//! request, `{"id": 1, "result": ...}` or `{"id": 1, "error": {"code", "message"}}`,
+//! and stream messages without an id. Everything a request carries is validated
+//! here, on the async side, before anything reaches the loop; requests that act
+//! on the loop are sent with `try_send` (a full channel is an immediate "busy")
+//! and answered when the loop acks them.
+//!
+//! - [`api`]: wire format, params, error codes.
+//! - `server`: binding, the runtime thread, accept loops, the client limit.
+//! - `conn`: one connection: reading lines, answering in order, the writer.
+//! - `methods`: what each method does; `views`: JSON views of a snapshot.
+//! - `router`: tickets and acks between connections and the loop.
+//! - [`client`]: a small blocking client (used by `snakectl` and the tests).
+
+pub mod api;
+pub mod client;
+mod conn;
+mod lines;
+mod methods;
+mod router;
+mod server;
+mod views;
+
+use std::path::PathBuf;
+use std::time::Duration;
+
+use serde::Serialize;
+
+use crate::rt::messages::{Ack, Envelope};
+use crate::rt::telemetry::TelemetryReader;
+
+pub use methods::{BLEND_TIME_RANGE_S, DEFAULT_RATE_HZ, METHODS, RATE_RANGE_HZ};
+pub use server::{RunningServer, ServerError, start};
+
+/// Where the daemon puts its socket unless told otherwise.
+pub const DEFAULT_SOCKET_PATH: &str = "/run/snaked/snaked.sock";
+
+/// How the server listens and what it tolerates.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ServerConfig {
+    /// Unix stream socket path (the parent directory is created if missing).
+    pub unix_path: Option<PathBuf>,
+    /// TCP port on 127.0.0.1 only (0 picks a free port; see `RunningServer::tcp_addr`).
+    pub tcp_port: Option<u16>,
+    /// Longest request line accepted, bytes (without the newline).
+    pub max_line_bytes: usize,
+    /// Connections served at once; one more is told -32004 and closed.
+    pub max_clients: usize,
+    /// How long a request waits for the loop's ack before -32001.
+    pub ack_timeout: Duration,
+    /// Mode of the socket file (e.g. 0o660: owner and group may control the robot).
+    pub socket_mode: u32,
+}
+
+impl Default for ServerConfig {
+    fn default() -> Self {
+        Self {
+            unix_path: Some(PathBuf::from(DEFAULT_SOCKET_PATH)),
+            tcp_port: None,
+            max_line_bytes: 65536,
+            max_clients: 64,
+            ack_timeout: Duration::from_secs(1),
+            socket_mode: 0o660,
+        }
+    }
+}
+
+/// The server's ends of the loop's channels.
+pub struct LoopHandle {
+    /// Bounded: the server only ever `try_send`s.
+    pub requests: crossbeam_channel::Sender<Envelope>,
+    /// The loop's answers, matched to requests by ticket.
+    pub acks: crossbeam_channel::Receiver<Ack>,
+    pub telemetry: TelemetryReader,
+    pub info: DaemonInfo,
+}
+
+/// How the daemon talks to its modules.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum BusKind {
+    /// Real (or `snake-emu`) modules over UDP.
+    #[default]
+    Udp,
+    /// The in-process emulator (`snaked --emulated`).
+    Emulated,
+}
+
+/// How the loop is paced.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Pacing {
+    /// Absolute deadlines on the wall clock.
+    #[default]
+    Realtime,
+    /// Advance when the emulator's feedback for the next step has arrived.
+    Lockstep,
+}
+
+/// Static facts about the daemon, reported by `status`.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct DaemonInfo {
+    /// The daemon's version (`CARGO_PKG_VERSION`).
+    pub version: String,
+    pub module_count: usize,
+    /// Module names, head first.
+    pub module_names: Vec<String>,
+    pub loop_rate_hz: f64,
+    pub bus: BusKind,
+    pub pacing: Pacing,
+}

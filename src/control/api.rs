@@ -1,0 +1,433 @@
+//! The wire format: parsing requests, typed access to their params, error codes.
+//!
+//! Requests are parsed in two steps so that errors can name the offending field:
+//! the line is first checked as JSON with every value kept raw (which does not
+//! convert numbers, so `1e999` gets through), then each param is converted on its
+//! own and a failure says which field and why.
+use std::collections::BTreeMap;
+
+use serde::Serialize;
+use serde_json::Value;
+use serde_json::value::RawValue;
+
+use crate::gait::{GaitKind, ParamPatch};
+
+/// Error codes (JSON-RPC 2.0 style). See `docs/control-socket.md`.
+pub mod code {
+    /// The line is not valid JSON.
+    pub const PARSE_ERROR: i64 = -32700;
+    /// Not an object, or `id` / `method` missing or of the wrong type.
+    pub const INVALID_REQUEST: i64 = -32600;
+    /// No such method.
+    pub const METHOD_NOT_FOUND: i64 = -32601;
+    /// A param has the wrong type, is unknown, out of range or not finite.
+    pub const INVALID_PARAMS: i64 = -32602;
+    /// The loop's request channel is full; try again.
+    pub const BUSY: i64 = -32000;
+    /// The loop did not answer within the server's ack timeout.
+    pub const LOOP_TIMEOUT: i64 = -32001;
+    /// The loop refused the request (or is not running).
+    pub const REFUSED: i64 = -32002;
+    /// The line exceeded `max_line_bytes`; it was discarded up to its newline.
+    pub const LINE_TOO_LONG: i64 = -32003;
+    /// The server already serves `max_clients` connections; it closes this one.
+    pub const TOO_MANY_CLIENTS: i64 = -32004;
+}
+
+/// An error answer: `{"code": .., "message": ".."}`.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, thiserror::Error)]
+#[error("error {code}: {message}")]
+pub struct RpcError {
+    pub code: i64,
+    pub message: String,
+}
+
+impl RpcError {
+    pub fn new(code: i64, message: impl Into<String>) -> Self {
+        Self {
+            code,
+            message: message.into(),
+        }
+    }
+
+    pub fn invalid_params(message: impl Into<String>) -> Self {
+        Self::new(code::INVALID_PARAMS, message)
+    }
+}
+
+/// One parsed request line.
+#[derive(Debug)]
+pub struct Request {
+    /// Echoed in the answer: a JSON number or string.
+    pub id: Value,
+    pub method: String,
+    pub params: Params,
+}
+
+/// A line that is not a valid request: the error and the id to answer with
+/// (`null` when the id could not be read).
+#[derive(Debug)]
+pub struct BadRequest {
+    pub id: Value,
+    pub error: RpcError,
+}
+
+type RawMap = BTreeMap<String, Box<RawValue>>;
+
+/// Parse one request line (without its newline).
+pub fn parse_request(line: &[u8]) -> Result<Request, BadRequest> {
+    let bad = |id: &Value, code: i64, message: String| BadRequest {
+        id: id.clone(),
+        error: RpcError::new(code, message),
+    };
+    let null = Value::Null;
+    let text = std::str::from_utf8(line)
+        .map_err(|e| bad(&null, code::PARSE_ERROR, format!("invalid UTF-8: {e}")))?;
+    // Syntax only: raw values are skipped, numbers are not converted.
+    let raw: Box<RawValue> = serde_json::from_str(text)
+        .map_err(|e| bad(&null, code::PARSE_ERROR, format!("invalid JSON: {e}")))?;
+    if !raw.get().starts_with('{') {
+        let what = json_kind(raw.get());
+        return Err(bad(
+            &null,
+            code::INVALID_REQUEST,
+            format!("a request must be a JSON object, got {what}"),
+        ));
+    }
+    let mut top: RawMap = serde_json::from_str(raw.get()).map_err(|e| {
+        bad(
+            &null,
+            code::INVALID_REQUEST,
+            format!("invalid request: {e}"),
+        )
+    })?;
+
+    let id = match top.remove("id") {
+        None => return Err(bad(&null, code::INVALID_REQUEST, "missing `id`".into())),
+        Some(raw_id) => match serde_json::from_str::<Value>(raw_id.get()) {
+            Ok(v @ (Value::Number(_) | Value::String(_))) => v,
+            Ok(other) => {
+                let what = json_kind(&other.to_string());
+                let msg = format!("`id` must be a number or a string, got {what}");
+                return Err(bad(&null, code::INVALID_REQUEST, msg));
+            }
+            Err(e) => {
+                let msg = format!("`id` is not a usable number: {e}");
+                return Err(bad(&null, code::INVALID_REQUEST, msg));
+            }
+        },
+    };
+    let method = match top.remove("method") {
+        None => return Err(bad(&id, code::INVALID_REQUEST, "missing `method`".into())),
+        Some(m) => serde_json::from_str::<String>(m.get()).map_err(|_| {
+            let what = json_kind(m.get());
+            bad(
+                &id,
+                code::INVALID_REQUEST,
+                format!("`method` must be a string, got {what}"),
+            )
+        })?,
+    };
+    let params = match top.remove("params") {
+        None => RawMap::new(),
+        Some(p) if p.get() == "null" => RawMap::new(),
+        Some(p) if p.get().starts_with('{') => serde_json::from_str(p.get())
+            .map_err(|e| bad(&id, code::INVALID_PARAMS, format!("`params`: {e}")))?,
+        Some(p) => {
+            let what = json_kind(p.get());
+            let msg = format!("`params` must be an object, got {what}");
+            return Err(bad(&id, code::INVALID_PARAMS, msg));
+        }
+    };
+    // A "jsonrpc": "2.0" member is tolerated so JSON-RPC clients work unchanged.
+    top.remove("jsonrpc");
+    if let Some(extra) = top.keys().next() {
+        let msg = format!("unknown member `{extra}` (a request has id, method, params)");
+        return Err(bad(&id, code::INVALID_REQUEST, msg));
+    }
+    Ok(Request {
+        id,
+        method,
+        params: Params { fields: params },
+    })
+}
+
+/// What kind of JSON value a raw text is, for error messages.
+fn json_kind(raw: &str) -> &'static str {
+    match raw.trim_start().as_bytes().first() {
+        Some(b'{') => "an object",
+        Some(b'[') => "an array",
+        Some(b'"') => "a string",
+        Some(b't' | b'f') => "a boolean",
+        Some(b'n') => "null",
+        Some(b'-' | b'0'..=b'9') => "a number",
+        _ => "nothing",
+    }
+}
+
+/// A request's params, taken out field by field; `finish` refuses leftovers.
+#[derive(Debug, Default)]
+pub struct Params {
+    fields: RawMap,
+}
+
+impl Params {
+    pub fn is_empty(&self) -> bool {
+        self.fields.is_empty()
+    }
+
+    pub fn contains(&self, name: &str) -> bool {
+        self.fields.contains_key(name)
+    }
+
+    /// A number param: absent → `None`; not a number, or not finite as an f64
+    /// (e.g. `1e999`) → an error naming the field.
+    pub fn take_f64(&mut self, name: &str) -> Result<Option<f64>, RpcError> {
+        let Some(raw) = self.fields.remove(name) else {
+            return Ok(None);
+        };
+        let text = raw.get();
+        if !matches!(text.as_bytes().first(), Some(b'-' | b'0'..=b'9')) {
+            let what = json_kind(text);
+            return Err(RpcError::invalid_params(format!(
+                "`{name}` must be a number, got {what}"
+            )));
+        }
+        match serde_json::from_str::<f64>(text) {
+            Ok(v) if v.is_finite() => Ok(Some(v)),
+            _ => Err(RpcError::invalid_params(format!(
+                "`{name}` = {text} is not a finite number"
+            ))),
+        }
+    }
+
+    /// A number param that must lie in `min..=max`.
+    pub fn take_f64_in(&mut self, name: &str, min: f64, max: f64) -> Result<Option<f64>, RpcError> {
+        match self.take_f64(name)? {
+            Some(v) if !(min..=max).contains(&v) => Err(RpcError::invalid_params(format!(
+                "`{name}` = {v} is out of range [{min}, {max}]"
+            ))),
+            other => Ok(other),
+        }
+    }
+
+    /// A string param: absent → `None`; another type → an error naming the field.
+    pub fn take_str(&mut self, name: &str) -> Result<Option<String>, RpcError> {
+        let Some(raw) = self.fields.remove(name) else {
+            return Ok(None);
+        };
+        serde_json::from_str::<String>(raw.get())
+            .map(Some)
+            .map_err(|_| {
+                let what = json_kind(raw.get());
+                RpcError::invalid_params(format!("`{name}` must be a string, got {what}"))
+            })
+    }
+
+    /// A gait name param.
+    pub fn take_gait(&mut self, name: &str) -> Result<Option<GaitKind>, RpcError> {
+        match self.take_str(name)? {
+            None => Ok(None),
+            Some(s) => GaitKind::from_name(&s).map(Some).ok_or_else(|| {
+                let known: Vec<&str> = GaitKind::ALL.iter().map(|k| k.name()).collect();
+                RpcError::invalid_params(format!(
+                    "`{name}`: unknown gait `{s}` (known: {})",
+                    known.join(", ")
+                ))
+            }),
+        }
+    }
+
+    /// Every `ParamPatch` field present, each a finite number.
+    pub fn take_patch(&mut self) -> Result<ParamPatch, RpcError> {
+        let mut patch = ParamPatch::default();
+        for name in PATCH_FIELDS {
+            if let Some(v) = self.take_f64(name)? {
+                *patch_slot(&mut patch, name).expect("PATCH_FIELDS names ParamPatch fields") =
+                    Some(v);
+            }
+        }
+        Ok(patch)
+    }
+
+    /// Refuse any field not taken yet; `expected` lists the method's fields.
+    pub fn finish(self, expected: &[&str]) -> Result<(), RpcError> {
+        match self.fields.keys().next() {
+            None => Ok(()),
+            Some(extra) if expected.is_empty() => Err(RpcError::invalid_params(format!(
+                "unknown field `{extra}` (this method takes no params)"
+            ))),
+            Some(extra) => Err(RpcError::invalid_params(format!(
+                "unknown field `{extra}` (expected one of: {})",
+                expected.join(", ")
+            ))),
+        }
+    }
+}
+
+/// The fields of `ParamPatch`, as named on the wire.
+pub const PATCH_FIELDS: [&str; 10] = [
+    "amplitude_lat_rad",
+    "amplitude_dor_rad",
+    "offset_lat_rad",
+    "offset_dor_rad",
+    "spatial_freq_rad",
+    "temporal_freq_rad_s",
+    "phase_shift_rad",
+    "taper",
+    "helix_radius_m",
+    "helix_pitch_m",
+];
+
+fn patch_slot<'a>(p: &'a mut ParamPatch, name: &str) -> Option<&'a mut Option<f64>> {
+    Some(match name {
+        "amplitude_lat_rad" => &mut p.amplitude_lat_rad,
+        "amplitude_dor_rad" => &mut p.amplitude_dor_rad,
+        "offset_lat_rad" => &mut p.offset_lat_rad,
+        "offset_dor_rad" => &mut p.offset_dor_rad,
+        "spatial_freq_rad" => &mut p.spatial_freq_rad,
+        "temporal_freq_rad_s" => &mut p.temporal_freq_rad_s,
+        "phase_shift_rad" => &mut p.phase_shift_rad,
+        "taper" => &mut p.taper,
+        "helix_radius_m" => &mut p.helix_radius_m,
+        "helix_pitch_m" => &mut p.helix_pitch_m,
+        _ => return None,
+    })
+}
+
+/// The answer line for a result.
+pub fn result_line(id: &Value, result: &Value) -> String {
+    #[derive(Serialize)]
+    struct Answer<'a> {
+        id: &'a Value,
+        result: &'a Value,
+    }
+    to_line(&Answer { id, result })
+}
+
+/// The answer line for an error.
+pub fn error_line(id: &Value, error: &RpcError) -> String {
+    #[derive(Serialize)]
+    struct Answer<'a> {
+        id: &'a Value,
+        error: &'a RpcError,
+    }
+    to_line(&Answer { id, error })
+}
+
+/// A stream message line (no id): `{"method": .., "params": ..}`.
+pub fn stream_line(method: &str, params: &Value) -> String {
+    #[derive(Serialize)]
+    struct Message<'a> {
+        method: &'a str,
+        params: &'a Value,
+    }
+    to_line(&Message { method, params })
+}
+
+fn to_line(v: &impl Serialize) -> String {
+    // Serialising a `Value` or plain structs of them cannot fail (string keys only).
+    let mut s = serde_json::to_string(v).expect("JSON values always serialise");
+    s.push('\n');
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn err(line: &str) -> BadRequest {
+        parse_request(line.as_bytes()).expect_err("should be refused")
+    }
+
+    #[test]
+    fn parses_a_request_with_params() {
+        let r =
+            parse_request(br#"{"id":7,"method":"gait.set","params":{"gait":"rolling"}}"#).unwrap();
+        assert_eq!(r.id, Value::from(7));
+        assert_eq!(r.method, "gait.set");
+        let mut p = r.params;
+        assert_eq!(p.take_gait("gait").unwrap(), Some(GaitKind::Rolling));
+        p.finish(&["gait"]).unwrap();
+    }
+
+    #[test]
+    fn classifies_bad_lines() {
+        assert_eq!(err("{not json").error.code, code::PARSE_ERROR);
+        assert_eq!(err("[1,2]").error.code, code::INVALID_REQUEST);
+        assert_eq!(
+            err(r#"{"method":"status"}"#).error.code,
+            code::INVALID_REQUEST
+        );
+        let e = err(r#"{"id":"a"}"#);
+        assert_eq!(
+            (e.error.code, e.id),
+            (code::INVALID_REQUEST, Value::from("a"))
+        );
+        assert_eq!(
+            err(r#"{"id":1,"method":3}"#).error.code,
+            code::INVALID_REQUEST
+        );
+        assert_eq!(
+            err(r#"{"id":[1],"method":"x"}"#).error.code,
+            code::INVALID_REQUEST
+        );
+        assert_eq!(
+            err(r#"{"id":1,"method":"x","params":[]}"#).error.code,
+            code::INVALID_PARAMS
+        );
+        assert_eq!(
+            err(r#"{"id":1,"method":"x","extra":0}"#).error.code,
+            code::INVALID_REQUEST
+        );
+    }
+
+    #[test]
+    fn non_finite_numbers_name_their_field() {
+        let r = parse_request(br#"{"id":1,"method":"m","params":{"taper":1e999}}"#).unwrap();
+        let mut p = r.params;
+        let e = p.take_f64("taper").unwrap_err();
+        assert_eq!(e.code, code::INVALID_PARAMS);
+        assert!(
+            e.message.contains("taper") && e.message.contains("finite"),
+            "{}",
+            e.message
+        );
+    }
+
+    #[test]
+    fn wrong_types_and_unknown_fields_are_named() {
+        let r = parse_request(br#"{"id":1,"method":"m","params":{"rate_hz":"x","zz":1}}"#).unwrap();
+        let mut p = r.params;
+        let e = p.take_f64("rate_hz").unwrap_err();
+        assert!(e.message.contains("rate_hz") && e.message.contains("string"));
+        let e = p.finish(&["rate_hz"]).unwrap_err();
+        assert!(e.message.contains("zz"), "{}", e.message);
+    }
+
+    #[test]
+    fn patch_fields_round_trip() {
+        let r =
+            parse_request(br#"{"id":1,"method":"m","params":{"taper":0.5,"helix_pitch_m":0.1}}"#)
+                .unwrap();
+        let mut p = r.params;
+        let patch = p.take_patch().unwrap();
+        assert_eq!(patch.taper, Some(0.5));
+        assert_eq!(patch.helix_pitch_m, Some(0.1));
+        assert_eq!(patch.amplitude_lat_rad, None);
+        assert!(p.is_empty());
+        let mut probe = ParamPatch::default();
+        for f in PATCH_FIELDS {
+            assert!(patch_slot(&mut probe, f).is_some(), "{f}");
+        }
+    }
+
+    #[test]
+    fn answer_lines_end_with_a_newline() {
+        let l = error_line(&Value::Null, &RpcError::new(code::BUSY, "busy"));
+        assert_eq!(
+            l,
+            "{\"id\":null,\"error\":{\"code\":-32000,\"message\":\"busy\"}}\n"
+        );
+    }
+}

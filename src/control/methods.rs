@@ -1,0 +1,148 @@
+//! The methods: validate params completely on the async side, then either answer
+//! from the latest snapshot or hand one request to the loop and wait for its ack.
+use std::sync::Arc;
+
+use serde_json::{Value, json};
+
+use super::api::{PATCH_FIELDS, Params, RpcError, code};
+use super::conn::Session;
+use super::server::Shared;
+use super::views;
+use crate::gait::ParamPatch;
+use crate::rt::messages::LoopRequest;
+
+/// Every method the server knows (listed in the unknown-method error).
+pub const METHODS: [&str; 13] = [
+    "status",
+    "gait.list",
+    "gait.set",
+    "params.get",
+    "params.set",
+    "hold",
+    "limp",
+    "estop",
+    "arm",
+    "stats",
+    "telemetry.subscribe",
+    "telemetry.unsubscribe",
+    "ping",
+];
+
+/// Blend time limits, s.
+pub const BLEND_TIME_RANGE_S: (f64, f64) = (0.1, 30.0);
+/// Telemetry stream rate limits and default, Hz.
+pub const RATE_RANGE_HZ: (f64, f64) = (1.0, 200.0);
+pub const DEFAULT_RATE_HZ: f64 = 10.0;
+
+pub(crate) async fn dispatch(
+    shared: &Arc<Shared>,
+    session: &mut Session,
+    method: &str,
+    mut p: Params,
+) -> Result<Value, RpcError> {
+    match method {
+        "ping" => {
+            p.finish(&[])?;
+            Ok(json!({ "pong": true }))
+        }
+        "status" => {
+            p.finish(&[])?;
+            Ok(views::status(&shared.telemetry.latest(), &shared.info))
+        }
+        "gait.list" => {
+            p.finish(&[])?;
+            Ok(views::gait_list(&shared.telemetry.latest()))
+        }
+        "gait.set" => {
+            let gait = p.take_gait("gait")?.ok_or_else(|| missing("gait"))?;
+            p.finish(&["gait"])?;
+            shared.router.call(LoopRequest::SetGait(gait)).await?;
+            Ok(json!({ "gait": gait }))
+        }
+        "params.get" => {
+            let gait = p.take_gait("gait")?;
+            p.finish(&["gait"])?;
+            let s = shared.telemetry.latest();
+            Ok(views::params(&s.params, s.blend_time_s, gait))
+        }
+        "params.set" => params_set(shared, p).await,
+        "hold" => act(shared, p, LoopRequest::Hold).await,
+        "limp" => act(shared, p, LoopRequest::Limp).await,
+        "estop" => act(shared, p, LoopRequest::EStop).await,
+        "arm" => act(shared, p, LoopRequest::Arm).await,
+        "stats" => {
+            p.finish(&[])?;
+            Ok(views::stats(&shared.telemetry.latest()))
+        }
+        "telemetry.subscribe" => {
+            let (min, max) = RATE_RANGE_HZ;
+            let rate_hz = p
+                .take_f64_in("rate_hz", min, max)?
+                .unwrap_or(DEFAULT_RATE_HZ);
+            p.finish(&["rate_hz"])?;
+            // Started by the connection once this answer is queued, so it comes first.
+            session.subscribe_after_answer(rate_hz);
+            Ok(json!({ "subscribed": true, "rate_hz": rate_hz }))
+        }
+        "telemetry.unsubscribe" => {
+            p.finish(&[])?;
+            let dropped = session.unsubscribe().await;
+            Ok(json!({ "subscribed": false, "dropped": dropped }))
+        }
+        _ => Err(RpcError::new(
+            code::METHOD_NOT_FOUND,
+            format!("unknown method `{method}` (known: {})", METHODS.join(", ")),
+        )),
+    }
+}
+
+fn missing(field: &str) -> RpcError {
+    RpcError::invalid_params(format!("missing `{field}`"))
+}
+
+/// A parameterless request to the loop.
+async fn act(shared: &Shared, p: Params, request: LoopRequest) -> Result<Value, RpcError> {
+    p.finish(&[])?;
+    shared.router.call(request).await?;
+    Ok(json!({ "ok": true }))
+}
+
+/// `params.set`: either `{"blend_time_s": x}` or `{"gait": name, <field>: x, ...}`.
+async fn params_set(shared: &Shared, mut p: Params) -> Result<Value, RpcError> {
+    if p.contains("blend_time_s") {
+        let (min, max) = BLEND_TIME_RANGE_S;
+        let t = p
+            .take_f64_in("blend_time_s", min, max)?
+            .expect("checked present above");
+        if !p.is_empty() {
+            return Err(RpcError::invalid_params(
+                "`blend_time_s` is set on its own: send gait params in a separate request",
+            ));
+        }
+        shared.router.call(LoopRequest::SetBlendTime(t)).await?;
+        return Ok(json!({ "blend_time_s": t }));
+    }
+    let gait = p
+        .take_gait("gait")?
+        .ok_or_else(|| RpcError::invalid_params("missing `gait` (or `blend_time_s`)"))?;
+    let patch = p.take_patch()?;
+    let mut expected = vec!["gait"];
+    expected.extend(PATCH_FIELDS);
+    p.finish(&expected)?;
+    if patch == ParamPatch::default() {
+        return Err(RpcError::invalid_params(format!(
+            "nothing to change: give at least one of {}",
+            PATCH_FIELDS.join(", ")
+        )));
+    }
+    // Validated against the table the loop published last; the loop checks again.
+    let current = *shared.telemetry.latest().params.get(gait);
+    let new = current
+        .patched(gait, &patch)
+        .map_err(|e| RpcError::invalid_params(format!("{}: {e}", gait.name())))?;
+    shared
+        .router
+        .call(LoopRequest::SetParams(gait, patch))
+        .await?;
+    Ok(json!({ "gait": gait, "params": new }))
+}

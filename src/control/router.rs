@@ -1,0 +1,229 @@
+//! Getting requests to the loop and its acks back to the connection that asked.
+//!
+//! A request gets a ticket and a oneshot registered in `pending` BEFORE it is
+//! sent (so an ack can never arrive first), then goes out with `try_send`: a full
+//! channel is an immediate "busy", never a wait. A plain thread blocks on the
+//! loop's crossbeam ack channel and completes the oneshot with the same ticket.
+use std::collections::HashMap;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::{Arc, Mutex};
+use std::thread::JoinHandle;
+use std::time::Duration;
+
+use crossbeam_channel::{Receiver, RecvTimeoutError, Sender, TrySendError};
+use tokio::sync::oneshot;
+
+use super::api::{RpcError, code};
+use crate::rt::messages::{Ack, Envelope, LoopRequest, Rejection};
+
+type Pending = Arc<Mutex<HashMap<u64, oneshot::Sender<Result<(), Rejection>>>>>;
+
+/// How often the ack thread looks at its stop flag while no ack arrives.
+const STOP_POLL: Duration = Duration::from_millis(50);
+
+pub(crate) struct AckRouter {
+    requests: Sender<Envelope>,
+    pending: Pending,
+    next_ticket: AtomicU64,
+    ack_timeout: Duration,
+    stop: Arc<AtomicBool>,
+    thread: Mutex<Option<JoinHandle<()>>>,
+}
+
+/// Removes its ticket from `pending` when dropped: on timeout, and when the
+/// connection waiting for the ack goes away.
+struct TicketGuard<'a> {
+    pending: &'a Pending,
+    ticket: u64,
+}
+
+impl Drop for TicketGuard<'_> {
+    fn drop(&mut self) {
+        lock(self.pending).remove(&self.ticket);
+    }
+}
+
+fn lock(
+    p: &Pending,
+) -> std::sync::MutexGuard<'_, HashMap<u64, oneshot::Sender<Result<(), Rejection>>>> {
+    // A panic while holding this lock leaves the map consistent (single inserts/removes).
+    p.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+impl AckRouter {
+    pub(crate) fn start(
+        requests: Sender<Envelope>,
+        acks: Receiver<Ack>,
+        ack_timeout: Duration,
+    ) -> std::io::Result<Self> {
+        let pending: Pending = Arc::default();
+        let stop = Arc::new(AtomicBool::new(false));
+        let thread = {
+            let pending = pending.clone();
+            let stop = stop.clone();
+            std::thread::Builder::new()
+                .name("snaked-ctl-acks".into())
+                .spawn(move || route_acks(&acks, &pending, &stop))?
+        };
+        Ok(Self {
+            requests,
+            pending,
+            next_ticket: AtomicU64::new(1),
+            ack_timeout,
+            stop,
+            thread: Mutex::new(Some(thread)),
+        })
+    }
+
+    /// Send `request` to the loop and wait for its ack (at most `ack_timeout`).
+    pub(crate) async fn call(&self, request: LoopRequest) -> Result<(), RpcError> {
+        let ticket = self.next_ticket.fetch_add(1, Ordering::Relaxed);
+        let (tx, rx) = oneshot::channel();
+        lock(&self.pending).insert(ticket, tx);
+        let _guard = TicketGuard {
+            pending: &self.pending,
+            ticket,
+        };
+        match self.requests.try_send(Envelope { ticket, request }) {
+            Ok(()) => {}
+            Err(TrySendError::Full(_)) => {
+                return Err(RpcError::new(
+                    code::BUSY,
+                    "busy: the loop's request queue is full; try again",
+                ));
+            }
+            Err(TrySendError::Disconnected(_)) => return Err(not_running()),
+        }
+        match tokio::time::timeout(self.ack_timeout, rx).await {
+            Ok(Ok(Ok(()))) => Ok(()),
+            Ok(Ok(Err(rejection))) => Err(RpcError::new(
+                code::REFUSED,
+                format!("refused by the loop: {rejection}"),
+            )),
+            Ok(Err(_)) => Err(not_running()),
+            Err(_) => Err(RpcError::new(
+                code::LOOP_TIMEOUT,
+                format!(
+                    "the loop did not answer within {} ms",
+                    self.ack_timeout.as_millis()
+                ),
+            )),
+        }
+    }
+
+    /// Stop the ack thread (waits for it; at most one `STOP_POLL`).
+    pub(crate) fn stop(&self) {
+        self.stop.store(true, Ordering::Relaxed);
+        let thread = self.thread.lock().unwrap_or_else(|e| e.into_inner()).take();
+        if let Some(t) = thread {
+            let _ = t.join();
+        }
+    }
+}
+
+impl Drop for AckRouter {
+    fn drop(&mut self) {
+        self.stop();
+    }
+}
+
+fn not_running() -> RpcError {
+    RpcError::new(
+        code::REFUSED,
+        format!(
+            "refused: the loop is not running ({})",
+            Rejection::ShuttingDown
+        ),
+    )
+}
+
+fn route_acks(acks: &Receiver<Ack>, pending: &Pending, stop: &AtomicBool) {
+    while !stop.load(Ordering::Relaxed) {
+        match acks.recv_timeout(STOP_POLL) {
+            Ok(ack) => {
+                // No entry: the requester timed out or left; the ack is dropped.
+                if let Some(tx) = lock(pending).remove(&ack.ticket) {
+                    let _ = tx.send(ack.result);
+                }
+            }
+            Err(RecvTimeoutError::Timeout) => {}
+            Err(RecvTimeoutError::Disconnected) => {
+                // The loop is gone: fail every waiter now rather than at their timeouts.
+                lock(pending).clear();
+                // Keep clearing new waiters until stopped (their sends also fail).
+                while !stop.load(Ordering::Relaxed) {
+                    std::thread::sleep(STOP_POLL);
+                    lock(pending).clear();
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn rt() -> tokio::runtime::Runtime {
+        tokio::runtime::Builder::new_current_thread()
+            .enable_all()
+            .build()
+            .unwrap()
+    }
+
+    #[test]
+    fn acks_reach_their_requester_and_rejections_carry_their_message() {
+        let (req_tx, req_rx) = crossbeam_channel::bounded::<Envelope>(4);
+        let (ack_tx, ack_rx) = crossbeam_channel::bounded::<Ack>(4);
+        let router = AckRouter::start(req_tx, ack_rx, Duration::from_secs(5)).unwrap();
+        let fake = std::thread::spawn(move || {
+            for (i, env) in req_rx.iter().take(2).enumerate() {
+                let result = if i == 0 {
+                    Ok(())
+                } else {
+                    Err(Rejection::EStopLatched)
+                };
+                ack_tx
+                    .send(Ack {
+                        ticket: env.ticket,
+                        result,
+                    })
+                    .unwrap();
+            }
+        });
+        let rt = rt();
+        assert_eq!(rt.block_on(router.call(LoopRequest::Hold)), Ok(()));
+        let e = rt.block_on(router.call(LoopRequest::Arm)).unwrap_err();
+        assert_eq!(e.code, code::REFUSED);
+        assert!(e.message.contains("e-stop"), "{}", e.message);
+        fake.join().unwrap();
+        assert!(lock(&router.pending).is_empty());
+    }
+
+    #[test]
+    fn full_channel_is_busy_and_silence_times_out() {
+        let (req_tx, _req_rx) = crossbeam_channel::bounded::<Envelope>(1);
+        let (_ack_tx, ack_rx) = crossbeam_channel::bounded::<Ack>(1);
+        let router = AckRouter::start(req_tx, ack_rx, Duration::from_millis(20)).unwrap();
+        let rt = rt();
+        let e = rt.block_on(router.call(LoopRequest::Hold)).unwrap_err();
+        assert_eq!(e.code, code::LOOP_TIMEOUT);
+        let e = rt.block_on(router.call(LoopRequest::Hold)).unwrap_err();
+        assert_eq!(e.code, code::BUSY);
+        assert!(
+            lock(&router.pending).is_empty(),
+            "timed-out tickets are forgotten"
+        );
+    }
+
+    #[test]
+    fn a_dead_loop_is_refused() {
+        let (req_tx, req_rx) = crossbeam_channel::bounded::<Envelope>(1);
+        let (ack_tx, ack_rx) = crossbeam_channel::bounded::<Ack>(1);
+        drop((req_rx, ack_tx));
+        let router = AckRouter::start(req_tx, ack_rx, Duration::from_secs(5)).unwrap();
+        let e = rt().block_on(router.call(LoopRequest::Limp)).unwrap_err();
+        assert_eq!(e.code, code::REFUSED);
+        router.stop();
+    }
+}

@@ -1,0 +1,347 @@
+//! Binding the listeners (synchronously, so the daemon fails clearly at start),
+//! the server's own tokio runtime on a background thread, accept loops and the
+//! client limit.
+use std::io;
+use std::net::{Ipv4Addr, SocketAddr};
+use std::os::unix::fs::{FileTypeExt, MetadataExt, PermissionsExt};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::thread::JoinHandle;
+use std::time::Duration;
+
+use serde_json::Value;
+use tokio::io::{AsyncRead, AsyncWrite, AsyncWriteExt};
+use tokio::net::{TcpListener, UnixListener};
+
+use super::api::{self, RpcError, code};
+use super::router::AckRouter;
+use super::{LoopHandle, ServerConfig, conn};
+use crate::rt::telemetry::TelemetryReader;
+
+/// Why the server could not start. Every variant names the path or port.
+#[derive(Debug, thiserror::Error)]
+pub enum ServerError {
+    #[error("no listener configured: give a unix socket path, a TCP port, or both")]
+    NoListener,
+    #[error("control socket {path}: another snaked is already listening there")]
+    InUse { path: PathBuf },
+    #[error("control socket {path}: exists and is not a socket; refusing to replace it")]
+    NotASocket { path: PathBuf },
+    #[error("control socket {path}: {what}: {source}")]
+    Unix {
+        path: PathBuf,
+        what: &'static str,
+        #[source]
+        source: io::Error,
+    },
+    #[error("control socket 127.0.0.1:{port}: cannot listen: {source}")]
+    Tcp {
+        port: u16,
+        #[source]
+        source: io::Error,
+    },
+    #[error("control socket: cannot start its runtime: {0}")]
+    Runtime(#[source] io::Error),
+}
+
+/// What every connection shares.
+pub(crate) struct Shared {
+    pub(crate) router: AckRouter,
+    pub(crate) telemetry: TelemetryReader,
+    pub(crate) info: super::DaemonInfo,
+    pub(crate) max_line_bytes: usize,
+}
+
+/// A started server. `shutdown` (or dropping it) stops accepting, closes every
+/// connection and removes the socket file.
+pub struct RunningServer {
+    unix_path: Option<PathBuf>,
+    /// (device, inode) of the socket file we bound, so we never remove a successor's.
+    unix_id: Option<(u64, u64)>,
+    tcp_addr: Option<SocketAddr>,
+    stop: Option<tokio::sync::oneshot::Sender<()>>,
+    thread: Option<JoinHandle<()>>,
+    shared: Arc<Shared>,
+}
+
+impl RunningServer {
+    /// The Unix socket's path, if one is bound.
+    pub fn unix_path(&self) -> Option<&Path> {
+        self.unix_path.as_deref()
+    }
+
+    /// The TCP listener's address (useful with `tcp_port: Some(0)`).
+    pub fn tcp_addr(&self) -> Option<SocketAddr> {
+        self.tcp_addr
+    }
+
+    /// Stop accepting, close every connection, remove the socket file. Waits for
+    /// the server's threads (a fraction of a second).
+    pub fn shutdown(mut self) {
+        self.stop_now();
+    }
+
+    fn stop_now(&mut self) {
+        if let Some(stop) = self.stop.take() {
+            let _ = stop.send(());
+        }
+        if let Some(thread) = self.thread.take() {
+            let _ = thread.join();
+        }
+        self.shared.router.stop();
+        if let (Some(path), Some(id)) = (&self.unix_path, self.unix_id.take()) {
+            match std::fs::metadata(path) {
+                Ok(m) if (m.dev(), m.ino()) == id => {
+                    if let Err(e) = std::fs::remove_file(path) {
+                        tracing::warn!("cannot remove control socket {}: {e}", path.display());
+                    }
+                }
+                _ => {} // Gone already, or another server's socket now.
+            }
+        }
+    }
+}
+
+impl Drop for RunningServer {
+    fn drop(&mut self) {
+        self.stop_now();
+    }
+}
+
+/// Bind the configured listeners and start serving on a background thread.
+pub fn start(cfg: ServerConfig, handle: LoopHandle) -> Result<RunningServer, ServerError> {
+    if cfg.unix_path.is_none() && cfg.tcp_port.is_none() {
+        return Err(ServerError::NoListener);
+    }
+    // TCP first: if it fails, no socket file has been created yet.
+    let tcp = match cfg.tcp_port {
+        Some(port) => Some(
+            std::net::TcpListener::bind((Ipv4Addr::LOCALHOST, port))
+                .and_then(|l| l.set_nonblocking(true).map(|()| l))
+                .map_err(|source| ServerError::Tcp { port, source })?,
+        ),
+        None => None,
+    };
+    let tcp_addr = tcp.as_ref().and_then(|l| l.local_addr().ok());
+    let mut file_guard = SocketFile(None);
+    let unix = match &cfg.unix_path {
+        Some(path) => {
+            let l = bind_unix(path, cfg.socket_mode)?;
+            file_guard.0 = Some(path.clone());
+            Some(l)
+        }
+        None => None,
+    };
+    let unix_id = match (&unix, &cfg.unix_path) {
+        (Some(_), Some(path)) => std::fs::metadata(path).ok().map(|m| (m.dev(), m.ino())),
+        _ => None,
+    };
+
+    let rt = tokio::runtime::Builder::new_current_thread()
+        .enable_all()
+        .build()
+        .map_err(ServerError::Runtime)?;
+    let router = AckRouter::start(handle.requests, handle.acks, cfg.ack_timeout)
+        .map_err(ServerError::Runtime)?;
+    let shared = Arc::new(Shared {
+        router,
+        telemetry: handle.telemetry,
+        info: handle.info,
+        max_line_bytes: cfg.max_line_bytes.max(1),
+    });
+    let clients = Arc::new(Clients {
+        active: AtomicUsize::new(0),
+        max: cfg.max_clients,
+    });
+    {
+        // Listeners must be registered with the runtime they will run on.
+        let _enter = rt.enter();
+        if let Some(l) = unix {
+            let l = UnixListener::from_std(l).map_err(|source| ServerError::Unix {
+                path: cfg.unix_path.clone().unwrap_or_default(),
+                what: "cannot register listener",
+                source,
+            })?;
+            rt.spawn(accept_unix(l, shared.clone(), clients.clone()));
+        }
+        if let Some(l) = tcp {
+            let port = cfg.tcp_port.unwrap_or_default();
+            let l = TcpListener::from_std(l).map_err(|source| ServerError::Tcp { port, source })?;
+            rt.spawn(accept_tcp(l, shared.clone(), clients));
+        }
+    }
+    let (stop_tx, stop_rx) = tokio::sync::oneshot::channel::<()>();
+    let thread = std::thread::Builder::new()
+        .name("snaked-ctl".into())
+        .spawn(move || {
+            let _ = rt.block_on(stop_rx);
+            // Drops every task: listeners and connections close here.
+            rt.shutdown_timeout(Duration::from_secs(1));
+        })
+        .map_err(ServerError::Runtime)?;
+    file_guard.0 = None; // Started: the server removes the file at shutdown now.
+    if let Some(p) = &cfg.unix_path {
+        tracing::info!("control socket listening on {}", p.display());
+    }
+    if let Some(a) = tcp_addr {
+        tracing::info!("control socket listening on tcp {a}");
+    }
+    Ok(RunningServer {
+        unix_path: cfg.unix_path,
+        unix_id,
+        tcp_addr,
+        stop: Some(stop_tx),
+        thread: Some(thread),
+        shared,
+    })
+}
+
+/// Bind the Unix socket: create the parent directory, replace a stale socket file
+/// (nobody answers on it), refuse a live one, then set the file's mode.
+fn bind_unix(path: &Path, mode: u32) -> Result<std::os::unix::net::UnixListener, ServerError> {
+    let err = |what: &'static str| {
+        move |source: io::Error| ServerError::Unix {
+            path: path.to_owned(),
+            what,
+            source,
+        }
+    };
+    if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
+        std::fs::create_dir_all(parent).map_err(err("cannot create its directory"))?;
+    }
+    match std::fs::symlink_metadata(path) {
+        Ok(meta) if !meta.file_type().is_socket() => {
+            return Err(ServerError::NotASocket {
+                path: path.to_owned(),
+            });
+        }
+        Ok(_) => match std::os::unix::net::UnixStream::connect(path) {
+            Ok(_) => {
+                return Err(ServerError::InUse {
+                    path: path.to_owned(),
+                });
+            }
+            Err(e) if e.kind() == io::ErrorKind::ConnectionRefused => {
+                std::fs::remove_file(path).map_err(err("cannot remove the stale socket"))?;
+                tracing::info!("removed stale control socket {}", path.display());
+            }
+            Err(e) => return Err(err("cannot check whether it is in use")(e)),
+        },
+        Err(e) if e.kind() == io::ErrorKind::NotFound => {}
+        Err(e) => return Err(err("cannot inspect it")(e)),
+    }
+    let listener = std::os::unix::net::UnixListener::bind(path).map_err(err("cannot bind"))?;
+    std::fs::set_permissions(path, std::fs::Permissions::from_mode(mode))
+        .map_err(err("cannot set its permissions"))?;
+    listener
+        .set_nonblocking(true)
+        .map_err(err("cannot make it non-blocking"))?;
+    Ok(listener)
+}
+
+/// Removes a socket file we bound if `start` fails after binding it.
+struct SocketFile(Option<PathBuf>);
+
+impl Drop for SocketFile {
+    fn drop(&mut self) {
+        if let Some(path) = self.0.take() {
+            let _ = std::fs::remove_file(path);
+        }
+    }
+}
+
+/// Counts connections against `max_clients`.
+struct Clients {
+    active: AtomicUsize,
+    max: usize,
+}
+
+/// One slot of `Clients`, released when the connection ends.
+struct Slot(Arc<Clients>);
+
+impl Drop for Slot {
+    fn drop(&mut self) {
+        self.0.active.fetch_sub(1, Ordering::AcqRel);
+    }
+}
+
+impl Clients {
+    fn try_take(self: &Arc<Self>) -> Option<Slot> {
+        let mut n = self.active.load(Ordering::Acquire);
+        loop {
+            if n >= self.max {
+                return None;
+            }
+            match self
+                .active
+                .compare_exchange(n, n + 1, Ordering::AcqRel, Ordering::Acquire)
+            {
+                Ok(_) => return Some(Slot(self.clone())),
+                Err(now) => n = now,
+            }
+        }
+    }
+}
+
+async fn accept_unix(l: UnixListener, shared: Arc<Shared>, clients: Arc<Clients>) {
+    loop {
+        match l.accept().await {
+            Ok((s, _)) => admit(s, &shared, &clients),
+            Err(e) => accept_failed(e).await,
+        }
+    }
+}
+
+async fn accept_tcp(l: TcpListener, shared: Arc<Shared>, clients: Arc<Clients>) {
+    loop {
+        match l.accept().await {
+            Ok((s, _)) => {
+                let _ = s.set_nodelay(true);
+                admit(s, &shared, &clients);
+            }
+            Err(e) => accept_failed(e).await,
+        }
+    }
+}
+
+/// Out of file descriptors and the like: say so, back off, keep serving.
+async fn accept_failed(e: io::Error) {
+    tracing::warn!("control socket: accept failed: {e}");
+    tokio::time::sleep(Duration::from_millis(100)).await;
+}
+
+fn admit<S>(stream: S, shared: &Arc<Shared>, clients: &Arc<Clients>)
+where
+    S: AsyncRead + AsyncWrite + Send + Unpin + 'static,
+{
+    match clients.try_take() {
+        Some(slot) => {
+            let shared = shared.clone();
+            tokio::spawn(async move {
+                conn::serve(stream, shared).await;
+                drop(slot);
+            });
+        }
+        None => {
+            let max = clients.max;
+            tokio::spawn(refuse(stream, max));
+        }
+    }
+}
+
+/// Tell a client over the limit why, then close.
+async fn refuse<S: AsyncWrite + Unpin>(mut stream: S, max: usize) {
+    let line = api::error_line(
+        &Value::Null,
+        &RpcError::new(
+            code::TOO_MANY_CLIENTS,
+            format!("too many clients (at most {max}); closing"),
+        ),
+    );
+    let send = async {
+        stream.write_all(line.as_bytes()).await?;
+        stream.shutdown().await
+    };
+    let _ = tokio::time::timeout(Duration::from_secs(1), send).await;
+}

@@ -1,0 +1,186 @@
+//! Binding, replacing stale sockets, refusing live ones, TCP, client limit, shutdown.
+mod socket_support;
+
+use std::os::unix::fs::PermissionsExt;
+use std::time::{Duration, Instant};
+
+use snaked::control::api::code;
+use snaked::control::client::{Client, ClientError, Endpoint};
+use snaked::control::{ServerConfig, ServerError};
+use socket_support::{Harness, LoopSpec, error_code, fake_loop};
+
+fn connect(path: &std::path::Path) -> Client {
+    Client::connect(
+        &Endpoint::Unix(path.to_owned()),
+        Some(Duration::from_secs(10)),
+    )
+    .unwrap()
+}
+
+#[test]
+fn tcp_listener_on_loopback() {
+    let (_fake, handle) = fake_loop(LoopSpec::default());
+    let cfg = ServerConfig {
+        unix_path: None,
+        tcp_port: Some(0),
+        ..ServerConfig::default()
+    };
+    let server = snaked::control::start(cfg, handle).unwrap();
+    let addr = server.tcp_addr().unwrap();
+    assert!(addr.ip().is_loopback());
+    let mut c = Client::connect(
+        &Endpoint::Tcp(addr.to_string()),
+        Some(Duration::from_secs(10)),
+    )
+    .unwrap();
+    assert_eq!(c.call("status", None).unwrap()["modules"], 8);
+    server.shutdown();
+}
+
+#[test]
+fn stale_socket_file_is_replaced() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("snaked.sock");
+    // A socket file nobody listens on, as a crashed daemon leaves behind.
+    drop(std::os::unix::net::UnixListener::bind(&path).unwrap());
+    assert!(path.exists());
+    let (_fake, handle) = fake_loop(LoopSpec::default());
+    let cfg = ServerConfig {
+        unix_path: Some(path.clone()),
+        ..ServerConfig::default()
+    };
+    let server = snaked::control::start(cfg, handle).expect("stale socket replaced");
+    assert_eq!(connect(&path).call("ping", None).unwrap()["pong"], true);
+    server.shutdown();
+}
+
+#[test]
+fn a_live_socket_is_refused_and_keeps_serving() {
+    let h = Harness::default_server();
+    let (_fake, handle) = fake_loop(LoopSpec::default());
+    let cfg = ServerConfig {
+        unix_path: Some(h.path.clone()),
+        ..ServerConfig::default()
+    };
+    match snaked::control::start(cfg, handle) {
+        Err(e @ ServerError::InUse { .. }) => {
+            assert!(e.to_string().contains(&h.path.display().to_string()), "{e}");
+        }
+        Err(e) => panic!("expected InUse, got {e}"),
+        Ok(_) => panic!("a second server bound a live socket"),
+    }
+    assert_eq!(h.client().call("ping", None).unwrap()["pong"], true);
+}
+
+#[test]
+fn a_regular_file_is_not_replaced() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("snaked.sock");
+    std::fs::write(&path, "precious").unwrap();
+    let (_fake, handle) = fake_loop(LoopSpec::default());
+    let cfg = ServerConfig {
+        unix_path: Some(path.clone()),
+        ..ServerConfig::default()
+    };
+    assert!(matches!(
+        snaked::control::start(cfg, handle),
+        Err(ServerError::NotASocket { .. })
+    ));
+    assert_eq!(std::fs::read_to_string(&path).unwrap(), "precious");
+}
+
+#[test]
+fn missing_directories_are_created_and_the_mode_is_set() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("run/snaked/ctl.sock");
+    let (_fake, handle) = fake_loop(LoopSpec::default());
+    let cfg = ServerConfig {
+        unix_path: Some(path.clone()),
+        socket_mode: 0o600,
+        ..ServerConfig::default()
+    };
+    let server = snaked::control::start(cfg, handle).unwrap();
+    let mode = std::fs::metadata(&path).unwrap().permissions().mode() & 0o777;
+    assert_eq!(mode, 0o600);
+    assert_eq!(server.unix_path(), Some(path.as_path()));
+    server.shutdown();
+}
+
+#[test]
+fn an_unusable_path_is_a_clear_error_naming_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let blocker = dir.path().join("not-a-dir");
+    std::fs::write(&blocker, "").unwrap();
+    let path = blocker.join("snaked.sock");
+    let (_fake, handle) = fake_loop(LoopSpec::default());
+    let cfg = ServerConfig {
+        unix_path: Some(path.clone()),
+        ..ServerConfig::default()
+    };
+    let e = snaked::control::start(cfg, handle)
+        .err()
+        .expect("cannot bind there");
+    let msg = e.to_string();
+    assert!(msg.contains(&path.display().to_string()), "{msg}");
+    assert!(msg.contains("directory"), "{msg}");
+}
+
+#[test]
+fn no_listener_is_an_error() {
+    let (_fake, handle) = fake_loop(LoopSpec::default());
+    let cfg = ServerConfig {
+        unix_path: None,
+        tcp_port: None,
+        ..ServerConfig::default()
+    };
+    assert!(matches!(
+        snaked::control::start(cfg, handle),
+        Err(ServerError::NoListener)
+    ));
+}
+
+#[test]
+fn shutdown_closes_connections_and_removes_the_socket() {
+    let mut h = Harness::default_server();
+    let mut c = h.client();
+    assert_eq!(c.call("ping", None).unwrap()["pong"], true);
+    h.server.take().unwrap().shutdown();
+    assert!(!h.path.exists(), "socket file left behind");
+    match c.next_message() {
+        Err(ClientError::Closed | ClientError::Io(_)) => {}
+        other => panic!("connection not closed: {other:?}"),
+    }
+    assert!(matches!(
+        Client::connect(&Endpoint::Unix(h.path.clone()), None),
+        Err(ClientError::Connect { .. })
+    ));
+}
+
+#[test]
+fn too_many_clients_are_told_and_closed() {
+    let h = Harness::new(LoopSpec::default(), |c| c.max_clients = 2);
+    let mut a = h.client();
+    let mut b = h.client();
+    // Make sure both are being served before the third arrives.
+    a.call("ping", None).unwrap();
+    b.call("ping", None).unwrap();
+    let mut third = h.client();
+    let m = third.next_message().unwrap();
+    assert_eq!(error_code(&m), code::TOO_MANY_CLIENTS, "{m}");
+    assert!(matches!(third.next_message(), Err(ClientError::Closed)));
+    // The others are unaffected, and a slot frees when one leaves.
+    assert_eq!(a.call("ping", None).unwrap()["pong"], true);
+    drop(b);
+    let deadline = Instant::now() + Duration::from_secs(10);
+    loop {
+        let mut c = h.client();
+        match c.call("ping", None) {
+            Ok(r) => {
+                assert_eq!(r["pong"], true);
+                break;
+            }
+            Err(_) if Instant::now() < deadline => std::thread::sleep(Duration::from_millis(20)),
+            Err(e) => panic!("slot never freed: {e}"),
+        }
+    }
+}

@@ -1,0 +1,150 @@
+//! `snakectl` against the real server with a fake loop.
+mod socket_support;
+
+use std::process::{Command, Output};
+
+use serde_json::Value;
+use snaked::gait::GaitKind;
+use snaked::rt::messages::LoopRequest;
+use socket_support::Harness;
+
+fn snakectl(h: &Harness, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_snakectl"))
+        .arg("--socket")
+        .arg(&h.path)
+        .args(args)
+        .output()
+        .expect("snakectl runs")
+}
+
+fn stdout(o: &Output) -> String {
+    assert!(
+        o.status.success(),
+        "snakectl failed: {}\n{}",
+        o.status,
+        String::from_utf8_lossy(&o.stderr)
+    );
+    String::from_utf8(o.stdout.clone()).unwrap()
+}
+
+#[test]
+fn human_and_json_output() {
+    let h = Harness::default_server();
+    let status = stdout(&snakectl(&h, &["status"]));
+    assert!(
+        status.contains("slithering") && status.contains("modules"),
+        "{status}"
+    );
+
+    let json: Value = serde_json::from_str(&stdout(&snakectl(&h, &["--json", "status"]))).unwrap();
+    assert_eq!(json["modules"], 8);
+
+    let list = stdout(&snakectl(&h, &["gait", "list"]));
+    assert!(
+        list.lines().any(|l| l.starts_with("* slithering")),
+        "{list}"
+    );
+
+    let stats = stdout(&snakectl(&h, &["stats"]));
+    for col in [
+        "p50",
+        "p99",
+        "p99.9",
+        "max",
+        "period error",
+        "feedback_received",
+    ] {
+        assert!(stats.contains(col), "stats lacks {col}:\n{stats}");
+    }
+
+    let params = stdout(&snakectl(&h, &["params", "get", "rolling"]));
+    assert!(params.contains("phase_shift_rad"), "{params}");
+
+    stdout(&snakectl(&h, &["gait", "set", "rolling"]));
+    stdout(&snakectl(
+        &h,
+        &["params", "set", "rolling", "temporal_freq_rad_s=-0.5"],
+    ));
+    stdout(&snakectl(&h, &["params", "set", "--blend-time", "4"]));
+    for cmd in ["hold", "limp", "estop", "arm"] {
+        assert_eq!(stdout(&snakectl(&h, &[cmd])).trim(), "ok");
+    }
+    let raw: Value = serde_json::from_str(&stdout(&snakectl(&h, &["call", "ping"]))).unwrap();
+    assert_eq!(raw["pong"], true);
+
+    let seen = h.fake.seen();
+    assert_eq!(seen[0], LoopRequest::SetGait(GaitKind::Rolling));
+    assert!(
+        matches!(seen[1], LoopRequest::SetParams(GaitKind::Rolling, p) if p.temporal_freq_rad_s == Some(-0.5))
+    );
+    assert_eq!(seen[2], LoopRequest::SetBlendTime(4.0));
+    assert_eq!(seen.len(), 7);
+}
+
+#[test]
+fn watch_prints_the_requested_number_of_lines() {
+    let h = Harness::default_server();
+    let out = stdout(&snakectl(&h, &["watch", "--rate", "50", "--count", "3"]));
+    assert_eq!(out.lines().count(), 3, "{out}");
+    assert!(out.lines().all(|l| l.contains("cycle")), "{out}");
+    let out = stdout(&snakectl(
+        &h,
+        &["--json", "watch", "--rate", "50", "--count", "2"],
+    ));
+    for line in out.lines() {
+        let v: Value = serde_json::from_str(line).unwrap();
+        assert!(v["joints"].is_array());
+    }
+    assert_eq!(out.lines().count(), 2);
+}
+
+#[test]
+fn errors_exit_non_zero_with_a_message() {
+    let h = Harness::default_server();
+    let o = snakectl(&h, &["gait", "set", "swimming"]);
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("-32602") && err.contains("swimming"), "{err}");
+
+    let o = snakectl(&h, &["params", "set", "rolling", "taper=abc"]);
+    assert_eq!(o.status.code(), Some(2), "bad value is a usage error");
+
+    let o = Command::new(env!("CARGO_BIN_EXE_snakectl"))
+        .args(["--socket", "/nonexistent/snaked.sock", "status"])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(3));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("/nonexistent/snaked.sock") && err.contains("running"),
+        "{err}"
+    );
+}
+
+#[test]
+fn the_socket_comes_from_the_environment() {
+    let h = Harness::default_server();
+    let o = Command::new(env!("CARGO_BIN_EXE_snakectl"))
+        .env("SNAKED_SOCKET", &h.path)
+        .args(["--json", "call", "ping"])
+        .output()
+        .unwrap();
+    assert_eq!(
+        String::from_utf8_lossy(&o.stdout).trim(),
+        r#"{"pong":true}"#
+    );
+}
+
+#[test]
+fn over_tcp() {
+    let h = Harness::new(socket_support::LoopSpec::default(), |c| {
+        c.tcp_port = Some(0)
+    });
+    let addr = h.server.as_ref().unwrap().tcp_addr().unwrap().to_string();
+    let o = Command::new(env!("CARGO_BIN_EXE_snakectl"))
+        .args(["--tcp", &addr, "--json", "status"])
+        .output()
+        .unwrap();
+    let v: Value = serde_json::from_str(&stdout(&o)).unwrap();
+    assert_eq!(v["modules"], 8);
+}
