@@ -17,7 +17,10 @@ fn run_with_config(text: &str) -> (i32, String) {
         .env("RUST_LOG", "off")
         .output()
         .unwrap();
-    (out.status.code().unwrap_or(-1), String::from_utf8_lossy(&out.stderr).into_owned())
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
 }
 
 #[test]
@@ -51,10 +54,16 @@ fn emulated_daemon_runs_switches_and_stops_safely() {
     let mut d = Proc::spawn(
         "snaked",
         &exe("snaked"),
-        &["--emulated".into(), "--socket".into(), sock.display().to_string()],
+        &[
+            "--emulated".into(),
+            "--socket".into(),
+            sock.display().to_string(),
+        ],
     );
     let mut c = Client::connect(&sock, Duration::from_secs(20));
-    let s = c.wait_status(Duration::from_secs(20), "running", |s| s["mode"] == "running");
+    let s = c.wait_status(Duration::from_secs(20), "running", |s| {
+        s["mode"] == "running"
+    });
     assert_eq!(s["gait"], "sidewinding");
     assert_eq!(s["modules"], 18);
     c.call("gait.set", json!({"gait": "rolling"}));
@@ -69,11 +78,18 @@ fn emulated_daemon_runs_switches_and_stops_safely() {
         .args(["--socket", sock.to_str().unwrap(), "--json", "status"])
         .output()
         .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(v["gait"], "rolling");
 
     d.signal(libc::SIGINT);
-    assert!(d.wait(Duration::from_secs(20)).success(), "exit 0 after the safe stop");
+    assert!(
+        d.wait(Duration::from_secs(20)).success(),
+        "exit 0 after the safe stop"
+    );
     assert!(!sock.exists(), "socket removed");
 }

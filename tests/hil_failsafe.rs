@@ -56,21 +56,36 @@ socket = "{sock}"
         ),
     )
     .unwrap();
-    let mut daemon = Proc::spawn("snaked", &exe("snaked"), &["--config".into(), cfg_path.display().to_string()]);
+    let mut daemon = Proc::spawn(
+        "snaked",
+        &exe("snaked"),
+        &["--config".into(), cfg_path.display().to_string()],
+    );
     let mut c = Client::connect(&sock, Duration::from_secs(30));
-    c.wait_status(Duration::from_secs(30), "running", |s| s["mode"] == "running");
+    c.wait_status(Duration::from_secs(30), "running", |s| {
+        s["mode"] == "running"
+    });
 
     let held = c.wait_status(Duration::from_secs(30), "hold", |s| s["mode"] != "running");
     assert_eq!(held["mode"], "hold", "a silent module first holds: {held}");
     assert_eq!(held["reason"], "feedback_timeout");
     let limp = c.wait_status(Duration::from_secs(30), "limp", |s| s["mode"] == "limp");
     assert_eq!(limp["reason"], "feedback_timeout");
-    assert!(limp["joints"]["max_feedback_age_s"].as_f64().unwrap() >= 1.0, "{limp}");
+    assert!(
+        limp["joints"]["max_feedback_age_s"].as_f64().unwrap() >= 1.0,
+        "{limp}"
+    );
     let stats = c.call("stats", json!({}));
-    assert!(stats["loop"]["late_feedback"].as_u64().unwrap() > 0, "{stats}");
+    assert!(
+        stats["loop"]["late_feedback"].as_u64().unwrap() > 0,
+        "{stats}"
+    );
     // Arming is refused while the module stays silent.
     let arm = c.call_raw("arm", json!({}));
-    assert!(arm.get("error").is_some(), "arm refused while feedback is stale: {arm}");
+    assert!(
+        arm.get("error").is_some(),
+        "arm refused while feedback is stale: {arm}"
+    );
 
     daemon.signal(libc::SIGINT);
     assert!(daemon.wait(Duration::from_secs(20)).success());
@@ -80,7 +95,10 @@ socket = "{sock}"
     // At the emulator: the others were driven before the silence and limp by the end.
     let rec = Recording::load(&rec_path, N);
     let before = rec.span(SILENCE_AT_S - 1.0, SILENCE_AT_S);
-    assert!(before.clone().all(|k| rec.cmd[0][k].is_finite()), "driven before the silence");
+    assert!(
+        before.clone().all(|k| rec.cmd[0][k].is_finite()),
+        "driven before the silence"
+    );
     let last = rec.t.len() - 1;
     for i in (0..N).filter(|&i| i != SILENT) {
         assert!(rec.cmd[i][last].is_nan(), "module {i} limp at the end");

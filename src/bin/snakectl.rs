@@ -8,7 +8,6 @@ use std::time::Duration;
 
 use clap::{Parser, Subcommand};
 use serde_json::{Map, Value, json};
-use snaked::control::DEFAULT_SOCKET_PATH;
 use snaked::control::api::PATCH_FIELDS;
 use snaked::control::client::{Client, ClientError, Endpoint};
 
@@ -16,7 +15,8 @@ use snaked::control::client::{Client, ClientError, Endpoint};
 #[derive(Parser, Debug)]
 #[command(name = "snakectl", version)]
 struct Cli {
-    /// Unix socket of the daemon [default: $SNAKED_SOCKET, else /run/snaked/snaked.sock].
+    /// Unix socket of the daemon [default: $SNAKED_SOCKET, else /run/snaked/snaked.sock or
+    /// $XDG_RUNTIME_DIR/snaked.sock, whichever exists].
     #[arg(long, value_name = "PATH", global = true, conflicts_with = "tcp")]
     socket: Option<PathBuf>,
     /// Talk to the daemon's TCP listener instead.
@@ -136,7 +136,7 @@ fn endpoint(cli: &Cli) -> Endpoint {
         .socket
         .clone()
         .or_else(|| std::env::var_os("SNAKED_SOCKET").map(PathBuf::from))
-        .unwrap_or_else(|| PathBuf::from(DEFAULT_SOCKET_PATH));
+        .unwrap_or_else(snaked::daemon::paths::client_socket);
     Endpoint::Unix(path)
 }
 

@@ -36,8 +36,8 @@ use crate::rt::telemetry::TelemetryReader;
 pub use methods::{BLEND_TIME_RANGE_S, DEFAULT_RATE_HZ, METHODS, RATE_RANGE_HZ};
 pub use server::{RunningServer, ServerError, start};
 
-/// Where the daemon puts its socket unless told otherwise.
-pub const DEFAULT_SOCKET_PATH: &str = "/run/snaked/snaked.sock";
+/// The system service's socket (see `daemon::paths` for how "auto" resolves).
+pub const DEFAULT_SOCKET_PATH: &str = crate::daemon::paths::SYSTEM_SOCKET;
 
 /// How the server listens and what it tolerates.
 #[derive(Debug, Clone, PartialEq)]

@@ -7,6 +7,7 @@ use anyhow::{Context, Result, bail};
 use crate::bus::Bus;
 use crate::bus::sim::{SimBus, SimBusConfig};
 use crate::bus::udp::{self, UdpBus};
+use crate::control::BusKind;
 use crate::daemon::config::{Config, LookupBy, parse_mac};
 use crate::emu::module::{EMULATOR_FIRMWARE, ModuleIdentity};
 use crate::emu::plant::{JointSpacePlant, PlantConfig};
@@ -16,8 +17,7 @@ pub struct BuiltBus {
     pub bus: Box<dyn Bus>,
     /// Module names, head first.
     pub names: Vec<String>,
-    /// "udp" or "emulated".
-    pub kind: &'static str,
+    pub kind: BusKind,
 }
 
 pub fn build(cfg: &Config, emulated: bool, period_ns: u64) -> Result<BuiltBus> {
@@ -80,7 +80,7 @@ fn udp_bus(cfg: &Config) -> Result<BuiltBus> {
     Ok(BuiltBus {
         bus: Box::new(bus),
         names,
-        kind: "udp",
+        kind: BusKind::Udp,
     })
 }
 
@@ -100,11 +100,15 @@ fn emulated_bus(cfg: &Config, period_ns: u64) -> Result<BuiltBus> {
     );
     let family = name(&cfg.network.family, "network.family")?;
     let names = (0..n)
-        .map(|i| ModuleIdentity::emulated(i, n, family, EMULATOR_FIRMWARE).name.to_string())
+        .map(|i| {
+            ModuleIdentity::emulated(i, n, family, EMULATOR_FIRMWARE)
+                .name
+                .to_string()
+        })
         .collect();
     Ok(BuiltBus {
         bus: Box::new(bus),
         names,
-        kind: "emulated",
+        kind: BusKind::Emulated,
     })
 }

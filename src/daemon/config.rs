@@ -7,7 +7,7 @@ use serde::Deserialize;
 
 use crate::gait::{GaitKind, Plane};
 
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, Default, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct Config {
     #[serde(rename = "loop")]
@@ -209,20 +209,6 @@ impl Default for EmulatorConfig {
         Self {
             modules: 18,
             seed: 1,
-        }
-    }
-}
-
-impl Default for Config {
-    fn default() -> Self {
-        Self {
-            loop_: LoopConfig::default(),
-            body: BodyConfig::default(),
-            network: NetworkConfig::default(),
-            failsafe: FailsafeSection::default(),
-            gait: GaitSection::default(),
-            control: ControlConfig::default(),
-            emulator: EmulatorConfig::default(),
         }
     }
 }

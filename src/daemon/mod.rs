@@ -13,7 +13,7 @@ use std::time::Duration;
 
 use anyhow::{Context, Result};
 
-use crate::control::server::{self, LoopHandle, ServerConfig};
+use crate::control::{self, DaemonInfo, LoopHandle, ServerConfig};
 use crate::gait::{BodyLayout, GaitSelector, GaitTable};
 use crate::rt::control_loop::{ControlLoop, LoopParts};
 use crate::rt::pacer::{LockstepPacer, Pacer, RealTimePacer};
@@ -84,7 +84,7 @@ pub fn run(cfg: Config, emulated: bool) -> Result<()> {
     let period_ns = (1e9 / cfg.loop_.rate_hz).round() as u64;
     let built = bus_setup::build(&cfg, emulated, period_ns)?;
     let n = built.bus.module_count();
-    tracing::info!(modules = n, bus = built.kind, names = ?built.names, "group ready");
+    tracing::info!(modules = n, bus = ?built.kind, names = ?built.names, "group ready");
     service::notify_status(&format!("group of {n} modules found"));
 
     let layout = BodyLayout::alternating(n, cfg.body.first_joint_plane, cfg.body.module_length_m);
@@ -121,23 +121,22 @@ pub fn run(cfg: Config, emulated: bool) -> Result<()> {
     ));
     let heartbeat = Arc::new(AtomicU64::new(0));
 
-    let server = server::start(
+    let server = control::start(
         server_config(&cfg),
         LoopHandle {
             requests: req_tx,
             acks: ack_rx,
             telemetry: tel_reader.clone(),
-            info: server::DaemonInfo {
+            info: DaemonInfo {
                 version: env!("CARGO_PKG_VERSION").to_owned(),
                 module_count: n,
                 module_names: built.names.clone(),
-                rate_hz: cfg.loop_.rate_hz,
-                bus: built.kind.to_owned(),
+                loop_rate_hz: cfg.loop_.rate_hz,
+                bus: built.kind,
                 pacing: match cfg.loop_.pacing {
-                    Pacing::Realtime => "realtime",
-                    Pacing::Lockstep => "lockstep",
-                }
-                .to_owned(),
+                    Pacing::Realtime => control::Pacing::Realtime,
+                    Pacing::Lockstep => control::Pacing::Lockstep,
+                },
             },
         },
     )
@@ -202,23 +201,23 @@ fn server_config(cfg: &Config) -> ServerConfig {
 
 /// Each real-time setting is attempted; a refusal is a warning, not a failure.
 fn apply_realtime_settings(rt: &config::LoopConfig) {
-    if rt.lock_memory {
-        if let Err(e) = sys::lock_memory() {
-            tracing::warn!("mlockall refused ({e}); carrying on without locked memory");
-        }
+    if rt.lock_memory
+        && let Err(e) = sys::lock_memory()
+    {
+        tracing::warn!("mlockall refused ({e}); carrying on without locked memory");
     }
-    if let Some(cpu) = rt.cpu {
-        if let Err(e) = sys::pin_to_cpu(cpu) {
-            tracing::warn!("pinning the loop to CPU {cpu} refused ({e}); carrying on unpinned");
-        }
+    if let Some(cpu) = rt.cpu
+        && let Err(e) = sys::pin_to_cpu(cpu)
+    {
+        tracing::warn!("pinning the loop to CPU {cpu} refused ({e}); carrying on unpinned");
     }
-    if rt.sched_fifo_priority > 0 {
-        if let Err(e) = sys::set_fifo_priority(rt.sched_fifo_priority) {
-            tracing::warn!(
-                "SCHED_FIFO priority {} refused ({e}); carrying on with the default scheduler",
-                rt.sched_fifo_priority
-            );
-        }
+    if rt.sched_fifo_priority > 0
+        && let Err(e) = sys::set_fifo_priority(rt.sched_fifo_priority)
+    {
+        tracing::warn!(
+            "SCHED_FIFO priority {} refused ({e}); carrying on with the default scheduler",
+            rt.sched_fifo_priority
+        );
     }
 }
 

@@ -61,6 +61,8 @@ pub struct ControlLoop {
     refused: u64,
     stop_seen: bool,
     started: bool,
+    pending_acks: [Ack; MAX_REQUESTS_PER_CYCLE],
+    pending: usize,
 }
 
 impl ControlLoop {
@@ -81,6 +83,11 @@ impl ControlLoop {
             refused: 0,
             stop_seen: false,
             started: false,
+            pending_acks: [Ack {
+                ticket: 0,
+                result: Ok(()),
+            }; MAX_REQUESTS_PER_CYCLE],
+            pending: 0,
         }
     }
 
@@ -145,11 +152,11 @@ impl ControlLoop {
             } else {
                 self.refused += 1;
             }
-            // A full ack queue means nobody is waiting any more; the client times out.
-            let _ = self.p.acks.try_send(Ack {
+            self.pending_acks[self.pending] = Ack {
                 ticket: env.ticket,
                 result,
-            });
+            };
+            self.pending += 1;
         }
 
         // Update.
@@ -194,6 +201,12 @@ impl ControlLoop {
         let compute_ns = self.p.pacer.elapsed_ns().saturating_sub(started_ns);
         self.record(c, compute_ns);
         self.publish(c);
+        // Answers leave after the telemetry that shows their effect (read-your-writes).
+        // A full ack queue means nobody is waiting any more; the client times out.
+        for ack in &self.pending_acks[..self.pending] {
+            let _ = self.p.acks.try_send(*ack);
+        }
+        self.pending = 0;
         self.p.heartbeat.fetch_add(1, Ordering::Release);
         flow
     }

@@ -173,7 +173,10 @@ fn estop_latches_and_only_arm_releases_it() {
         request(&mut h, 2, LoopRequest::SetGait(GaitKind::Sidewinding)),
         Err(Rejection::EStopLatched)
     );
-    assert_eq!(request(&mut h, 3, LoopRequest::Hold), Err(Rejection::EStopLatched));
+    assert_eq!(
+        request(&mut h, 3, LoopRequest::Hold),
+        Err(Rejection::EStopLatched)
+    );
     assert_eq!(h.telemetry.latest().mode, Mode::EStop);
     assert_eq!(request(&mut h, 4, LoopRequest::Arm), Ok(()));
     steps(&mut h, 2);

@@ -24,7 +24,10 @@ pub fn fit_sine(t: &[f64], x: &[f64], omega: f64) -> SineFit {
     }
     let m = nalgebra::Matrix3::from_fn(|r, c| ata[r][c]);
     let v = nalgebra::Vector3::from_column_slice(&atb);
-    let sol = m.lu().solve(&v).expect("well-posed fit (span covers a period)");
+    let sol = m
+        .lu()
+        .solve(&v)
+        .expect("well-posed fit (span covers a period)");
     let (c, a, b) = (sol[0], sol[1], sol[2]);
     let mut ss = 0.0;
     for (&ti, &xi) in t.iter().zip(x) {

@@ -18,7 +18,9 @@ pub fn free_udp_ports(n: u16) -> u16 {
     let seed = std::process::id() as u16;
     for attempt in 0..200u16 {
         let base = 20000 + (seed.wrapping_mul(7).wrapping_add(attempt * 97) % 30000);
-        let held: Vec<_> = (0..n).filter_map(|i| UdpSocket::bind(("127.0.0.1", base + i)).ok()).collect();
+        let held: Vec<_> = (0..n)
+            .filter_map(|i| UdpSocket::bind(("127.0.0.1", base + i)).ok())
+            .collect();
         if held.len() == n as usize {
             return base;
         }
@@ -42,7 +44,10 @@ impl Proc {
             .env("RUST_LOG", "warn")
             .spawn()
             .unwrap_or_else(|e| panic!("spawning {name}: {e}"));
-        Proc { name, child: Some(child) }
+        Proc {
+            name,
+            child: Some(child),
+        }
     }
 
     pub fn pid(&self) -> i32 {
@@ -63,7 +68,11 @@ impl Proc {
                 self.child = None;
                 return status;
             }
-            assert!(Instant::now() < deadline, "{} did not exit within {timeout:?}", self.name);
+            assert!(
+                Instant::now() < deadline,
+                "{} did not exit within {timeout:?}",
+                self.name
+            );
             std::thread::sleep(Duration::from_millis(20));
         }
     }
@@ -104,7 +113,11 @@ impl Client {
                     };
                 }
                 Err(e) => {
-                    assert!(Instant::now() < deadline, "connecting to {}: {e}", path.display());
+                    assert!(
+                        Instant::now() < deadline,
+                        "connecting to {}: {e}",
+                        path.display()
+                    );
                     std::thread::sleep(Duration::from_millis(50));
                 }
             }
@@ -138,14 +151,22 @@ impl Client {
     }
 
     /// Poll `status` until `pred` holds, at most `timeout`.
-    pub fn wait_status(&mut self, timeout: Duration, what: &str, pred: impl Fn(&Value) -> bool) -> Value {
+    pub fn wait_status(
+        &mut self,
+        timeout: Duration,
+        what: &str,
+        pred: impl Fn(&Value) -> bool,
+    ) -> Value {
         let deadline = Instant::now() + timeout;
         loop {
             let s = self.call("status", json!({}));
             if pred(&s) {
                 return s;
             }
-            assert!(Instant::now() < deadline, "timed out waiting for {what}; last status {s}");
+            assert!(
+                Instant::now() < deadline,
+                "timed out waiting for {what}; last status {s}"
+            );
             std::thread::sleep(Duration::from_millis(20));
         }
     }
@@ -161,7 +182,8 @@ pub struct Recording {
 
 impl Recording {
     pub fn load(path: &Path, n: usize) -> Recording {
-        let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        let text =
+            std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
         let mut lines = text.lines();
         let header: Vec<&str> = lines.next().expect("header").split(',').collect();
         assert_eq!(header.len(), 1 + 3 * n, "recording columns: {header:?}");
@@ -172,7 +194,10 @@ impl Recording {
             torque: vec![vec![]; n],
         };
         for line in lines {
-            let v: Vec<f64> = line.split(',').map(|x| x.trim().parse::<f64>().unwrap_or(f64::NAN)).collect();
+            let v: Vec<f64> = line
+                .split(',')
+                .map(|x| x.trim().parse::<f64>().unwrap_or(f64::NAN))
+                .collect();
             if v.len() != 1 + 3 * n {
                 continue; // a row cut by the stop
             }
