@@ -93,3 +93,54 @@ fn emulated_daemon_runs_switches_and_stops_safely() {
     );
     assert!(!sock.exists(), "socket removed");
 }
+
+/// The service manager's view: READY once the loop turns, watchdog pings while it
+/// does, STOPPING on the safe stop. A datagram socket stands in for systemd.
+#[test]
+fn notifies_ready_pings_the_watchdog_and_says_stopping() {
+    use std::os::unix::net::UnixDatagram;
+    let dir = tempfile::tempdir().unwrap();
+    let notify = dir.path().join("notify");
+    let listener = UnixDatagram::bind(&notify).unwrap();
+    listener
+        .set_read_timeout(Some(Duration::from_secs(10)))
+        .unwrap();
+    let sock = dir.path().join("s.sock");
+    let child = Command::new(exe("snaked"))
+        .args(["--emulated", "--socket", sock.to_str().unwrap()])
+        .env("NOTIFY_SOCKET", &notify)
+        .env("WATCHDOG_USEC", "200000")
+        .env("RUST_LOG", "warn")
+        .spawn()
+        .unwrap();
+    let mut d = Proc {
+        name: "snaked",
+        child: Some(child),
+    };
+    let mut seen = String::new();
+    let mut buf = [0u8; 512];
+    let mut pings = 0;
+    while pings < 3 {
+        let n = listener.recv(&mut buf).expect("notifications arrive");
+        let msg = String::from_utf8_lossy(&buf[..n]).into_owned();
+        if msg.contains("WATCHDOG=1") {
+            assert!(
+                seen.contains("READY=1"),
+                "READY comes before the first ping: {seen}"
+            );
+            pings += 1;
+        }
+        seen.push_str(&msg);
+        seen.push('\n');
+    }
+    d.signal(libc::SIGTERM);
+    assert!(d.wait(Duration::from_secs(20)).success());
+    let mut rest = String::new();
+    listener
+        .set_read_timeout(Some(Duration::from_millis(500)))
+        .unwrap();
+    while let Ok(n) = listener.recv(&mut buf) {
+        rest.push_str(&String::from_utf8_lossy(&buf[..n]));
+    }
+    assert!(rest.contains("STOPPING=1"), "{rest}");
+}

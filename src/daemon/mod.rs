@@ -201,6 +201,9 @@ fn server_config(cfg: &Config) -> ServerConfig {
 
 /// Each real-time setting is attempted; a refusal is a warning, not a failure.
 fn apply_realtime_settings(rt: &config::LoopConfig) {
+    if let Err(e) = sys::set_timer_slack_ns(1) {
+        tracing::warn!("timer slack refused ({e}); sleeps may end up to 50 µs late");
+    }
     if rt.lock_memory
         && let Err(e) = sys::lock_memory()
     {
@@ -232,7 +235,7 @@ fn supervise(
 ) {
     let mut ready = false;
     let mut last = None;
-    let mut watchdog = service::Watchdog::new(heartbeat.clone());
+    let mut watchdog = service::Watchdog::from_env(heartbeat.clone());
     while !loop_thread.is_finished() {
         std::thread::sleep(Duration::from_millis(20));
         if !ready && heartbeat.load(Ordering::Acquire) > 0 {

@@ -29,9 +29,15 @@ pub struct Watchdog {
 }
 
 impl Watchdog {
-    pub fn new(heartbeat: Arc<AtomicU64>) -> Self {
+    /// The interval systemd asked for (`WATCHDOG_USEC`), if any.
+    pub fn from_env(heartbeat: Arc<AtomicU64>) -> Self {
+        Self::new(sd_notify::watchdog_enabled(), heartbeat)
+    }
+
+    /// Pings at half of `timeout`; `None` disables the watchdog.
+    pub fn new(timeout: Option<Duration>, heartbeat: Arc<AtomicU64>) -> Self {
         Self {
-            interval: sd_notify::watchdog_enabled().map(|d| d / 2),
+            interval: timeout.map(|d| d / 2),
             heartbeat,
             last_beat: 0,
             last_ping: Instant::now(),
@@ -59,5 +65,31 @@ impl Watchdog {
         }
         self.last_ping = Instant::now();
         alive
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pings_only_while_the_heartbeat_moves() {
+        let beat = Arc::new(AtomicU64::new(0));
+        let mut w = Watchdog::new(Some(Duration::from_millis(2)), beat.clone());
+        assert!(w.enabled());
+        std::thread::sleep(Duration::from_millis(2));
+        assert!(!w.poll(), "no cycle yet: no ping");
+        beat.fetch_add(5, Ordering::Release);
+        std::thread::sleep(Duration::from_millis(2));
+        assert!(w.poll(), "the loop turned: ping");
+        std::thread::sleep(Duration::from_millis(2));
+        assert!(!w.poll(), "stalled since the last ping: no ping");
+    }
+
+    #[test]
+    fn disabled_without_a_timeout() {
+        let mut w = Watchdog::new(None, Arc::new(AtomicU64::new(0)));
+        assert!(!w.enabled());
+        assert!(w.poll());
     }
 }
