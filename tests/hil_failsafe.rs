@@ -4,7 +4,7 @@ mod common;
 
 use std::time::Duration;
 
-use common::{Client, Proc, Recording, exe, free_udp_ports};
+use common::Rig;
 use serde_json::json;
 
 const N: usize = 8;
@@ -13,55 +13,15 @@ const SILENCE_AT_S: f64 = 5.0;
 
 #[test]
 fn a_silent_module_makes_the_daemon_hold_then_go_limp() {
-    let dir = tempfile::tempdir().unwrap();
-    let base = free_udp_ports(N as u16);
-    let rec_path = dir.path().join("truth.csv");
-    let sock = dir.path().join("snaked.sock");
-    let mut emu = Proc::spawn(
-        "snake-emu",
-        &exe("snake-emu"),
-        &[
-            "--modules".into(),
-            N.to_string(),
-            "--base-port".into(),
-            base.to_string(),
-            "--silence".into(),
-            format!("{SILENT}@{SILENCE_AT_S}"),
-            "--record".into(),
-            rec_path.display().to_string(),
-        ],
-    );
-    let cfg_path = dir.path().join("snaked.toml");
+    let silence = format!("{SILENT}@{SILENCE_AT_S}");
     // Timeouts generous enough for a loaded 2-core CI machine; the logic is the same.
-    std::fs::write(
-        &cfg_path,
-        format!(
-            r#"
-[network]
-targets = ["127.0.0.1:{base}-{last}"]
-expected_modules = {N}
-discovery_timeout_s = 5.0
-command_lifetime_s = 0.25
-[failsafe]
-feedback_timeout_s = 0.2
-limp_after_s = 1.0
-[gait]
-initial = "rolling"
-start = "run"
-[control]
-socket = "{sock}"
-"#,
-            last = base + N as u16 - 1,
-            sock = sock.display()
-        ),
-    )
-    .unwrap();
-    let mut daemon = Proc::spawn(
-        "snaked",
-        &exe("snaked"),
-        &["--config".into(), cfg_path.display().to_string()],
+    let mut rig = Rig::start(
+        N,
+        &["--silence", &silence],
+        "command_lifetime_s = 0.25",
+        "[failsafe]\nfeedback_timeout_s = 0.2\nlimp_after_s = 1.0\n[gait]\ninitial = \"rolling\"\nstart = \"run\"",
     );
-    let mut c = Client::connect(&sock, Duration::from_secs(30));
+    let c = &mut rig.client;
     c.wait_status(Duration::from_secs(30), "running", |s| {
         s["mode"] == "running"
     });
@@ -87,13 +47,9 @@ socket = "{sock}"
         "arm refused while feedback is stale: {arm}"
     );
 
-    daemon.signal(libc::SIGINT);
-    assert!(daemon.wait(Duration::from_secs(20)).success());
-    emu.signal(libc::SIGTERM);
-    assert!(emu.wait(Duration::from_secs(20)).success());
+    let rec = rig.stop(N);
 
     // At the emulator: the others were driven before the silence and limp by the end.
-    let rec = Recording::load(&rec_path, N);
     let before = rec.span(SILENCE_AT_S - 1.0, SILENCE_AT_S);
     assert!(
         before.clone().all(|k| rec.cmd[0][k].is_finite()),

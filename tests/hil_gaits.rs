@@ -7,7 +7,7 @@ mod common;
 use std::time::Duration;
 
 use common::fit::{fit_sine, wrap};
-use common::{Client, Proc, Recording, exe, free_udp_ports};
+use common::{Client, Recording, Rig};
 use serde_json::json;
 use snaked::gait::serpenoid::Serpenoid;
 use snaked::gait::{BodyLayout, GaitKind, GaitParams, Plane};
@@ -34,55 +34,13 @@ fn wait_until_t(c: &mut Client, t: f64) -> f64 {
 
 #[test]
 fn gaits_follow_the_serpenoid_and_switches_never_step_a_joint() {
-    let dir = tempfile::tempdir().unwrap();
-    let base = free_udp_ports(N as u16);
-    let rec_path = dir.path().join("truth.csv");
-    let sock = dir.path().join("snaked.sock");
-    let mut emu = Proc::spawn(
-        "snake-emu",
-        &exe("snake-emu"),
-        &[
-            "--modules".into(),
-            N.to_string(),
-            "--base-port".into(),
-            base.to_string(),
-            "--mode".into(),
-            "lockstep".into(),
-            "--record".into(),
-            rec_path.display().to_string(),
-        ],
+    let mut rig = Rig::start(
+        N,
+        &["--mode", "lockstep"],
+        "",
+        "[loop]\npacing = \"lockstep\"\nlockstep_timeout_s = 2.0\n[gait]\ninitial = \"sidewinding\"\nstart = \"run\"",
     );
-    let cfg_path = dir.path().join("snaked.toml");
-    std::fs::write(
-        &cfg_path,
-        format!(
-            r#"
-[loop]
-pacing = "lockstep"
-lockstep_timeout_s = 2.0
-[network]
-targets = ["127.0.0.1:{base}-{last}"]
-expected_modules = {N}
-discovery_timeout_s = 5.0
-[failsafe]
-feedback_timeout_s = 0.05
-[gait]
-initial = "sidewinding"
-start = "run"
-[control]
-socket = "{sock}"
-"#,
-            last = base + N as u16 - 1,
-            sock = sock.display()
-        ),
-    )
-    .unwrap();
-    let mut daemon = Proc::spawn(
-        "snaked",
-        &exe("snaked"),
-        &["--config".into(), cfg_path.display().to_string()],
-    );
-    let mut c = Client::connect(&sock, Duration::from_secs(30));
+    let c = &mut rig.client;
     c.wait_status(Duration::from_secs(30), "running", |s| {
         s["mode"] == "running"
     });
@@ -121,7 +79,7 @@ socket = "{sock}"
         // The switch happened at or before this status' time: the blend is over by t0.
         let t0 = s["t_s"].as_f64().unwrap() + blend + 0.3;
         let period = std::f64::consts::TAU / OMEGA_T;
-        let t1 = wait_until_t(&mut c, t0 + 1.2 * period);
+        let t1 = wait_until_t(c, t0 + 1.2 * period);
         let p = c.call("params.get", json!({"gait": kind.name()}));
         let params: GaitParams = serde_json::from_value(p["params"].clone()).unwrap();
         windows.push(Window {
@@ -133,14 +91,7 @@ socket = "{sock}"
     }
 
     // A safe stop: SIGTERM, exit 0, socket gone.
-    daemon.signal(libc::SIGTERM);
-    let status = daemon.wait(Duration::from_secs(20));
-    assert!(status.success(), "snaked exits 0 on SIGTERM: {status:?}");
-    assert!(!sock.exists(), "the socket file is removed");
-    emu.signal(libc::SIGTERM);
-    assert!(emu.wait(Duration::from_secs(20)).success());
-
-    let rec = Recording::load(&rec_path, N);
+    let rec = rig.stop(N);
     check_no_steps(&rec);
     let layout = BodyLayout::alternating(N, Plane::Lateral, 0.064);
     for w in &windows {

@@ -24,8 +24,8 @@ use super::module::{
 };
 use super::recorder::{RecordError, Recorder};
 use crate::protocol::{self, Command, DecodeError, Feedback, MAX_DATAGRAM, Message, Name};
+use crate::rt::sys;
 
-mod clock;
 mod io;
 
 /// How the emulator paces its world.
@@ -229,7 +229,7 @@ impl Server {
             counters: ServerCounters::default(),
             recv_buf: vec![0; 2 * MAX_DATAGRAM],
             send_buf: vec![0; MAX_DATAGRAM],
-            start_ns: clock::mono_ns(),
+            start_ns: sys::monotonic_ns(),
         })
     }
 
@@ -266,7 +266,7 @@ impl Server {
     /// Serve until `stop` is set or `duration_s` of simulated time has passed; flushes
     /// the recording on the way out and returns the counters.
     pub fn run(&mut self, stop: &AtomicBool) -> Result<ServerCounters, ServerError> {
-        self.start_ns = clock::mono_ns();
+        self.start_ns = sys::monotonic_ns();
         let result = match self.config.mode {
             Mode::Realtime => self.run_realtime(stop),
             Mode::Lockstep => self.run_lockstep(stop),
@@ -293,12 +293,12 @@ impl Server {
     }
 
     fn wall_s(&self) -> f64 {
-        clock::mono_ns().saturating_sub(self.start_ns) as f64 * 1e-9
+        sys::monotonic_ns().saturating_sub(self.start_ns) as f64 * 1e-9
     }
 
     fn run_realtime(&mut self, stop: &AtomicBool) -> Result<(), ServerError> {
         let period_ns = (self.config.physics_dt_s * 1e9).round() as u64;
-        let mut deadline_ns = clock::mono_ns();
+        let mut deadline_ns = sys::monotonic_ns();
         while !self.done(stop) {
             self.drain_all();
             self.step()?;
@@ -310,12 +310,12 @@ impl Server {
             }
             self.release_delayed();
             deadline_ns += period_ns;
-            let now_ns = clock::mono_ns();
+            let now_ns = sys::monotonic_ns();
             if now_ns > deadline_ns + 20 * period_ns {
                 self.counters.overruns += 1;
                 deadline_ns = now_ns;
             } else {
-                clock::sleep_until_ns(deadline_ns);
+                sys::sleep_until_ns(deadline_ns);
             }
         }
         Ok(())

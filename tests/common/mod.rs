@@ -231,3 +231,72 @@ pub fn exe(name: &str) -> String {
 pub fn tmp_path(dir: &tempfile::TempDir, name: &str) -> PathBuf {
     dir.path().join(name)
 }
+
+/// `snake-emu` and `snaked` as processes on loopback, talking protocol v1, with the
+/// daemon's socket connected and the emulator recording its ground truth.
+pub struct Rig {
+    pub dir: tempfile::TempDir,
+    pub emu: Proc,
+    pub daemon: Proc,
+    pub client: Client,
+    pub sock: PathBuf,
+    pub recording: PathBuf,
+}
+
+impl Rig {
+    /// `emu_args` are added to snake-emu's; `network` goes into the daemon's `[network]`
+    /// section and `sections` after it (whole TOML sections, not `[network]`/`[control]`).
+    pub fn start(n: usize, emu_args: &[&str], network: &str, sections: &str) -> Rig {
+        let dir = tempfile::tempdir().unwrap();
+        let base = free_udp_ports(n as u16);
+        let recording = dir.path().join("truth.csv");
+        let sock = dir.path().join("snaked.sock");
+        let mut args = vec![
+            "--modules".to_owned(),
+            n.to_string(),
+            "--base-port".into(),
+            base.to_string(),
+            "--record".into(),
+            recording.display().to_string(),
+        ];
+        args.extend(emu_args.iter().map(|a| a.to_string()));
+        let emu = Proc::spawn("snake-emu", &exe("snake-emu"), &args);
+        let cfg_path = dir.path().join("snaked.toml");
+        let last = base + n as u16 - 1;
+        let cfg = format!(
+            "[network]\ntargets = [\"127.0.0.1:{base}-{last}\"]\nexpected_modules = {n}\n\
+             discovery_timeout_s = 5.0\n{network}\n{sections}\n[control]\nsocket = \"{}\"\n",
+            sock.display()
+        );
+        std::fs::write(&cfg_path, cfg).unwrap();
+        let daemon = Proc::spawn(
+            "snaked",
+            &exe("snaked"),
+            &["--config".into(), cfg_path.display().to_string()],
+        );
+        let client = Client::connect(&sock, Duration::from_secs(30));
+        Rig {
+            dir,
+            emu,
+            daemon,
+            client,
+            sock,
+            recording,
+        }
+    }
+
+    /// SIGTERM the daemon (exit 0 and socket removed are checked), then the emulator;
+    /// returns the emulator's recording.
+    pub fn stop(mut self, n: usize) -> Recording {
+        self.daemon.signal(libc::SIGTERM);
+        let status = self.daemon.wait(Duration::from_secs(20));
+        assert!(status.success(), "snaked exits 0 on SIGTERM: {status:?}");
+        assert!(!self.sock.exists(), "the socket file is removed");
+        self.emu.signal(libc::SIGTERM);
+        assert!(
+            self.emu.wait(Duration::from_secs(20)).success(),
+            "snake-emu exits 0"
+        );
+        Recording::load(&self.recording, n)
+    }
+}
