@@ -11,6 +11,7 @@ pub mod recorder;
 pub mod scenario;
 pub mod server;
 pub mod servo;
+pub mod world;
 
 use crate::protocol::{Command, Feedback};
 

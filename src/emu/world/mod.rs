@@ -1,0 +1,9 @@
+//! The world the simulated snake touches, described as plain data (`WorldSpec`),
+//! produced from scenario files by seeded generators (`scenario`), and turned into
+//! a rapier3d rigid-body world by `physics`.
+//!
+//! Frames: world z up, gravity −z, metres. The ground's top surface is z = 0.
+
+pub mod spec;
+
+pub use spec::*;
