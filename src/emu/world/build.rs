@@ -71,10 +71,9 @@ pub(crate) fn build(
     for (i, r) in s.rock_piles.iter().enumerate() {
         let mut rng = g::rng_for(s.seed, r.seed, Kind::RockPile, i as u64);
         for _ in 0..r.count {
-            let x = r.region.x_m[0] + r.region.width_m() * rand::RngExt::random::<f64>(&mut rng);
-            let y = r.region.y_m[0] + r.region.depth_m() * rand::RngExt::random::<f64>(&mut rng);
-            let size =
-                r.size_m[0] + (r.size_m[1] - r.size_m[0]) * rand::RngExt::random::<f64>(&mut rng);
+            let x = g::uniform(&mut rng, r.region.x_m);
+            let y = g::uniform(&mut rng, r.region.y_m);
+            let size = g::uniform(&mut rng, r.size_m);
             let pts = g::rock_points(&mut rng, size, r.points, r.flatness, r.jitter);
             w.rocks.push(g::rock_on_ground(x, y, pts));
         }
@@ -188,11 +187,11 @@ fn start(
     if let Some(r) = &st.random {
         let mut rng = g::rng_for(s.seed, r.seed, Kind::Start, trial);
         for _ in 0..START_TRIES {
-            let u = |rng: &mut rand_pcg::Pcg64, [a, b]: [f64; 2]| {
-                a + (b - a) * rand::RngExt::random::<f64>(rng)
-            };
-            let head = [u(&mut rng, r.region.x_m), u(&mut rng, r.region.y_m)];
-            let yaw = u(&mut rng, r.yaw_range_rad);
+            let head = [
+                g::uniform(&mut rng, r.region.x_m),
+                g::uniform(&mut rng, r.region.y_m),
+            ];
+            let yaw = g::uniform(&mut rng, r.yaw_range_rad);
             if st.allow_contact || g::body_hits(w, head, yaw, modules).is_none() {
                 return Ok(StartPose {
                     head_m: [head[0], head[1], 0.0],

@@ -31,7 +31,8 @@ fn splitmix(x: u64) -> u64 {
     z ^ (z >> 31)
 }
 
-fn uniform<R: Rng + ?Sized>(rng: &mut R, [a, b]: [f64; 2]) -> f64 {
+/// Uniform in `[a, b)`.
+pub fn uniform<R: Rng + ?Sized>(rng: &mut R, [a, b]: [f64; 2]) -> f64 {
     a + (b - a) * rng.random::<f64>()
 }
 

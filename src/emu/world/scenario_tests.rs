@@ -377,3 +377,48 @@ fn body_clearance_geometry() {
     assert!(body_hits(&w, [0.0, 0.0], std::f64::consts::PI, 18).is_some());
     assert!(body_hits(&w, [0.0, 0.0], 0.0, 18).is_none());
 }
+
+#[test]
+fn missing_pegs_file_names_it() {
+    let s = parse("[[peg_file]]\npath = \"no-such-dir/pegs.csv\"\ndiameter_m = 0.03\n");
+    let msg = s.generate(18).unwrap_err().to_string();
+    assert!(
+        msg.contains("peg_file[0].path") && msg.contains("no-such-dir/pegs.csv"),
+        "{msg}"
+    );
+}
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(24))]
+    /// Any board either meets its spacing and region, or is refused with a fit count
+    /// below the request.
+    #[test]
+    fn boards_meet_spacing_or_are_refused(
+        seed in 0u64..1000,
+        count in 1usize..60,
+        spacing in 0.05f64..0.4,
+        w in 0.2f64..2.0,
+        h in 0.2f64..2.0,
+    ) {
+        let text = format!(
+            "seed = {seed}\n[[peg_board]]\ncount = {count}\ndiameter_m = 0.02\n\
+             min_spacing_m = {spacing}\nregion = {{ x_m = [0.0, {w}], y_m = [0.0, {h}] }}\n\
+             [start]\nhead_m = [-5.0, -5.0]\n"
+        );
+        match parse(&text).generate(18) {
+            Ok(world) => {
+                proptest::prop_assert_eq!(world.pegs.len(), count);
+                for (i, p) in world.pegs.iter().enumerate() {
+                    proptest::prop_assert!(p.x_m >= 0.0 && p.x_m <= w && p.y_m >= 0.0 && p.y_m <= h);
+                    for q in &world.pegs[i + 1..] {
+                        proptest::prop_assert!((p.x_m - q.x_m).hypot(p.y_m - q.y_m) >= spacing);
+                    }
+                }
+            }
+            Err(ScenarioError::PegsDontFit { fit, hex, .. }) => {
+                proptest::prop_assert!(fit < count && fit <= hex);
+            }
+            Err(e) => proptest::prop_assert!(false, "{}", e),
+        }
+    }
+}
