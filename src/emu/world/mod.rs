@@ -4,6 +4,10 @@
 //!
 //! Frames: world z up, gravity −z, metres. The ground's top surface is z = 0.
 
+mod build;
+pub mod generators;
+pub mod scenario;
 pub mod spec;
+mod validate;
 
 pub use spec::*;
