@@ -4,6 +4,7 @@
 //!
 //! Frames: world z up, gravity −z, metres. The ground's top surface is z = 0.
 
+pub mod physics;
 pub mod spec;
 
 pub use spec::*;
