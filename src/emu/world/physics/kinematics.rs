@@ -4,8 +4,12 @@
 //! Link frames: x toward the head (the nose), y left, z up when the body lies straight
 //! and flat. Link 0 is the head; joint `i` joins link `i` (parent) to link `i + 1`
 //! (child, the output side of module `i`, where its IMU sits). A lateral joint turns
-//! about the links' z axis, a dorsal joint about their y axis, positive by the
-//! right-hand rule, as in the joint-space plant.
+//! about the links' z axis (positive: the tail side swings right, as in the
+//! joint-space plant), a dorsal joint about their −y axis (positive: the tail side
+//! pitches down; the joint-space plant uses +y). Only the relative sign of the two
+//! planes has a physical consequence: it decides which sections of a sidewinding body
+//! touch the ground, and with this choice the thesis' `δ = 3π/4` sidewinds (with +y
+//! it travels obliquely; see docs/emulator.md).
 
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use rapier3d::math::{Pose, Rotation, Vector};
@@ -17,7 +21,7 @@ use crate::gait::Plane;
 pub fn axis_of(plane: Plane) -> Vector3<f64> {
     match plane {
         Plane::Lateral => Vector3::z(),
-        Plane::Dorsal => Vector3::y(),
+        Plane::Dorsal => -Vector3::y(),
     }
 }
 

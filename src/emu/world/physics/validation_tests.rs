@@ -1,1 +1,163 @@
+//! The physics against the literature, driven by the real gaits (SPEC §2, §5-6).
+//! Figures are printed (`cargo test -- --nocapture`) for the report.
 
+use std::f64::consts::PI;
+
+use super::tests::{hold, quiet};
+use super::*;
+use crate::emu::Plant;
+use crate::emu::servo::MODULE_LENGTH_M;
+use crate::gait::{BodyLayout, GaitKind, GaitParams, GaitSelector, GaitTable, Serpenoid};
+
+const N: usize = 18;
+
+fn layout() -> BodyLayout {
+    BodyLayout::alternating(N, Plane::Lateral, MODULE_LENGTH_M)
+}
+
+/// Joint angles of `kind` at phase ψ = 0.
+fn gait_pose(kind: GaitKind, params: &GaitParams) -> Vec<f64> {
+    let l = layout();
+    let mut out = vec![0.0; N];
+    Serpenoid::for_layout(kind, params, &l).evaluate(&l, 0.0, &mut out);
+    out
+}
+
+/// Runs `kind` open loop for `duration_s` from its own start pose (no blend), calling
+/// `each(t_s, plant)` after every step; returns the plant.
+fn run_gait(
+    spec: &WorldSpec,
+    kind: GaitKind,
+    params: GaitParams,
+    duration_s: f64,
+    mut each: impl FnMut(f64, &PhysicsPlant),
+) -> PhysicsPlant {
+    let mut table = GaitTable::default();
+    *table.get_mut(kind) = params;
+    let spec = WorldSpec {
+        start: crate::emu::world::StartPose {
+            joint_angles_rad: gait_pose(kind, &params),
+            ..spec.start.clone()
+        },
+        ..spec.clone()
+    };
+    let mut plant = PhysicsPlant::new(&spec, quiet(N)).unwrap();
+    let mut sel = GaitSelector::new(layout(), table, kind, 0.5, 3.46);
+    let (mut pos, mut vel) = (vec![0.0; N], vec![0.0; N]);
+    let steps = (duration_s * 1e3).round() as usize;
+    for k in 0..steps {
+        sel.update(k as f64 * 1e-3, &mut pos, &mut vel);
+        plant.step(1e-3, &hold(&pos));
+        each((k + 1) as f64 * 1e-3, &plant);
+    }
+    plant
+}
+
+/// Principal axis of the links' ground-plane positions (unit, sign arbitrary).
+fn body_axis(plant: &PhysicsPlant) -> [f64; 2] {
+    let c = plant.centre_of_mass_m();
+    let (mut sxx, mut sxy, mut syy) = (0.0, 0.0, 0.0);
+    for k in 0..plant.link_count() {
+        let p = plant.link_pose(k).position_m;
+        let (x, y) = (p[0] - c[0], p[1] - c[1]);
+        sxx += x * x;
+        sxy += x * y;
+        syy += y * y;
+    }
+    let theta = 0.5 * (2.0 * sxy).atan2(sxx - syy);
+    [theta.cos(), theta.sin()]
+}
+
+/// Angle between a displacement and an axis, degrees in [0, 90].
+fn angle_to_axis_deg(d: [f64; 2], axis: [f64; 2]) -> f64 {
+    let cos = ((d[0] * axis[0] + d[1] * axis[1]) / d[0].hypot(d[1])).abs();
+    cos.min(1.0).acos().to_degrees()
+}
+
+fn body_length_m() -> f64 {
+    (N + 1) as f64 * MODULE_LENGTH_M
+}
+
+#[test]
+fn sidewinding_travels_sideways() {
+    let params = GaitParams::default_for(GaitKind::Sidewinding);
+    let cycle_s = 2.0 * PI / params.temporal_freq_rad_s;
+    let cycles = 3;
+    // Centre and axis at each cycle boundary after one settling cycle.
+    let mut marks: Vec<([f64; 3], [f64; 2])> = Vec::new();
+    let mut next = cycle_s;
+    run_gait(
+        &WorldSpec::default(),
+        GaitKind::Sidewinding,
+        params,
+        cycle_s * (1 + cycles) as f64 + 1e-3,
+        |t, p| {
+            if t >= next - 1e-9 {
+                marks.push((p.centre_of_mass_m(), body_axis(p)));
+                next += cycle_s;
+            }
+        },
+    );
+    let mut total = 0.0;
+    let mut angles = Vec::new();
+    for w in marks.windows(2) {
+        let d = [w[1].0[0] - w[0].0[0], w[1].0[1] - w[0].0[1]];
+        total += d[0].hypot(d[1]);
+        angles.push(angle_to_axis_deg(d, w[0].1));
+    }
+    let per_cycle_bl = total / cycles as f64 / body_length_m();
+    let angle_deg = angles.iter().sum::<f64>() / angles.len() as f64;
+    println!(
+        "sidewinding: {per_cycle_bl:.3} body lengths per cycle ({total:.3} m in {cycles} cycles), \
+         {angle_deg:.1} deg from the body axis (per cycle: {angles:.1?})"
+    );
+    assert!(per_cycle_bl > 0.1 && per_cycle_bl < 1.0, "{per_cycle_bl}");
+    assert!(angle_deg > 70.0, "{angle_deg}");
+}
+
+/// Centre displacement per cycle and its angle to the body axis, averaged over
+/// `cycles` cycles after `settle_s`.
+fn travel_per_cycle(
+    spec: &WorldSpec,
+    kind: GaitKind,
+    params: GaitParams,
+    settle_s: f64,
+    cycles: usize,
+) -> (f64, f64, [f64; 2]) {
+    let cycle_s = 2.0 * PI / params.temporal_freq_rad_s;
+    let mut marks: Vec<([f64; 3], [f64; 2])> = Vec::new();
+    let mut next = settle_s;
+    run_gait(
+        spec,
+        kind,
+        params,
+        settle_s + cycle_s * cycles as f64 + 1e-3,
+        |t, p| {
+            if t >= next - 1e-9 {
+                marks.push((p.centre_of_mass_m(), body_axis(p)));
+                next += cycle_s;
+            }
+        },
+    );
+    let first = marks[0].0;
+    let last = marks[marks.len() - 1].0;
+    let d = [last[0] - first[0], last[1] - first[1]];
+    let dist = d[0].hypot(d[1]) / cycles as f64;
+    (dist, angle_to_axis_deg(d, marks[0].1), d)
+}
+
+#[test]
+fn rolling_rolls_sideways() {
+    let params = GaitParams::default_for(GaitKind::Rolling);
+    let (dist, angle, _) =
+        travel_per_cycle(&WorldSpec::default(), GaitKind::Rolling, params, 1.0, 2);
+    // One cycle turns the arc once about its own axis: ideally π·d of ground per cycle.
+    let ideal = PI * build::MODULE_DIAMETER_M;
+    println!(
+        "rolling: {dist:.3} m per cycle ({:.2} of the rolling-without-slip π·d = {ideal:.3} m), \
+         {angle:.1} deg from the body axis",
+        dist / ideal
+    );
+    assert!(dist > 0.5 * ideal && dist < 1.5 * ideal, "{dist}");
+    assert!(angle > 70.0, "{angle}");
+}
