@@ -161,3 +161,118 @@ fn rolling_rolls_sideways() {
     assert!(dist > 0.5 * ideal && dist < 1.5 * ideal, "{dist}");
     assert!(angle > 70.0, "{angle}");
 }
+
+/// Pegs matching the slithering wave: one just outside each lateral extremum of the
+/// start shape (relative to the line from tail to head), repeated every wavelength
+/// ahead of the head. Returns the pegs and the forward (tail-to-head) direction.
+fn matched_pegs(params: &GaitParams) -> (Vec<crate::emu::world::Peg>, [f64; 2]) {
+    let spec = WorldSpec::default();
+    let angles = gait_pose(GaitKind::Slithering, params);
+    let poses = build::start_poses(
+        &WorldSpec {
+            start: crate::emu::world::StartPose {
+                joint_angles_rad: angles,
+                ..spec.start.clone()
+            },
+            ..spec
+        },
+        &quiet(N),
+        None,
+    );
+    let pts: Vec<[f64; 2]> = poses
+        .iter()
+        .map(|p| [p.translation.x, p.translation.y])
+        .collect();
+    let (head, tail) = (pts[0], pts[pts.len() - 1]);
+    let len = (head[0] - tail[0]).hypot(head[1] - tail[1]);
+    let fwd = [(head[0] - tail[0]) / len, (head[1] - tail[1]) / len];
+    let side = [-fwd[1], fwd[0]];
+    // Coordinates along (u) and across (w) the line.
+    let uw: Vec<[f64; 2]> = pts
+        .iter()
+        .map(|p| {
+            let (x, y) = (p[0] - tail[0], p[1] - tail[1]);
+            [x * fwd[0] + y * fwd[1], x * side[0] + y * side[1]]
+        })
+        .collect();
+    let mean_w = uw.iter().map(|p| p[1]).sum::<f64>() / uw.len() as f64;
+    let mut crests = Vec::new();
+    for k in 1..uw.len() - 1 {
+        let (a, b, c) = (uw[k - 1][1], uw[k][1], uw[k + 1][1]);
+        if (b > a && b >= c) || (b < a && b <= c) {
+            crests.push(uw[k]);
+        }
+    }
+    assert!(crests.len() >= 3, "{crests:?}");
+    // Wavelength along the line: between crests on the same side.
+    let lambda = (crests[0][0] - crests[2][0]).abs();
+    let peg_d = 0.05;
+    let gap = 0.5 * build::MODULE_DIAMETER_M + 0.5 * peg_d + 0.003;
+    // Measured: 3/8 of a wavelength behind each apex (near the inflection, where the
+    // tailward flank faces backwards) pushes best; at 1/8 or on the apex it barely helps.
+    let shift = 0.375;
+    let mut pegs = Vec::new();
+    for c in &crests {
+        // Outside the bend's tailward flank, where the travelling wave presses it.
+        let u0 = c[0] - shift * lambda;
+        let w0 = interpolate_w(&uw, u0);
+        for rep in 0..3 {
+            let u = u0 + rep as f64 * lambda;
+            let w = w0 + (c[1] - mean_w).signum() * gap;
+            pegs.push(crate::emu::world::Peg {
+                x_m: tail[0] + u * fwd[0] + w * side[0],
+                y_m: tail[1] + u * fwd[1] + w * side[1],
+                diameter_m: peg_d,
+                height_m: 0.1,
+            });
+        }
+    }
+    (pegs, fwd)
+}
+
+/// `w` of the polyline `uw` at `u` (linear between the nearest points).
+fn interpolate_w(uw: &[[f64; 2]], u: f64) -> f64 {
+    for p in uw.windows(2) {
+        let (a, b) = (p[0], p[1]);
+        if (a[0] - u) * (b[0] - u) <= 0.0 && a[0] != b[0] {
+            return a[1] + (b[1] - a[1]) * (u - a[0]) / (b[0] - a[0]);
+        }
+    }
+    uw[0][1]
+}
+
+#[test]
+fn slithering_needs_pegs() {
+    let params = GaitParams::default_for(GaitKind::Slithering);
+    let cycles = 2;
+    let (pegs, fwd) = matched_pegs(&params);
+    let along = |d: [f64; 2]| (d[0] * fwd[0] + d[1] * fwd[1]) / cycles as f64;
+    let (free, _, free_d) = travel_per_cycle(
+        &WorldSpec::default(),
+        GaitKind::Slithering,
+        params,
+        0.5,
+        cycles,
+    );
+    let pegged_world = WorldSpec {
+        pegs,
+        ..WorldSpec::default()
+    };
+    let (pegged, _, pegged_d) =
+        travel_per_cycle(&pegged_world, GaitKind::Slithering, params, 0.5, cycles);
+    println!(
+        "slithering: {free:.3} m per cycle on isotropic friction without pegs \
+         ({:.3} m forward), {pegged:.3} m per cycle along {} matched pegs ({:.3} m forward)",
+        along(free_d),
+        pegged_world.pegs.len(),
+        along(pegged_d),
+    );
+    // Isotropic friction: a slight backward drift (a few cm per cycle), no progress.
+    assert!(free < 0.08, "{free}");
+    // Along the pegs: head first, and by a clear margin.
+    assert!(along(pegged_d) > 0.15, "{pegged_d:?}");
+    assert!(
+        along(pegged_d) > along(free_d) + 0.15,
+        "{pegged_d:?} vs {free_d:?}"
+    );
+}
