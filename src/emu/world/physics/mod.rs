@@ -286,6 +286,8 @@ fn validate(c: &PhysicsConfig) -> Result<(), PhysicsError> {
 }
 
 #[cfg(test)]
+mod pole_tests;
+#[cfg(test)]
 mod tests;
 #[cfg(test)]
 mod validation_tests;

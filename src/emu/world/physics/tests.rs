@@ -123,3 +123,47 @@ fn invalid_configs_are_refused() {
     };
     assert!(PhysicsPlant::new(&spec, bad).is_err());
 }
+
+/// Three-point bending: a lateral joint commanded to bend, blocked by one peg on the
+/// convex side at the joint and two on the concave side near the ends, reports the
+/// push of the pegs with the servo's sign (commanded positive, pushed back negative:
+/// positive torque).
+#[test]
+fn joint_pressed_by_pegs_reports_torque_of_the_right_sign() {
+    use crate::emu::servo::MODULE_LENGTH_M;
+    let l = MODULE_LENGTH_M;
+    let gap = 0.5 * build::MODULE_DIAMETER_M + 0.025 + 0.001;
+    for sign in [1.0, -1.0] {
+        // Head at the origin, body along −x; joint 4 (lateral) at x = −5 l. A positive
+        // lateral angle swings the tail side right (−y): the body's ends move to −y
+        // and the joint to +y.
+        let peg = |x: f64, y: f64| Peg {
+            x_m: x,
+            y_m: y,
+            diameter_m: 0.05,
+            height_m: 0.1,
+        };
+        let spec = WorldSpec {
+            pegs: vec![
+                peg(-5.0 * l, sign * gap),
+                peg(-1.0 * l, -sign * gap),
+                peg(-9.0 * l, -sign * gap),
+            ],
+            ..WorldSpec::default()
+        };
+        let mut plant = PhysicsPlant::new(&spec, quiet(9)).unwrap();
+        let mut cmd = [0.0; 9];
+        cmd[4] = sign * 0.8;
+        for _ in 0..800 {
+            plant.step(1e-3, &hold(&cmd));
+        }
+        let x = plant.joint_rad(4);
+        let tau = plant.feedback(4).torque_nm;
+        println!(
+            "peg torque: commanded {:.1} rad, joint at {x:.3} rad, torque {tau:.2} N·m",
+            cmd[4]
+        );
+        assert!(x.abs() < 0.4, "the pegs did not block the bend: {x}");
+        assert!(f64::from(tau) * sign > 1.0, "torque {tau} for sign {sign}");
+    }
+}
