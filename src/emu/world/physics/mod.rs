@@ -25,8 +25,10 @@ use rapier3d::prelude::*;
 use self::build::{Chain, build_chain, build_world, start_poses};
 use self::sensors::ImuState;
 use super::WorldSpec;
+use crate::emu::Plant;
 use crate::emu::plant::{GRAVITY_M_S2, NoiseConfig};
 use crate::emu::servo::{Servo, ServoParamError, ServoParams};
+pub use crate::emu::{ContactSummary, LinkPose};
 use crate::gait::Plane;
 use crate::protocol::Feedback;
 
@@ -98,22 +100,6 @@ pub enum PhysicsError {
     BadValue(&'static str),
     #[error("a rock's points have no 3-D convex hull")]
     BadRock,
-}
-
-/// One link's exact pose: position, m, and orientation quaternion (w, x, y, z).
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct LinkPose {
-    pub position_m: [f64; 3],
-    pub quat_wxyz: [f64; 4],
-}
-
-/// Contacts between the snake and the world after the last step.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct ContactSummary {
-    /// Collider pairs (link–obstacle) in contact.
-    pub pairs: usize,
-    /// Sum of their normal forces, N.
-    pub normal_force_n: f64,
 }
 
 /// The rigid-body snake (see the module docs).
@@ -200,23 +186,7 @@ impl PhysicsPlant {
         &self.servos[i]
     }
 
-    /// Number of links (modules + head).
-    pub fn link_count(&self) -> usize {
-        self.chain.links.len()
-    }
-
-    /// Exact pose of link `k` (0 = head, `i + 1` = module `i`'s output side).
-    pub fn link_pose(&self, k: usize) -> LinkPose {
-        let b = &self.world.bodies[self.chain.links[k]];
-        let t = b.translation();
-        let q = b.rotation();
-        LinkPose {
-            position_m: [t.x, t.y, t.z].map(f64::from),
-            quat_wxyz: [q.w, q.x, q.y, q.z].map(f64::from),
-        }
-    }
-
-    /// Mass-weighted centre of the links, m.
+    /// Mass-weighted centre of the links (all of equal mass), m.
     pub fn centre_of_mass_m(&self) -> [f64; 3] {
         let mut c = [0.0; 3];
         for k in 0..self.link_count() {
@@ -226,19 +196,6 @@ impl PhysicsPlant {
             }
         }
         c.map(|x| x / self.link_count() as f64)
-    }
-
-    /// Contacts of the snake with the world (from the last step's impulses).
-    pub fn contacts(&self) -> ContactSummary {
-        let mut s = ContactSummary::default();
-        let dt = f64::from(self.world.integration_parameters.dt);
-        for pair in self.world.narrow_phase.contact_pairs() {
-            if pair.has_any_active_contact() {
-                s.pairs += 1;
-                s.normal_force_n += f64::from(pair.total_impulse_magnitude()) / dt;
-            }
-        }
-        s
     }
 
     /// The rapier world (read-only; for diagnostics and tests).

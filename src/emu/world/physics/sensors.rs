@@ -61,32 +61,32 @@ impl PhysicsPlant {
             let g = inv * body.angvel();
             let torque = self.spring_torque_nm(i);
             let deflection = torque / k;
+            let accel = [f.x, f.y, f.z].map(f64::from);
+            let gyro = [g.x, g.y, g.z].map(f64::from);
             let rng = &mut self.rng;
             let mut noisy = |x: f64, sigma: f64| (x + sigma * gaussian(rng)) as f32;
+            let position_rad = noisy(self.joint_rad[i], noise.encoder_rad);
+            let velocity_rad_s = noisy(self.joint_rad_s[i], noise.velocity_rad_s);
+            let torque_nm = noisy(torque, noise.torque_nm);
+            let deflection_rad = noisy(deflection, noise.torque_nm / k);
+            let mut accel_m_s2 = [0.0f32; 3];
+            let mut gyro_rad_s = [0.0f32; 3];
+            for j in 0..3 {
+                accel_m_s2[j] = noisy(accel[j] + imu.accel_bias_m_s2[j], noise.accel_m_s2);
+                gyro_rad_s[j] = noisy(gyro[j] + imu.gyro_bias_rad_s[j], noise.gyro_rad_s);
+            }
             self.feedback[i] = Feedback {
                 module_time_us: time_us,
                 last_command_seq: 0,
-                position_rad: noisy(self.joint_rad[i], noise.encoder_rad),
-                velocity_rad_s: noisy(self.joint_rad_s[i], noise.velocity_rad_s),
-                torque_nm: noisy(torque, noise.torque_nm),
-                deflection_rad: noisy(deflection, noise.torque_nm / k),
-                accel_m_s2: [f.x, f.y, f.z]
-                    .map(f64::from)
-                    .iter()
-                    .zip(imu.accel_bias_m_s2)
-                    .map(|(x, b)| noisy(x + b, noise.accel_m_s2))
-                    .collect::<Vec<_>>()
-                    .try_into()
-                    .expect("three axes"),
-                gyro_rad_s: [0.0f32; 3],
+                position_rad,
+                velocity_rad_s,
+                torque_nm,
+                deflection_rad,
+                accel_m_s2,
+                gyro_rad_s,
                 temperature_c: self.config.temperature_c,
                 voltage_v: self.config.voltage_v,
             };
-            let gyro = [g.x, g.y, g.z].map(f64::from);
-            for j in 0..3 {
-                self.feedback[i].gyro_rad_s[j] =
-                    noisy(gyro[j] + imu.gyro_bias_rad_s[j], noise.gyro_rad_s);
-            }
         }
     }
 }

@@ -3,7 +3,7 @@
 
 use super::PhysicsPlant;
 use super::kinematics::twist_angle;
-use crate::emu::{GroundTruth, Plant};
+use crate::emu::{ContactSummary, GroundTruth, LinkPose, Plant};
 use crate::protocol::{Command, ControlStrategy, Feedback};
 
 impl PhysicsPlant {
@@ -97,5 +97,34 @@ impl Plant for PhysicsPlant {
             position_rad: self.joint_rad[i],
             torque_nm: self.spring_torque_nm(i),
         }
+    }
+
+    /// Links: modules + head.
+    fn link_count(&self) -> usize {
+        self.chain.links.len()
+    }
+
+    /// Link `k`: 0 = head, `i + 1` = module `i`'s output side.
+    fn link_pose(&self, k: usize) -> LinkPose {
+        let b = &self.world.bodies[self.chain.links[k]];
+        let t = b.translation();
+        let q = b.rotation();
+        LinkPose {
+            position_m: [t.x, t.y, t.z].map(f64::from),
+            quat_wxyz: [q.w, q.x, q.y, q.z].map(f64::from),
+        }
+    }
+
+    /// Collider pairs touching and their summed normal force (last substep's impulses).
+    fn contacts(&self) -> ContactSummary {
+        let mut s = ContactSummary::default();
+        let dt = f64::from(self.world.integration_parameters.dt);
+        for pair in self.world.narrow_phase.contact_pairs() {
+            if pair.has_any_active_contact() {
+                s.pairs += 1;
+                s.normal_force_n += f64::from(pair.total_impulse_magnitude()) / dt;
+            }
+        }
+        s
     }
 }

@@ -146,7 +146,7 @@ fn joint_pressed_by_pegs_reports_torque_of_the_right_sign() {
         let spec = WorldSpec {
             pegs: vec![
                 peg(-5.0 * l, sign * gap),
-                peg(-1.0 * l, -sign * gap),
+                peg(-l, -sign * gap),
                 peg(-9.0 * l, -sign * gap),
             ],
             ..WorldSpec::default()
