@@ -61,7 +61,12 @@ fn fit_helix(pts: &[Vector3<f64>]) -> (Vector3<f64>, Vector3<f64>, f64) {
 /// A plant coiled with the helix of `start_radius_m` around a pole at the origin
 /// whose radius leaves `clearance_m` inside the coil, the coil's middle at 0.6 m.
 /// Returns the plant and the pole's radius.
-fn coiled(start_radius_m: f64, clearance_m: f64, pole_mu: f64) -> (PhysicsPlant, f64) {
+fn coiled(
+    start_radius_m: f64,
+    clearance_m: f64,
+    pole_mu: f64,
+    config: PhysicsConfig,
+) -> (PhysicsPlant, f64) {
     let angles = helix_angles(start_radius_m);
     let poses = chain_poses(
         Isometry3::identity(),
@@ -92,7 +97,7 @@ fn coiled(start_radius_m: f64, clearance_m: f64, pole_mu: f64) -> (PhysicsPlant,
         },
         ..WorldSpec::default()
     };
-    let plant = PhysicsPlant::with_head_pose(&spec, quiet(N), Some(place)).unwrap();
+    let plant = PhysicsPlant::with_head_pose(&spec, config, Some(place)).unwrap();
     (plant, pole_r)
 }
 
@@ -111,7 +116,7 @@ fn hold_helix(plant: &mut PhysicsPlant, command_radius_m: f64, seconds: usize) -
 
 #[test]
 fn squeezing_helix_holds_on_the_pole_without_creep() {
-    let (mut plant, pole_r) = coiled(0.10, 0.002, 0.5);
+    let (mut plant, pole_r) = coiled(0.10, 0.002, 0.5, quiet(N));
     // Command a coil whose inner surface (radius − module radius) is well inside the
     // pole: the joints press.
     let command_r = 0.075;
@@ -135,7 +140,7 @@ fn squeezing_helix_holds_on_the_pole_without_creep() {
 #[test]
 fn loose_helix_slides_down_the_pole() {
     // Helix radius larger than the pole's: nothing presses.
-    let (mut plant, pole_r) = coiled(0.16, 0.02, 0.5);
+    let (mut plant, pole_r) = coiled(0.16, 0.02, 0.5, quiet(N));
     let z = hold_helix(&mut plant, 0.16, 1);
     println!("pole slide: pole radius {pole_r:.3} m, centre z {z:.3?}");
     assert!(z[0] - z[1] > 0.2, "did not slide: {z:?}");
