@@ -198,6 +198,12 @@ impl PhysicsPlant {
         c.map(|x| x / self.link_count() as f64)
     }
 
+    /// Exact angular velocity of link `k` in the world frame, rad/s.
+    pub fn link_angvel_rad_s(&self, k: usize) -> nalgebra::Vector3<f64> {
+        let w = self.world.bodies[self.chain.links[k]].angvel();
+        nalgebra::Vector3::new(f64::from(w.x), f64::from(w.y), f64::from(w.z))
+    }
+
     /// The rapier world (read-only; for diagnostics and tests).
     pub fn world(&self) -> &PhysicsWorld {
         &self.world
