@@ -30,6 +30,8 @@ pub const TAG_LINK_BASE: u128 = 1000;
 /// The chain as built: one body per link, one joint per module.
 pub struct Chain {
     pub links: Vec<RigidBodyHandle>,
+    /// The links' colliders.
+    pub colliders: Vec<ColliderHandle>,
     pub joints: Vec<ImpulseJointHandle>,
     /// Joint axis of each joint, in both links' frames.
     pub axes: Vec<Vector>,
@@ -154,6 +156,7 @@ pub fn build_chain(
         ActiveHooks::empty()
     };
     let mut links = Vec::with_capacity(poses.len());
+    let mut colliders = Vec::with_capacity(poses.len());
     for (k, pose) in poses.iter().enumerate() {
         let body = RigidBodyBuilder::dynamic()
             .pose(to_rapier(pose))
@@ -169,7 +172,7 @@ pub fn build_chain(
             .collision_groups(groups)
             .active_hooks(hooks)
             .user_data(TAG_LINK_BASE + k as u128);
-        world.colliders.insert_with_parent(c, h, &mut world.bodies);
+        colliders.push(world.colliders.insert_with_parent(c, h, &mut world.bodies));
         links.push(h);
     }
     let lim = JOINT_LIMIT_RAD as f32;
@@ -192,6 +195,7 @@ pub fn build_chain(
     }
     Chain {
         links,
+        colliders,
         joints,
         axes,
     }

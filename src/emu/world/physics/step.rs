@@ -28,7 +28,9 @@ impl PhysicsPlant {
         let hm = h / m as f64;
         for &link in &self.chain.links {
             self.world.bodies[link].reset_torques(false);
+            self.world.bodies[link].reset_forces(false);
         }
+        self.apply_anisotropic_friction(h);
         for i in 0..self.config.modules {
             let cmd = commands.get(i).copied().unwrap_or(Command::LIMP);
             let (x, w) = (self.joint_rad[i], self.joint_rad_s[i]);

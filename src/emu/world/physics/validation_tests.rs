@@ -326,3 +326,27 @@ fn slithering_needs_pegs() {
         "{pegged_d:?} vs {free_d:?}"
     );
 }
+
+/// Snake-like anisotropic skin (sliding along the body easier than across it) lets
+/// slithering progress without pegs (Hu et al. 2009), through the friction hook.
+#[test]
+fn slithering_on_anisotropic_skin_moves_forward() {
+    let params = GaitParams::default_for(GaitKind::Slithering);
+    let (_, fwd) = matched_pegs(&params);
+    let spec = WorldSpec {
+        friction: crate::emu::world::Friction {
+            mu: 0.5,
+            anisotropic: Some(crate::emu::world::Anisotropic {
+                mu_axial: 0.2,
+                mu_lateral: 0.8,
+            }),
+        },
+        ..WorldSpec::default()
+    };
+    let (_, _, d, _) = travel_per_cycle(&spec, GaitKind::Slithering, params, 0.5, 1);
+    let forward = d[0] * fwd[0] + d[1] * fwd[1];
+    println!(
+        "slithering, anisotropic skin (axial 0.2, lateral 0.8): {forward:.3} m forward per cycle"
+    );
+    assert!(forward > 0.1, "{d:?}");
+}
