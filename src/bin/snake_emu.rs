@@ -1,5 +1,6 @@
 //! `snake-emu`: every module of a snake as its own UDP endpoint, with a joint-space
-//! physics model behind them. See `docs/emulator.md`.
+//! model (default) or, with `--world`, the rigid-body physics plant behind them. See
+//! `docs/emulator.md`.
 
 use std::net::IpAddr;
 use std::path::PathBuf;
@@ -8,11 +9,14 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use anyhow::Context;
 use clap::Parser;
+use snaked::emu::Plant;
 use snaked::emu::faults::{FaultConfig, Silence};
 use snaked::emu::module::ModuleConfig;
 use snaked::emu::plant::JointSpacePlant;
 use snaked::emu::scenario::Scenario;
 use snaked::emu::server::{Mode, Server, ServerConfig};
+use snaked::emu::world::WorldSpec;
+use snaked::emu::world::physics::{PhysicsConfig, PhysicsPlant};
 use tracing::{info, warn};
 
 /// UDP emulator of a modular series-elastic snake robot (protocol v1).
@@ -52,6 +56,14 @@ struct Args {
     /// Write the ground truth (one CSV row per physics step) to this file.
     #[arg(long, value_name = "FILE.csv")]
     record: Option<PathBuf>,
+    /// Use the rigid-body physics plant in this world (a `WorldSpec` as TOML). The
+    /// scenario's first plane, servo and noise parameters still apply; its scripted
+    /// torques and obstacles do not.
+    #[arg(long, value_name = "FILE.toml")]
+    world: Option<PathBuf>,
+    /// Physics plant: write every link's pose and the contacts per step to this CSV.
+    #[arg(long, value_name = "FILE.csv")]
+    record_poses: Option<PathBuf>,
     /// Seed of the sensor noise and the faults.
     #[arg(long, default_value_t = 0)]
     seed: u64,
@@ -73,8 +85,32 @@ fn main() -> anyhow::Result<()> {
         Some(path) => Scenario::load(path)?,
         None => Scenario::default(),
     };
-    let plant = JointSpacePlant::new(scenario.plant_config(args.modules, args.seed))
-        .context("invalid plant configuration")?;
+    let plant: Box<dyn Plant> = match &args.world {
+        Some(path) => {
+            let text = std::fs::read_to_string(path)
+                .with_context(|| format!("cannot read {}", path.display()))?;
+            let spec: WorldSpec = toml::from_str(&text)
+                .with_context(|| format!("invalid world {}", path.display()))?;
+            let config = PhysicsConfig {
+                modules: args.modules,
+                first_plane: scenario.first_plane,
+                servo: scenario.servo,
+                noise: scenario.noise,
+                seed: args.seed,
+                temperature_c: scenario.temperature_c,
+                voltage_v: scenario.voltage_v,
+                ..PhysicsConfig::default()
+            };
+            Box::new(PhysicsPlant::new(&spec, config).context("invalid physics plant")?)
+        }
+        None => Box::new(
+            JointSpacePlant::new(scenario.plant_config(args.modules, args.seed))
+                .context("invalid plant configuration")?,
+        ),
+    };
+    if args.record_poses.is_some() && args.world.is_none() {
+        warn!("--record-poses without --world: the joint-space plant has no bodies to record");
+    }
     if args.mode == Mode::Lockstep && args.delay_ms > 0.0 {
         warn!("--delay-ms has no effect in lockstep mode");
     }
@@ -94,10 +130,11 @@ fn main() -> anyhow::Result<()> {
             ..FaultConfig::default()
         },
         record: args.record.clone(),
+        record_poses: args.record_poses.clone(),
         duration_s: args.duration,
         ..ServerConfig::default()
     };
-    let mut server = Server::new(config, Box::new(plant)).context("cannot start the emulator")?;
+    let mut server = Server::new(config, plant).context("cannot start the emulator")?;
     let addrs = server.local_addrs()?;
     info!(
         modules = args.modules,

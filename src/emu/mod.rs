@@ -7,6 +7,7 @@
 pub mod faults;
 pub mod module;
 pub mod plant;
+pub mod pose_recorder;
 pub mod recorder;
 pub mod scenario;
 pub mod server;
@@ -35,6 +36,34 @@ pub trait Plant: Send {
             torque_nm: f64::from(f.torque_nm),
         }
     }
+    /// Rigid bodies the plant can report poses of (0: it has none).
+    fn link_count(&self) -> usize {
+        0
+    }
+    /// Exact pose of body `k` (`k < link_count()`), for ground-truth recordings.
+    fn link_pose(&self, _k: usize) -> LinkPose {
+        LinkPose::default()
+    }
+    /// Contacts with the world after the last step (none for a plant without them).
+    fn contacts(&self) -> ContactSummary {
+        ContactSummary::default()
+    }
+}
+
+/// One body's exact pose: position, m, and orientation quaternion (w, x, y, z).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct LinkPose {
+    pub position_m: [f64; 3],
+    pub quat_wxyz: [f64; 4],
+}
+
+/// Contacts between the snake and the world after a step.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ContactSummary {
+    /// Collider pairs (link–obstacle) in contact.
+    pub pairs: usize,
+    /// Sum of their normal forces, N.
+    pub normal_force_n: f64,
 }
 
 /// Exact joint state of a plant, as recorded out of band.

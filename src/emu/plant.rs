@@ -267,7 +267,7 @@ pub fn plane_of(first: Plane, i: usize) -> Plane {
 }
 
 /// Standard normal sample (Box–Muller; one of the pair is discarded for simplicity).
-fn gaussian<R: Rng + ?Sized>(rng: &mut R) -> f64 {
+pub(crate) fn gaussian<R: Rng + ?Sized>(rng: &mut R) -> f64 {
     // `random::<f64>()` is in [0, 1); 1 − u is in (0, 1] so the log is finite.
     let u1: f64 = 1.0 - rng.random::<f64>();
     let u2: f64 = rng.random::<f64>();

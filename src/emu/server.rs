@@ -22,6 +22,7 @@ use super::faults::{DelayQueue, FaultConfig, FaultError, Faults};
 use super::module::{
     EMULATOR_FIRMWARE, Module, ModuleConfig, ModuleIdentity, ModuleTime, Outgoing,
 };
+use super::pose_recorder::PoseRecorder;
 use super::recorder::{RecordError, Recorder};
 use crate::protocol::{self, Command, DecodeError, Feedback, MAX_DATAGRAM, Message, Name};
 use crate::rt::sys;
@@ -54,6 +55,8 @@ pub struct ServerConfig {
     pub faults: FaultConfig,
     /// Ground-truth CSV (see [`super::recorder`]).
     pub record: Option<PathBuf>,
+    /// Body poses and contacts CSV (see [`super::pose_recorder`]).
+    pub record_poses: Option<PathBuf>,
     /// Stop after this much simulated time, s.
     pub duration_s: Option<f64>,
 }
@@ -71,6 +74,7 @@ impl Default for ServerConfig {
             module: ModuleConfig::default(),
             faults: FaultConfig::default(),
             record: None,
+            record_poses: None,
             duration_s: None,
         }
     }
@@ -162,6 +166,7 @@ pub struct Server {
     delayed: DelayQueue<Delayed>,
     applied: Vec<Command>,
     recorder: Option<Recorder>,
+    pose_recorder: Option<PoseRecorder>,
     counters: ServerCounters,
     recv_buf: Vec<u8>,
     send_buf: Vec<u8>,
@@ -216,6 +221,10 @@ impl Server {
             Some(path) => Some(Recorder::create(path, n)?),
             None => None,
         };
+        let pose_recorder = match &config.record_poses {
+            Some(path) => Some(PoseRecorder::create(path, plant.link_count())?),
+            None => None,
+        };
         Ok(Self {
             poll: io::PollSet::new(&sockets),
             delayed: DelayQueue::with_capacity(config.faults.delay_capacity),
@@ -226,6 +235,7 @@ impl Server {
             plant,
             faults,
             recorder,
+            pose_recorder,
             counters: ServerCounters::default(),
             recv_buf: vec![0; 2 * MAX_DATAGRAM],
             send_buf: vec![0; MAX_DATAGRAM],
@@ -272,6 +282,9 @@ impl Server {
             Mode::Lockstep => self.run_lockstep(stop),
         };
         if let Some(r) = self.recorder.as_mut() {
+            r.flush()?;
+        }
+        if let Some(r) = self.pose_recorder.as_mut() {
             r.flush()?;
         }
         result.map(|()| self.counters())
@@ -375,6 +388,9 @@ impl Server {
         self.counters.steps += 1;
         if let Some(r) = self.recorder.as_mut() {
             r.row(self.plant.as_ref(), &self.applied)?;
+        }
+        if let Some(r) = self.pose_recorder.as_mut() {
+            r.row(self.plant.as_ref())?;
         }
         Ok(())
     }

@@ -229,16 +229,8 @@ impl Servo {
 
     fn substep(&mut self, h: f64, cmd: &Command, limp: bool, external_nm: f64) {
         let p = self.params;
-        let k = p.spring_stiffness_nm_per_rad;
         let tau_s = self.torque_nm();
-        // Motor speed: keep up with the output, plus what closes the torque loop.
-        let motor_rad_s = if limp {
-            self.output_rad_s - p.limp_relax_per_s * tau_s / k
-        } else {
-            let tau_ref = self.torque_reference(h, cmd);
-            let w = self.output_rad_s + p.torque_bandwidth_per_s * (tau_ref - tau_s) / k;
-            w.clamp(-p.max_motor_speed_rad_s, p.max_motor_speed_rad_s)
-        };
+        let motor_rad_s = self.motor_speed(h, cmd, limp);
         // Semi-implicit Euler: velocities from current forces, positions from new velocities.
         let damper_nm = p.spring_damping_nm_s_per_rad * (motor_rad_s - self.output_rad_s);
         let accel = (tau_s + damper_nm + external_nm
@@ -246,10 +238,60 @@ impl Servo {
             / p.output_inertia_kg_m2;
         self.output_rad_s += accel * h;
         self.output_rad += self.output_rad_s * h;
+        self.advance_motor(h, motor_rad_s);
+    }
+
+    /// Motor-side step with the output supplied from outside (a rigid-body simulation
+    /// owns the output): the output is set to `output_rad` / `output_rad_s`, the
+    /// cascade and the motor advance by `h` (call with `h <= max_substep_s`), and the
+    /// torque the actuator puts on the output during the step is returned: spring
+    /// (from the deflection at the start of the step) plus damper, N·m, positive in
+    /// the joint's positive direction. Apply it equal and opposite to the two links.
+    pub fn step_motor(
+        &mut self,
+        h: f64,
+        cmd: &Command,
+        strategy: ControlStrategy,
+        output_rad: f64,
+        output_rad_s: f64,
+    ) -> f64 {
+        self.output_rad = output_rad;
+        self.output_rad_s = output_rad_s;
+        if !(h.is_finite() && h > 0.0) {
+            return self.torque_nm();
+        }
+        let limp = strategy == ControlStrategy::Off || cmd.is_limp();
+        if limp {
+            self.integral_nm = 0.0;
+        }
+        let tau_s = self.torque_nm();
+        let motor_rad_s = self.motor_speed(h, cmd, limp);
+        let damper_nm = self.params.spring_damping_nm_s_per_rad * (motor_rad_s - self.output_rad_s);
+        self.advance_motor(h, motor_rad_s);
+        tau_s + damper_nm
+    }
+
+    /// Motor speed for the next `h`: keep up with the output, plus what closes the
+    /// torque loop (or, limp, what lets the spring unwind).
+    fn motor_speed(&mut self, h: f64, cmd: &Command, limp: bool) -> f64 {
+        let p = self.params;
+        let k = p.spring_stiffness_nm_per_rad;
+        let tau_s = self.torque_nm();
+        if limp {
+            self.output_rad_s - p.limp_relax_per_s * tau_s / k
+        } else {
+            let tau_ref = self.torque_reference(h, cmd);
+            let w = self.output_rad_s + p.torque_bandwidth_per_s * (tau_ref - tau_s) / k;
+            w.clamp(-p.max_motor_speed_rad_s, p.max_motor_speed_rad_s)
+        }
+    }
+
+    fn advance_motor(&mut self, h: f64, motor_rad_s: f64) {
+        let p = self.params;
         self.motor_rad += motor_rad_s * h;
         self.motor_rad_s = motor_rad_s;
         // The motor cannot hold more than its torque limit: beyond it, it is back-driven.
-        let max_defl = p.max_torque_nm / k;
+        let max_defl = p.max_torque_nm / p.spring_stiffness_nm_per_rad;
         let defl = self.motor_rad - self.output_rad;
         if defl.abs() > max_defl {
             self.motor_rad = self.output_rad + defl.clamp(-max_defl, max_defl);

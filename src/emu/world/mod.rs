@@ -6,6 +6,7 @@
 
 mod build;
 pub mod generators;
+pub mod physics;
 pub mod scenario;
 pub mod spec;
 mod validate;

@@ -1,0 +1,146 @@
+//! Real-time factor (simulated s per wall s) of the physics plant: 18 modules
+//! slithering among 40 pegs, and sidewinding over a pile of convex rocks.
+//! Criterion times one 1 ms plant step (RTF = 1 ms / step time); the explicit
+//! figures over 5 simulated seconds are printed first.
+use std::time::Instant;
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use rand::{RngExt, SeedableRng};
+use rand_pcg::Pcg64;
+use snaked::emu::Plant;
+use snaked::emu::plant::NoiseConfig;
+use snaked::emu::servo::MODULE_LENGTH_M;
+use snaked::emu::world::physics::{PhysicsConfig, PhysicsPlant};
+use snaked::emu::world::{Peg, Rock, StartPose, WorldSpec};
+use snaked::gait::{BodyLayout, GaitKind, GaitSelector, GaitTable, Plane};
+use snaked::protocol::Command;
+
+const N: usize = 18;
+
+fn pegs_world() -> WorldSpec {
+    // 40 pegs on a jittered 8 x 5 grid around and ahead of the body.
+    let mut rng = Pcg64::seed_from_u64(1);
+    let mut pegs = Vec::new();
+    for i in 0..8 {
+        for j in 0..5 {
+            pegs.push(Peg {
+                x_m: -1.2 + 0.3 * i as f64 + rng.random_range(-0.05..0.05),
+                y_m: -0.6 + 0.3 * j as f64 + 0.15 + rng.random_range(-0.05..0.05),
+                diameter_m: 0.05,
+                height_m: 0.15,
+            });
+        }
+    }
+    WorldSpec {
+        pegs,
+        start: StartPose {
+            head_m: [0.0, 0.0, 0.0],
+            ..StartPose::default()
+        },
+        ..WorldSpec::default()
+    }
+}
+
+fn rocks_world() -> WorldSpec {
+    // A dozen convex rocks (random hulls of 12 points, 5-12 cm) under the body.
+    let mut rng = Pcg64::seed_from_u64(2);
+    let rocks = (0..12)
+        .map(|k| {
+            let size = rng.random_range(0.05..0.12);
+            Rock {
+                center_m: [-0.1 * k as f64, rng.random_range(-0.2..0.2), 0.3 * size],
+                points_m: (0..12)
+                    .map(|_| [0; 3].map(|_| rng.random_range(-0.5..0.5) * size))
+                    .collect(),
+            }
+        })
+        .collect();
+    WorldSpec {
+        rocks,
+        start: StartPose {
+            head_m: [0.0, 0.0, 0.12],
+            ..StartPose::default()
+        },
+        ..WorldSpec::default()
+    }
+}
+
+struct Run {
+    plant: PhysicsPlant,
+    sel: GaitSelector,
+    pos: Vec<f64>,
+    vel: Vec<f64>,
+    cmds: Vec<Command>,
+}
+
+impl Run {
+    fn new(spec: &WorldSpec, gait: GaitKind) -> Self {
+        let config = PhysicsConfig {
+            modules: N,
+            noise: NoiseConfig::default(),
+            ..PhysicsConfig::default()
+        };
+        let layout = BodyLayout::alternating(N, Plane::Lateral, MODULE_LENGTH_M);
+        Run {
+            plant: PhysicsPlant::new(spec, config).expect("valid world"),
+            sel: GaitSelector::new(layout, GaitTable::default(), gait, 0.5, 3.46),
+            pos: vec![0.0; N],
+            vel: vec![0.0; N],
+            cmds: vec![Command::LIMP; N],
+        }
+    }
+
+    fn step(&mut self) {
+        let t = self.plant.time_s();
+        self.sel.update(t, &mut self.pos, &mut self.vel);
+        for (c, &p) in self.cmds.iter_mut().zip(&self.pos) {
+            *c = Command::position(p);
+        }
+        self.plant.step(1e-3, &self.cmds);
+    }
+}
+
+fn print_rtf(name: &str, spec: &WorldSpec, gait: GaitKind) {
+    let mut run = Run::new(spec, gait);
+    let start = Instant::now();
+    for _ in 0..5000 {
+        run.step();
+    }
+    let wall = start.elapsed().as_secs_f64();
+    println!(
+        "physics_rtf {name}: 5.0 simulated s in {wall:.3} wall s, RTF {:.1}x, contacts at the end {:?}",
+        5.0 / wall,
+        run.plant.contacts()
+    );
+}
+
+fn physics_rtf(c: &mut Criterion) {
+    let worlds = [
+        (
+            "18_modules_40_pegs_slithering",
+            pegs_world(),
+            GaitKind::Slithering,
+        ),
+        (
+            "18_modules_rock_pile_sidewinding",
+            rocks_world(),
+            GaitKind::Sidewinding,
+        ),
+    ];
+    for (name, spec, gait) in &worlds {
+        print_rtf(name, spec, *gait);
+    }
+    let mut group = c.benchmark_group("physics_step_1ms");
+    group.sample_size(20);
+    for (name, spec, gait) in &worlds {
+        let mut run = Run::new(spec, *gait);
+        for _ in 0..1000 {
+            run.step();
+        }
+        group.bench_function(*name, |b| b.iter(|| run.step()));
+    }
+    group.finish();
+}
+
+criterion_group!(benches, physics_rtf);
+criterion_main!(benches);

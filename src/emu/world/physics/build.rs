@@ -1,0 +1,202 @@
+//! Turning a [`WorldSpec`] and a [`PhysicsConfig`] into rapier bodies, colliders and
+//! joints.
+
+use nalgebra::Isometry3;
+use rapier3d::prelude::*;
+
+use super::kinematics::{axis_of, chain_poses, head_pose, to_rapier};
+use super::{PhysicsConfig, PhysicsError};
+use crate::emu::plant::plane_of;
+use crate::emu::servo::{MODULE_LENGTH_M, MODULE_MASS_KG};
+use crate::emu::world::WorldSpec;
+
+/// Module diameter (SPEC §1), m.
+pub const MODULE_DIAMETER_M: f64 = 0.051;
+/// Joint limit, rad.
+pub const JOINT_LIMIT_RAD: f64 = std::f64::consts::FRAC_PI_2;
+
+/// Collision group of the snake's links (they do not collide with each other).
+const SNAKE_GROUP: Group = Group::GROUP_1;
+/// Collision group of everything else.
+const WORLD_GROUP: Group = Group::GROUP_2;
+
+/// `user_data` of world colliders whose friction the anisotropy applies to.
+pub const TAG_SKIN_SURFACE: u128 = 1;
+/// `user_data` of pole colliders (their own isotropic `mu`).
+pub const TAG_POLE: u128 = 2;
+/// `user_data` of a snake link collider: `TAG_LINK_BASE + link index`.
+pub const TAG_LINK_BASE: u128 = 1000;
+
+/// The chain as built: one body per link, one joint per module.
+pub struct Chain {
+    pub links: Vec<RigidBodyHandle>,
+    /// The links' colliders.
+    pub colliders: Vec<ColliderHandle>,
+    pub joints: Vec<ImpulseJointHandle>,
+    /// Joint axis of each joint, in both links' frames.
+    pub axes: Vec<Vector>,
+}
+
+fn v(x: f64, y: f64, z: f64) -> Vector {
+    Vector::new(x as f32, y as f32, z as f32)
+}
+
+/// Static geometry from `spec` (ground, pegs, poles, rocks, walls).
+pub fn build_world(world: &mut PhysicsWorld, spec: &WorldSpec) -> Result<(), PhysicsError> {
+    let groups = InteractionGroups::new(WORLD_GROUP, SNAKE_GROUP, InteractionTestMode::And);
+    let mu = spec.friction.mu as f32;
+    let fixed = world.bodies.insert(RigidBodyBuilder::fixed());
+    let skin = |b: ColliderBuilder| {
+        b.friction(mu)
+            .collision_groups(groups)
+            .user_data(TAG_SKIN_SURFACE)
+    };
+    let add = |w: &mut PhysicsWorld, c: ColliderBuilder| {
+        w.colliders.insert_with_parent(c, fixed, &mut w.bodies);
+    };
+    if spec.ground {
+        add(
+            world,
+            skin(ColliderBuilder::cuboid(500.0, 500.0, 0.5)).translation(v(0.0, 0.0, -0.5)),
+        );
+    }
+    // Parry's cylinders stand along y: turn them to z.
+    let upright = Vector::X * std::f32::consts::FRAC_PI_2;
+    for p in &spec.pegs {
+        add(
+            world,
+            skin(ColliderBuilder::cylinder(
+                (0.5 * p.height_m) as f32,
+                (0.5 * p.diameter_m) as f32,
+            ))
+            .translation(v(p.x_m, p.y_m, 0.5 * p.height_m))
+            .rotation(upright),
+        );
+    }
+    for pole in &spec.poles {
+        for s in &pole.sections {
+            let c = ColliderBuilder::cylinder(
+                (0.5 * (s.z1_m - s.z0_m)) as f32,
+                (0.5 * s.diameter_m) as f32,
+            )
+            .translation(v(pole.x_m, pole.y_m, 0.5 * (s.z0_m + s.z1_m)))
+            .rotation(upright)
+            .friction(pole.mu as f32)
+            .collision_groups(groups)
+            .user_data(TAG_POLE);
+            add(world, c);
+        }
+    }
+    for r in &spec.rocks {
+        let pts: Vec<Vector> = r.points_m.iter().map(|p| v(p[0], p[1], p[2])).collect();
+        let c = ColliderBuilder::convex_hull(&pts).ok_or(PhysicsError::BadRock)?;
+        add(
+            world,
+            skin(c).translation(v(r.center_m[0], r.center_m[1], r.center_m[2])),
+        );
+    }
+    for w in &spec.walls {
+        let (dx, dy) = (w.to_m[0] - w.from_m[0], w.to_m[1] - w.from_m[1]);
+        let len = dx.hypot(dy);
+        let c = ColliderBuilder::cuboid(
+            (0.5 * len) as f32,
+            (0.5 * w.thickness_m) as f32,
+            (0.5 * w.height_m) as f32,
+        )
+        .translation(v(
+            0.5 * (w.from_m[0] + w.to_m[0]),
+            0.5 * (w.from_m[1] + w.to_m[1]),
+            0.5 * w.height_m,
+        ))
+        .rotation(Vector::Z * dy.atan2(dx) as f32);
+        add(world, skin(c));
+    }
+    Ok(())
+}
+
+/// The start pose's link poses: from the spec's head pose and joint angles, or from
+/// `override_head` when given (e.g. a body already coiled around a pole).
+pub fn start_poses(
+    spec: &WorldSpec,
+    config: &PhysicsConfig,
+    override_head: Option<Isometry3<f64>>,
+) -> Vec<Isometry3<f64>> {
+    let n = config.modules;
+    let angles: Vec<f64> = (0..n)
+        .map(|i| {
+            spec.start
+                .joint_angles_rad
+                .get(i)
+                .copied()
+                .unwrap_or(0.0)
+                .clamp(-JOINT_LIMIT_RAD, JOINT_LIMIT_RAD)
+        })
+        .collect();
+    let head = override_head.unwrap_or_else(|| {
+        let mut h = spec.start.head_m;
+        h[2] += 0.5 * MODULE_DIAMETER_M;
+        head_pose(h, spec.start.yaw_rad, MODULE_LENGTH_M)
+    });
+    chain_poses(head, config.first_plane, &angles, MODULE_LENGTH_M)
+}
+
+/// Links (capsules of the module's length and diameter and mass) and revolute
+/// impulse joints between them, with contacts between the links disabled.
+pub fn build_chain(
+    world: &mut PhysicsWorld,
+    config: &PhysicsConfig,
+    poses: &[Isometry3<f64>],
+) -> Chain {
+    let radius = 0.5 * MODULE_DIAMETER_M;
+    let half_len = 0.5 * MODULE_LENGTH_M;
+    let groups = InteractionGroups::new(SNAKE_GROUP, WORLD_GROUP, InteractionTestMode::And);
+    let hooks = if config.anisotropic_hooks {
+        ActiveHooks::MODIFY_SOLVER_CONTACTS
+    } else {
+        ActiveHooks::empty()
+    };
+    let mut links = Vec::with_capacity(poses.len());
+    let mut colliders = Vec::with_capacity(poses.len());
+    for (k, pose) in poses.iter().enumerate() {
+        let body = RigidBodyBuilder::dynamic()
+            .pose(to_rapier(pose))
+            .can_sleep(false)
+            .angular_damping(config.link_angular_damping as f32);
+        let h = world.bodies.insert(body);
+        // Friction 0 with rule Max: each contact takes the world surface's coefficient.
+        let c = ColliderBuilder::capsule_x((half_len - radius) as f32, radius as f32)
+            .mass(MODULE_MASS_KG as f32)
+            .friction(0.0)
+            .friction_combine_rule(CoefficientCombineRule::Max)
+            .restitution(0.0)
+            .collision_groups(groups)
+            .active_hooks(hooks)
+            .user_data(TAG_LINK_BASE + k as u128);
+        colliders.push(world.colliders.insert_with_parent(c, h, &mut world.bodies));
+        links.push(h);
+    }
+    let lim = JOINT_LIMIT_RAD as f32;
+    let mut joints = Vec::with_capacity(config.modules);
+    let mut axes = Vec::with_capacity(config.modules);
+    for i in 0..config.modules {
+        let a = axis_of(plane_of(config.first_plane, i));
+        let axis = v(a.x, a.y, a.z);
+        let joint = RevoluteJointBuilder::new(axis)
+            .local_anchor1(v(-half_len, 0.0, 0.0))
+            .local_anchor2(v(half_len, 0.0, 0.0))
+            .limits([-lim, lim])
+            .contacts_enabled(false);
+        joints.push(
+            world
+                .impulse_joints
+                .insert(links[i], links[i + 1], joint, true),
+        );
+        axes.push(axis);
+    }
+    Chain {
+        links,
+        colliders,
+        joints,
+        axes,
+    }
+}

@@ -1,0 +1,147 @@
+//! Rolling helix on a pole (SPEC §6): a coil that squeezes holds without creeping, a
+//! loose one slides down. The body starts already coiled around the pole.
+
+use nalgebra::{Isometry3, Matrix3, Translation3, UnitQuaternion, Vector3};
+
+use super::kinematics::chain_poses;
+use super::tests::{hold, quiet};
+use super::*;
+use crate::emu::Plant;
+use crate::emu::servo::MODULE_LENGTH_M;
+use crate::emu::world::{Pole, PoleSection, StartPose};
+use crate::gait::{BodyLayout, GaitKind, GaitParams, Serpenoid};
+
+const N: usize = 18;
+
+/// The helix of `radius_m` with the default gait's pitch angle (pitch scaled with the
+/// radius, so a tighter coil is the same coil squeezed, not a stretched one).
+fn helix_angles(radius_m: f64) -> Vec<f64> {
+    let l = BodyLayout::alternating(N, Plane::Lateral, MODULE_LENGTH_M);
+    let d = GaitParams::default_for(GaitKind::RollingHelix);
+    let p = GaitParams {
+        helix_radius_m: radius_m,
+        helix_pitch_m: d.helix_pitch_m * radius_m / d.helix_radius_m,
+        ..d
+    };
+    let mut out = vec![0.0; N];
+    Serpenoid::for_layout(GaitKind::RollingHelix, &p, &l).evaluate(&l, 0.0, &mut out);
+    out
+}
+
+/// Axis direction, centre (on the axis) and radius of the helix through the links'
+/// centres: the axis is the mean binormal, the circle a least-squares fit of the
+/// centres projected on the plane across it.
+fn fit_helix(pts: &[Vector3<f64>]) -> (Vector3<f64>, Vector3<f64>, f64) {
+    let mut d = Vector3::zeros();
+    for w in pts.windows(3) {
+        d += (w[1] - w[0]).cross(&(w[2] - w[1])).normalize();
+    }
+    let d = d.normalize();
+    let e1 = d
+        .cross(&Vector3::x())
+        .try_normalize(1e-6)
+        .unwrap_or_else(|| d.cross(&Vector3::y()).normalize());
+    let e2 = d.cross(&e1);
+    // u² + v² = a·u + b·v + c.
+    let mut m = Matrix3::zeros();
+    let mut r = Vector3::zeros();
+    for p in pts {
+        let (u, v) = (p.dot(&e1), p.dot(&e2));
+        let row = Vector3::new(u, v, 1.0);
+        m += row * row.transpose();
+        r += row * (u * u + v * v);
+    }
+    let s = m.lu().solve(&r).unwrap();
+    let (cu, cv) = (0.5 * s.x, 0.5 * s.y);
+    let radius = (s.z + cu * cu + cv * cv).sqrt();
+    let mean_d = pts.iter().map(|p| p.dot(&d)).sum::<f64>() / pts.len() as f64;
+    (d, e1 * cu + e2 * cv + d * mean_d, radius)
+}
+
+/// A plant coiled with the helix of `start_radius_m` around a pole at the origin
+/// whose radius leaves `clearance_m` inside the coil, the coil's middle at 0.6 m.
+/// Returns the plant and the pole's radius.
+fn coiled(
+    start_radius_m: f64,
+    clearance_m: f64,
+    pole_mu: f64,
+    config: PhysicsConfig,
+) -> (PhysicsPlant, f64) {
+    let angles = helix_angles(start_radius_m);
+    let poses = chain_poses(
+        Isometry3::identity(),
+        Plane::Lateral,
+        &angles,
+        MODULE_LENGTH_M,
+    );
+    let pts: Vec<Vector3<f64>> = poses.iter().map(|p| p.translation.vector).collect();
+    let (axis, centre, r) = fit_helix(&pts);
+    let pole_r = r - 0.5 * build::MODULE_DIAMETER_M - clearance_m;
+    let rot = UnitQuaternion::rotation_between(&axis, &Vector3::z())
+        .unwrap_or_else(UnitQuaternion::identity);
+    let place = Translation3::new(0.0, 0.0, 0.6) * rot * Translation3::from(-centre);
+    let spec = WorldSpec {
+        poles: vec![Pole {
+            x_m: 0.0,
+            y_m: 0.0,
+            sections: vec![PoleSection {
+                z0_m: 0.0,
+                z1_m: 1.5,
+                diameter_m: 2.0 * pole_r,
+            }],
+            mu: pole_mu,
+        }],
+        start: StartPose {
+            joint_angles_rad: angles,
+            ..StartPose::default()
+        },
+        ..WorldSpec::default()
+    };
+    let plant = PhysicsPlant::with_head_pose(&spec, config, Some(place)).unwrap();
+    (plant, pole_r)
+}
+
+/// Centre height after each second of holding `command_radius_m`'s helix.
+fn hold_helix(plant: &mut PhysicsPlant, command_radius_m: f64, seconds: usize) -> Vec<f64> {
+    let cmds = hold(&helix_angles(command_radius_m));
+    let mut z = vec![plant.centre_of_mass_m()[2]];
+    for _ in 0..seconds {
+        for _ in 0..1000 {
+            plant.step(1e-3, &cmds);
+        }
+        z.push(plant.centre_of_mass_m()[2]);
+    }
+    z
+}
+
+#[test]
+fn squeezing_helix_holds_on_the_pole_without_creep() {
+    let (mut plant, pole_r) = coiled(0.10, 0.002, 0.5, quiet(N));
+    // Command a coil whose inner surface (radius − module radius) is well inside the
+    // pole: the joints press.
+    let command_r = 0.075;
+    let z = hold_helix(&mut plant, command_r, 5);
+    let creep_um_s = (z[1] - z[5]) / 4.0 * 1e6;
+    let torque: f64 = (0..N)
+        .map(|i| plant.ground_truth(i).torque_nm.abs())
+        .sum::<f64>()
+        / N as f64;
+    println!(
+        "pole hold: pole radius {:.3} m, command radius {:.3} m, centre z per s {z:.5?}, \
+         creep {creep_um_s:.2} µm/s over s 1-5, mean |torque| {torque:.2} N·m, contacts {:?}",
+        pole_r,
+        command_r,
+        plant.contacts()
+    );
+    assert!(z[5] > 0.45, "fell: {z:?}");
+    assert!(creep_um_s.abs() < 200.0, "creeps {creep_um_s} µm/s");
+}
+
+#[test]
+fn loose_helix_slides_down_the_pole() {
+    // Helix radius larger than the pole's: nothing presses.
+    let (mut plant, pole_r) = coiled(0.16, 0.02, 0.5, quiet(N));
+    let z = hold_helix(&mut plant, 0.16, 1);
+    println!("pole slide: pole radius {pole_r:.3} m, centre z {z:.3?}");
+    assert!(z[0] - z[1] > 0.2, "did not slide: {z:?}");
+}

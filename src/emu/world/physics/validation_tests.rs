@@ -1,0 +1,352 @@
+//! The physics against the literature, driven by the real gaits (SPEC §2, §5-6).
+//! Figures are printed (`cargo test -- --nocapture`) for the report.
+
+use std::f64::consts::PI;
+
+use super::tests::{hold, quiet};
+use super::*;
+use crate::emu::Plant;
+use crate::emu::servo::MODULE_LENGTH_M;
+use crate::gait::{BodyLayout, GaitKind, GaitParams, GaitSelector, GaitTable, Serpenoid};
+
+const N: usize = 18;
+
+fn layout() -> BodyLayout {
+    BodyLayout::alternating(N, Plane::Lateral, MODULE_LENGTH_M)
+}
+
+/// Joint angles of `kind` at phase ψ = 0.
+fn gait_pose(kind: GaitKind, params: &GaitParams) -> Vec<f64> {
+    let l = layout();
+    let mut out = vec![0.0; N];
+    Serpenoid::for_layout(kind, params, &l).evaluate(&l, 0.0, &mut out);
+    out
+}
+
+/// Runs `kind` open loop for `duration_s` from its own start pose (no blend), calling
+/// `each(t_s, plant)` after every step; returns the plant.
+fn run_gait(
+    spec: &WorldSpec,
+    kind: GaitKind,
+    params: GaitParams,
+    duration_s: f64,
+    mut each: impl FnMut(f64, &PhysicsPlant),
+) -> PhysicsPlant {
+    let mut table = GaitTable::default();
+    *table.get_mut(kind) = params;
+    let spec = WorldSpec {
+        start: crate::emu::world::StartPose {
+            joint_angles_rad: gait_pose(kind, &params),
+            ..spec.start.clone()
+        },
+        ..spec.clone()
+    };
+    let mut plant = PhysicsPlant::new(&spec, quiet(N)).unwrap();
+    let mut sel = GaitSelector::new(layout(), table, kind, 0.5, 3.46);
+    let (mut pos, mut vel) = (vec![0.0; N], vec![0.0; N]);
+    let steps = (duration_s * 1e3).round() as usize;
+    for k in 0..steps {
+        sel.update(k as f64 * 1e-3, &mut pos, &mut vel);
+        plant.step(1e-3, &hold(&pos));
+        each((k + 1) as f64 * 1e-3, &plant);
+    }
+    plant
+}
+
+/// Principal axis of the links' ground-plane positions (unit, sign arbitrary).
+fn body_axis(plant: &PhysicsPlant) -> [f64; 2] {
+    let c = plant.centre_of_mass_m();
+    let (mut sxx, mut sxy, mut syy) = (0.0, 0.0, 0.0);
+    for k in 0..plant.link_count() {
+        let p = plant.link_pose(k).position_m;
+        let (x, y) = (p[0] - c[0], p[1] - c[1]);
+        sxx += x * x;
+        sxy += x * y;
+        syy += y * y;
+    }
+    let theta = 0.5 * (2.0 * sxy).atan2(sxx - syy);
+    [theta.cos(), theta.sin()]
+}
+
+/// Angle between a displacement and an axis, degrees in [0, 90].
+fn angle_to_axis_deg(d: [f64; 2], axis: [f64; 2]) -> f64 {
+    let cos = ((d[0] * axis[0] + d[1] * axis[1]) / d[0].hypot(d[1])).abs();
+    cos.min(1.0).acos().to_degrees()
+}
+
+fn body_length_m() -> f64 {
+    (N + 1) as f64 * MODULE_LENGTH_M
+}
+
+#[test]
+fn sidewinding_travels_sideways() {
+    let params = GaitParams::default_for(GaitKind::Sidewinding);
+    let cycle_s = 2.0 * PI / params.temporal_freq_rad_s;
+    let cycles = 3;
+    // Centre and axis at each cycle boundary after one settling cycle.
+    let mut marks: Vec<([f64; 3], [f64; 2])> = Vec::new();
+    let mut next = cycle_s;
+    run_gait(
+        &WorldSpec::default(),
+        GaitKind::Sidewinding,
+        params,
+        cycle_s * (1 + cycles) as f64 + 1e-3,
+        |t, p| {
+            if t >= next - 1e-9 {
+                marks.push((p.centre_of_mass_m(), body_axis(p)));
+                next += cycle_s;
+            }
+        },
+    );
+    let mut total = 0.0;
+    let mut angles = Vec::new();
+    for w in marks.windows(2) {
+        let d = [w[1].0[0] - w[0].0[0], w[1].0[1] - w[0].0[1]];
+        total += d[0].hypot(d[1]);
+        angles.push(angle_to_axis_deg(d, w[0].1));
+    }
+    let per_cycle_bl = total / cycles as f64 / body_length_m();
+    let angle_deg = angles.iter().sum::<f64>() / angles.len() as f64;
+    println!(
+        "sidewinding: {per_cycle_bl:.3} body lengths per cycle ({total:.3} m in {cycles} cycles), \
+         {angle_deg:.1} deg from the body axis (per cycle: {angles:.1?})"
+    );
+    assert!(per_cycle_bl > 0.1 && per_cycle_bl < 1.0, "{per_cycle_bl}");
+    assert!(angle_deg > 70.0, "{angle_deg}");
+}
+
+/// Centre displacement per cycle, m, the mean angle of each cycle's displacement to
+/// the body axis at its start, degrees, and the total displacement, over `cycles`
+/// cycles after `settle_s`.
+fn travel_per_cycle(
+    spec: &WorldSpec,
+    kind: GaitKind,
+    params: GaitParams,
+    settle_s: f64,
+    cycles: usize,
+) -> (f64, f64, [f64; 2], [f64; 2]) {
+    let cycle_s = 2.0 * PI / params.temporal_freq_rad_s;
+    let mut marks: Vec<([f64; 3], [f64; 2])> = Vec::new();
+    let mut next = settle_s;
+    run_gait(
+        spec,
+        kind,
+        params,
+        settle_s + cycle_s * cycles as f64 + 1e-3,
+        |t, p| {
+            if t >= next - 1e-9 {
+                marks.push((p.centre_of_mass_m(), body_axis(p)));
+                next += cycle_s;
+            }
+        },
+    );
+    let mut path = 0.0;
+    let mut angle = 0.0;
+    for w in marks.windows(2) {
+        let d = [w[1].0[0] - w[0].0[0], w[1].0[1] - w[0].0[1]];
+        path += d[0].hypot(d[1]);
+        angle += angle_to_axis_deg(d, w[0].1);
+        println!(
+            "  {kind:?} cycle: displacement {d:.3?} m, body axis {:.3?}, angle {:.1} deg",
+            w[0].1,
+            angle_to_axis_deg(d, w[0].1)
+        );
+    }
+    let first = marks[0].0;
+    let last = marks[marks.len() - 1].0;
+    let d = [last[0] - first[0], last[1] - first[1]];
+    (path / cycles as f64, angle / cycles as f64, d, marks[0].1)
+}
+
+#[test]
+fn rolling_rolls_sideways() {
+    // The arc's middle module, followed step by step: a rolling body turns about its
+    // own axis and moves across it.
+    let params = GaitParams::default_for(GaitKind::Rolling);
+    let cycle_s = 2.0 * PI / params.temporal_freq_rad_s;
+    let (settle_s, cycles) = (1.0, 3.0);
+    let mid = N / 2 + 1;
+    let (mut across, mut along, mut roll) = (0.0, 0.0, 0.0);
+    let mut last: Option<[f64; 3]> = None;
+    run_gait(
+        &WorldSpec::default(),
+        GaitKind::Rolling,
+        params,
+        settle_s + cycles * cycle_s,
+        |t, p| {
+            let pose = p.link_pose(mid);
+            let pos = pose.position_m;
+            let [w, x, y, z] = pose.quat_wxyz;
+            let q =
+                nalgebra::UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(w, x, y, z));
+            let axis = q * nalgebra::Vector3::x();
+            let flat = nalgebra::Vector3::new(axis.x, axis.y, 0.0).normalize();
+            let side = nalgebra::Vector3::z().cross(&flat);
+            if let (Some(l), true) = (last, t > settle_s) {
+                let d = nalgebra::Vector3::new(pos[0] - l[0], pos[1] - l[1], 0.0);
+                across += d.dot(&side);
+                along += d.dot(&flat);
+            }
+            last = Some(pos);
+            if t > settle_s {
+                roll += p.link_angvel_rad_s(mid).dot(&axis) * 1e-3;
+            }
+        },
+    );
+    let ideal = PI * build::MODULE_DIAMETER_M;
+    let (across, along, roll) = (across / cycles, along / cycles, roll / cycles);
+    println!(
+        "rolling: the middle module turns {:.2} rev about its axis and moves {across:.3} m \
+         across it ({:.2} of rolling without slip, π·d = {ideal:.3} m) and {along:.3} m (net) \
+         along it per cycle",
+        roll / (2.0 * PI),
+        across.abs() / ideal
+    );
+    assert!((roll.abs() / (2.0 * PI) - 1.0).abs() < 0.3, "{roll}");
+    assert!(across.abs() > 0.4 * ideal, "{across}");
+    // Rolling, not skidding: a cylinder turning by ω about its axis a moves by
+    // ω·r·(a × z), i.e. against `side` = z × a.
+    assert!(across * roll < 0.0, "{across} {roll}");
+    // The alternating joints make the arc slightly helical: it also screws along its
+    // axis, about as far as it rolls across (printed above); bounded here.
+    assert!(along.abs() < 2.0 * across.abs(), "{along} vs {across}");
+}
+
+/// Pegs matching the slithering wave: one just outside each lateral extremum of the
+/// start shape (relative to the line from tail to head), repeated every wavelength
+/// ahead of the head. Returns the pegs and the forward (tail-to-head) direction.
+fn matched_pegs(params: &GaitParams) -> (Vec<crate::emu::world::Peg>, [f64; 2]) {
+    let spec = WorldSpec::default();
+    let angles = gait_pose(GaitKind::Slithering, params);
+    let poses = build::start_poses(
+        &WorldSpec {
+            start: crate::emu::world::StartPose {
+                joint_angles_rad: angles,
+                ..spec.start.clone()
+            },
+            ..spec
+        },
+        &quiet(N),
+        None,
+    );
+    let pts: Vec<[f64; 2]> = poses
+        .iter()
+        .map(|p| [p.translation.x, p.translation.y])
+        .collect();
+    let (head, tail) = (pts[0], pts[pts.len() - 1]);
+    let len = (head[0] - tail[0]).hypot(head[1] - tail[1]);
+    let fwd = [(head[0] - tail[0]) / len, (head[1] - tail[1]) / len];
+    let side = [-fwd[1], fwd[0]];
+    // Coordinates along (u) and across (w) the line.
+    let uw: Vec<[f64; 2]> = pts
+        .iter()
+        .map(|p| {
+            let (x, y) = (p[0] - tail[0], p[1] - tail[1]);
+            [x * fwd[0] + y * fwd[1], x * side[0] + y * side[1]]
+        })
+        .collect();
+    let mean_w = uw.iter().map(|p| p[1]).sum::<f64>() / uw.len() as f64;
+    let mut crests = Vec::new();
+    for k in 1..uw.len() - 1 {
+        let (a, b, c) = (uw[k - 1][1], uw[k][1], uw[k + 1][1]);
+        if (b > a && b >= c) || (b < a && b <= c) {
+            crests.push(uw[k]);
+        }
+    }
+    assert!(crests.len() >= 3, "{crests:?}");
+    // Wavelength along the line: between crests on the same side.
+    let lambda = (crests[0][0] - crests[2][0]).abs();
+    let peg_d = 0.05;
+    let gap = 0.5 * build::MODULE_DIAMETER_M + 0.5 * peg_d + 0.003;
+    // Measured: 3/8 of a wavelength behind each apex (near the inflection, where the
+    // tailward flank faces backwards) pushes best; at 1/8 or on the apex it barely helps.
+    let shift = 0.375;
+    let mut pegs = Vec::new();
+    for c in &crests {
+        // Outside the bend's tailward flank, where the travelling wave presses it.
+        let u0 = c[0] - shift * lambda;
+        let w0 = interpolate_w(&uw, u0);
+        for rep in 0..3 {
+            let u = u0 + rep as f64 * lambda;
+            let w = w0 + (c[1] - mean_w).signum() * gap;
+            pegs.push(crate::emu::world::Peg {
+                x_m: tail[0] + u * fwd[0] + w * side[0],
+                y_m: tail[1] + u * fwd[1] + w * side[1],
+                diameter_m: peg_d,
+                height_m: 0.1,
+            });
+        }
+    }
+    (pegs, fwd)
+}
+
+/// `w` of the polyline `uw` at `u` (linear between the nearest points).
+fn interpolate_w(uw: &[[f64; 2]], u: f64) -> f64 {
+    for p in uw.windows(2) {
+        let (a, b) = (p[0], p[1]);
+        if (a[0] - u) * (b[0] - u) <= 0.0 && a[0] != b[0] {
+            return a[1] + (b[1] - a[1]) * (u - a[0]) / (b[0] - a[0]);
+        }
+    }
+    uw[0][1]
+}
+
+#[test]
+fn slithering_needs_pegs() {
+    let params = GaitParams::default_for(GaitKind::Slithering);
+    let cycles = 2;
+    let (pegs, fwd) = matched_pegs(&params);
+    let along = |d: [f64; 2]| (d[0] * fwd[0] + d[1] * fwd[1]) / cycles as f64;
+    let (free, _, free_d, _) = travel_per_cycle(
+        &WorldSpec::default(),
+        GaitKind::Slithering,
+        params,
+        0.5,
+        cycles,
+    );
+    let pegged_world = WorldSpec {
+        pegs,
+        ..WorldSpec::default()
+    };
+    let (pegged, _, pegged_d, _) =
+        travel_per_cycle(&pegged_world, GaitKind::Slithering, params, 0.5, cycles);
+    println!(
+        "slithering: {free:.3} m per cycle on isotropic friction without pegs \
+         ({:.3} m forward), {pegged:.3} m per cycle along {} matched pegs ({:.3} m forward)",
+        along(free_d),
+        pegged_world.pegs.len(),
+        along(pegged_d),
+    );
+    // Isotropic friction: a slight backward drift (a few cm per cycle), no progress.
+    assert!(free < 0.08, "{free}");
+    // Along the pegs: head first, and by a clear margin.
+    assert!(along(pegged_d) > 0.15, "{pegged_d:?}");
+    assert!(
+        along(pegged_d) > along(free_d) + 0.15,
+        "{pegged_d:?} vs {free_d:?}"
+    );
+}
+
+/// Snake-like anisotropic skin (sliding along the body easier than across it) lets
+/// slithering progress without pegs (Hu et al. 2009), through the friction hook.
+#[test]
+fn slithering_on_anisotropic_skin_moves_forward() {
+    let params = GaitParams::default_for(GaitKind::Slithering);
+    let (_, fwd) = matched_pegs(&params);
+    let spec = WorldSpec {
+        friction: crate::emu::world::Friction {
+            mu: 0.5,
+            anisotropic: Some(crate::emu::world::Anisotropic {
+                mu_axial: 0.2,
+                mu_lateral: 0.8,
+            }),
+        },
+        ..WorldSpec::default()
+    };
+    let (_, _, d, _) = travel_per_cycle(&spec, GaitKind::Slithering, params, 0.5, 1);
+    let forward = d[0] * fwd[0] + d[1] * fwd[1];
+    println!(
+        "slithering, anisotropic skin (axial 0.2, lateral 0.8): {forward:.3} m forward per cycle"
+    );
+    assert!(forward > 0.1, "{d:?}");
+}
