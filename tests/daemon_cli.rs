@@ -144,3 +144,35 @@ fn notifies_ready_pings_the_watchdog_and_says_stopping() {
     }
     assert!(rest.contains("STOPPING=1"), "{rest}");
 }
+
+/// `--emulated --world`: the daemon drives the rigid-body physics plant in process.
+#[test]
+fn emulated_daemon_drives_the_physics_world() {
+    let dir = tempfile::tempdir().unwrap();
+    let sock = dir.path().join("s.sock");
+    let world = concat!(env!("CARGO_MANIFEST_DIR"), "/scenarios/flat.toml");
+    let mut d = Proc::spawn(
+        "snaked",
+        &exe("snaked"),
+        &[
+            "--emulated".into(),
+            "--world".into(),
+            world.into(),
+            "--socket".into(),
+            sock.display().to_string(),
+        ],
+    );
+    let mut c = Client::connect(&sock, Duration::from_secs(20));
+    let s = c.wait_status(Duration::from_secs(20), "sidewinding a while", |s| {
+        s["mode"] == "running" && s["t_s"].as_f64().unwrap() > 2.5
+    });
+    // The joints follow the gait on the physics plant, and feel the ground.
+    let err = s["joints"]["max_tracking_error_rad"].as_f64().unwrap();
+    assert!(err < 0.3, "tracking error {err}: {s}");
+    assert!(
+        s["joints"]["max_abs_torque_nm"].as_f64().unwrap() > 0.05,
+        "{s}"
+    );
+    d.signal(libc::SIGTERM);
+    assert!(d.wait(Duration::from_secs(20)).success());
+}

@@ -15,8 +15,8 @@ use snaked::emu::module::ModuleConfig;
 use snaked::emu::plant::JointSpacePlant;
 use snaked::emu::scenario::Scenario;
 use snaked::emu::server::{Mode, Server, ServerConfig};
-use snaked::emu::world::WorldSpec;
 use snaked::emu::world::physics::{PhysicsConfig, PhysicsPlant};
+use snaked::emu::world::scenario::WorldScenario;
 use tracing::{info, warn};
 
 /// UDP emulator of a modular series-elastic snake robot (protocol v1).
@@ -56,11 +56,14 @@ struct Args {
     /// Write the ground truth (one CSV row per physics step) to this file.
     #[arg(long, value_name = "FILE.csv")]
     record: Option<PathBuf>,
-    /// Use the rigid-body physics plant in this world (a `WorldSpec` as TOML). The
-    /// scenario's first plane, servo and noise parameters still apply; its scripted
-    /// torques and obstacles do not.
+    /// Use the rigid-body physics plant in this world scenario (docs/scenarios.md, e.g.
+    /// scenarios/peg-board-40.toml). The scenario's first plane, servo and noise
+    /// parameters still apply; its scripted torques and obstacles do not.
     #[arg(long, value_name = "FILE.toml")]
     world: Option<PathBuf>,
+    /// Which start of the world scenario's `[start.random]` to use (obstacles stay).
+    #[arg(long, default_value_t = 0)]
+    world_trial: u64,
     /// Physics plant: write every link's pose and the contacts per step to this CSV.
     #[arg(long, value_name = "FILE.csv")]
     record_poses: Option<PathBuf>,
@@ -87,10 +90,7 @@ fn main() -> anyhow::Result<()> {
     };
     let plant: Box<dyn Plant> = match &args.world {
         Some(path) => {
-            let text = std::fs::read_to_string(path)
-                .with_context(|| format!("cannot read {}", path.display()))?;
-            let spec: WorldSpec = toml::from_str(&text)
-                .with_context(|| format!("invalid world {}", path.display()))?;
+            let spec = WorldScenario::load(path)?.generate_trial(args.modules, args.world_trial)?;
             let config = PhysicsConfig {
                 modules: args.modules,
                 first_plane: scenario.first_plane,

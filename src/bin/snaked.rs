@@ -16,6 +16,10 @@ struct Args {
     /// Drive an in-process emulated snake instead of modules on the network.
     #[arg(long)]
     emulated: bool,
+    /// With --emulated: a world scenario for the rigid-body physics plant (overrides
+    /// emulator.world), e.g. scenarios/flat.toml.
+    #[arg(long, value_name = "FILE.toml", requires = "emulated")]
+    world: Option<PathBuf>,
     /// Control socket path (overrides control.socket).
     #[arg(long, value_name = "PATH")]
     socket: Option<PathBuf>,
@@ -64,6 +68,7 @@ fn main() -> ExitCode {
     };
     let overrides = Overrides {
         emulated: args.emulated,
+        world: args.world.clone(),
         socket: args.socket.clone(),
         tcp_port: args.tcp_port,
         start: args.start.map(|s| match s {

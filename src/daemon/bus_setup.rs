@@ -9,8 +9,11 @@ use crate::bus::sim::{SimBus, SimBusConfig};
 use crate::bus::udp::{self, UdpBus};
 use crate::control::BusKind;
 use crate::daemon::config::{Config, LookupBy, parse_mac};
+use crate::emu::Plant;
 use crate::emu::module::{EMULATOR_FIRMWARE, ModuleIdentity};
 use crate::emu::plant::{JointSpacePlant, PlantConfig};
+use crate::emu::world::physics::{PhysicsConfig, PhysicsPlant};
+use crate::emu::world::scenario::WorldScenario;
 use crate::protocol::{ControlStrategy, LookupFilter, Name, Settings};
 
 pub struct BuiltBus {
@@ -87,12 +90,24 @@ fn udp_bus(cfg: &Config) -> Result<BuiltBus> {
 /// `--emulated`: the same plant as `snake-emu`, stepped in process once per cycle.
 fn emulated_bus(cfg: &Config, period_ns: u64) -> Result<BuiltBus> {
     let n = cfg.emulator.modules;
-    let mut plant_cfg = PlantConfig::new(n);
-    plant_cfg.first_plane = cfg.body.first_joint_plane;
-    plant_cfg.seed = cfg.emulator.seed;
-    let plant = JointSpacePlant::new(plant_cfg).context("building the emulated snake")?;
+    let emu = &cfg.emulator;
+    let plant: Box<dyn Plant> = if emu.world.as_os_str().is_empty() {
+        let mut plant_cfg = PlantConfig::new(n);
+        plant_cfg.first_plane = cfg.body.first_joint_plane;
+        plant_cfg.seed = emu.seed;
+        Box::new(JointSpacePlant::new(plant_cfg).context("building the emulated snake")?)
+    } else {
+        let spec = WorldScenario::load(&emu.world)?.generate_trial(n, emu.world_trial)?;
+        let config = PhysicsConfig {
+            modules: n,
+            first_plane: cfg.body.first_joint_plane,
+            seed: emu.seed,
+            ..PhysicsConfig::default()
+        };
+        Box::new(PhysicsPlant::new(&spec, config).context("building the emulated world")?)
+    };
     let bus = SimBus::new(
-        Box::new(plant),
+        plant,
         SimBusConfig {
             period_s: period_ns as f64 * 1e-9,
             command_lifetime_s: cfg.network.command_lifetime_s,

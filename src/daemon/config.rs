@@ -202,6 +202,11 @@ pub struct EmulatorConfig {
     /// Modules of the in-process emulator (`--emulated`).
     pub modules: usize,
     pub seed: u64,
+    /// World scenario for the rigid-body physics plant; empty = the joint-space plant
+    /// (no world, no locomotion).
+    pub world: PathBuf,
+    /// Which start of the world's `[start.random]` to use.
+    pub world_trial: u64,
 }
 
 impl Default for EmulatorConfig {
@@ -209,6 +214,8 @@ impl Default for EmulatorConfig {
         Self {
             modules: 18,
             seed: 1,
+            world: PathBuf::new(),
+            world_trial: 0,
         }
     }
 }

@@ -26,6 +26,7 @@ use config::{Config, Pacing, StartMode};
 #[derive(Debug, Clone, Default)]
 pub struct Overrides {
     pub emulated: bool,
+    pub world: Option<PathBuf>,
     pub socket: Option<PathBuf>,
     pub tcp_port: Option<u16>,
     pub start: Option<StartMode>,
@@ -37,6 +38,9 @@ pub struct Overrides {
 pub fn apply_overrides(cfg: &mut Config, o: &Overrides) {
     if let Some(s) = &o.socket {
         cfg.control.socket = s.clone();
+    }
+    if let Some(w) = &o.world {
+        cfg.emulator.world = w.clone();
     }
     if let Some(p) = o.tcp_port {
         cfg.control.tcp_port = p;

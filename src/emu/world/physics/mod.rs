@@ -57,6 +57,12 @@ pub struct PhysicsConfig {
     pub substeps: usize,
     /// Solver iterations per rigid-body step (rapier's default is 4).
     pub solver_iterations: usize,
+    /// Projected Gauss-Seidel sweeps inside each solver iteration (rapier's
+    /// `num_internal_pgs_iterations`): cheaper than whole iterations, no re-integration.
+    pub pgs_iterations: usize,
+    /// Coulomb: one friction cone per contact point. Simplified: one cone per manifold plus
+    /// a twist constraint (faster). Both cap the friction impulse by magnitude (a cone).
+    pub coulomb_friction: bool,
     /// Contact softness: natural frequency, Hz (rapier's default 30), and damping ratio.
     pub contact_natural_frequency_hz: f64,
     pub contact_damping_ratio: f64,
@@ -80,6 +86,8 @@ impl Default for PhysicsConfig {
             seed: 0,
             substeps: 2,
             solver_iterations: 8,
+            pgs_iterations: 1,
+            coulomb_friction: true,
             contact_natural_frequency_hz: 120.0,
             contact_damping_ratio: 10.0,
             link_angular_damping: 0.05,
@@ -137,8 +145,13 @@ impl PhysicsPlant {
         world.gravity = Vector::new(0.0, 0.0, -GRAVITY_M_S2 as f32);
         let ip = &mut world.integration_parameters;
         ip.dt = (1e-3 / config.substeps as f64) as f32;
-        ip.friction_model = FrictionModel::Coulomb;
+        ip.friction_model = if config.coulomb_friction {
+            FrictionModel::Coulomb
+        } else {
+            FrictionModel::Simplified
+        };
         ip.num_solver_iterations = config.solver_iterations;
+        ip.num_internal_pgs_iterations = config.pgs_iterations;
         // Every contact is with a fixed body: the static softness is the one that acts.
         let soft = SpringCoefficients::new(
             config.contact_natural_frequency_hz as f32,
@@ -220,6 +233,9 @@ fn validate(c: &PhysicsConfig) -> Result<(), PhysicsError> {
     }
     if c.solver_iterations == 0 {
         return Err(PhysicsError::BadValue("solver_iterations"));
+    }
+    if c.pgs_iterations == 0 {
+        return Err(PhysicsError::BadValue("pgs_iterations"));
     }
     for (name, x) in [
         (
