@@ -5,85 +5,54 @@
 //! `normal_force_n` the sum of their normal forces, N. For the physics plant link 0 is
 //! the head and link `i + 1` module `i`'s output side.
 
-use std::fs::File;
-use std::io::{self, BufWriter, Write};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use super::Plant;
-use super::recorder::{FLUSH_EVERY_ROWS, RecordError};
+use super::recorder::{CsvSink, RecordError};
 
 /// Buffered CSV writer of body poses and contacts.
 pub struct PoseRecorder {
-    path: PathBuf,
-    out: BufWriter<File>,
+    sink: CsvSink,
     links: usize,
-    rows_since_flush: u32,
 }
 
 impl PoseRecorder {
     /// Create (truncate) `path` and write the header for `links` bodies.
     pub fn create(path: &Path, links: usize) -> Result<Self, RecordError> {
-        let wrap = |source| RecordError {
-            path: path.to_owned(),
-            source,
-        };
-        let file = File::create(path).map_err(wrap)?;
-        let mut r = Self {
-            path: path.to_owned(),
-            out: BufWriter::with_capacity(1 << 16, file),
-            links,
-            rows_since_flush: 0,
-        };
-        r.header().map_err(wrap)?;
-        Ok(r)
-    }
-
-    fn header(&mut self) -> io::Result<()> {
-        write!(self.out, "t_s")?;
-        for k in 0..self.links {
-            for f in ["x", "y", "z", "qw", "qx", "qy", "qz"] {
-                write!(self.out, ",{f}_{k}")?;
+        let sink = CsvSink::create(path, |out| {
+            write!(out, "t_s")?;
+            for k in 0..links {
+                for f in ["x", "y", "z", "qw", "qx", "qy", "qz"] {
+                    write!(out, ",{f}_{k}")?;
+                }
             }
-        }
-        writeln!(self.out, ",contacts,normal_force_n")
+            writeln!(out, ",contacts,normal_force_n")
+        })?;
+        Ok(Self { sink, links })
     }
 
     /// Append the row of one physics step.
     pub fn row(&mut self, plant: &dyn Plant) -> Result<(), RecordError> {
-        self.write_row(plant).map_err(|source| RecordError {
-            path: self.path.clone(),
-            source,
+        let links = self.links;
+        self.sink.row(|out| {
+            write!(out, "{:.6}", plant.time_s())?;
+            for k in 0..links {
+                let p = plant.link_pose(k);
+                for x in p.position_m {
+                    write!(out, ",{x:.6}")?;
+                }
+                for q in p.quat_wxyz {
+                    write!(out, ",{q:.6}")?;
+                }
+            }
+            let c = plant.contacts();
+            writeln!(out, ",{},{:.3}", c.pairs, c.normal_force_n)
         })
-    }
-
-    fn write_row(&mut self, plant: &dyn Plant) -> io::Result<()> {
-        write!(self.out, "{:.6}", plant.time_s())?;
-        for k in 0..self.links {
-            let p = plant.link_pose(k);
-            for x in p.position_m {
-                write!(self.out, ",{x:.6}")?;
-            }
-            for q in p.quat_wxyz {
-                write!(self.out, ",{q:.6}")?;
-            }
-        }
-        let c = plant.contacts();
-        writeln!(self.out, ",{},{:.3}", c.pairs, c.normal_force_n)?;
-        self.rows_since_flush += 1;
-        if self.rows_since_flush >= FLUSH_EVERY_ROWS {
-            self.rows_since_flush = 0;
-            self.out.flush()?;
-        }
-        Ok(())
     }
 
     /// Flush everything written so far.
     pub fn flush(&mut self) -> Result<(), RecordError> {
-        self.rows_since_flush = 0;
-        self.out.flush().map_err(|source| RecordError {
-            path: self.path.clone(),
-            source,
-        })
+        self.sink.flush()
     }
 }
 

@@ -22,83 +22,115 @@ pub struct RecordError {
     pub source: io::Error,
 }
 
-/// Buffered CSV writer of the ground truth.
-pub struct Recorder {
+/// A buffered CSV file flushed every [`FLUSH_EVERY_ROWS`] rows and on request, whose
+/// I/O errors name the file. The recorders write their own columns into it.
+pub struct CsvSink {
     path: PathBuf,
     out: BufWriter<File>,
-    modules: usize,
     rows_since_flush: u32,
 }
 
-impl Recorder {
-    /// Create (truncate) `path` and write the header for `modules` joints.
-    pub fn create(path: &Path, modules: usize) -> Result<Self, RecordError> {
+impl CsvSink {
+    /// Create (truncate) `path` and write its header line with `header`.
+    pub fn create(
+        path: &Path,
+        header: impl FnOnce(&mut dyn Write) -> io::Result<()>,
+    ) -> Result<Self, RecordError> {
         let wrap = |source| RecordError {
             path: path.to_owned(),
             source,
         };
         let file = File::create(path).map_err(wrap)?;
-        let mut r = Self {
+        let mut out = BufWriter::with_capacity(1 << 16, file);
+        header(&mut out).map_err(wrap)?;
+        Ok(Self {
             path: path.to_owned(),
-            out: BufWriter::with_capacity(1 << 16, file),
-            modules,
+            out,
             rows_since_flush: 0,
-        };
-        r.header().map_err(wrap)?;
-        Ok(r)
+        })
     }
 
     pub fn path(&self) -> &Path {
         &self.path
     }
 
-    fn header(&mut self) -> io::Result<()> {
-        write!(self.out, "t_s")?;
-        for kind in ["cmd", "pos", "torque"] {
-            for i in 0..self.modules {
-                write!(self.out, ",{kind}_{i}")?;
+    /// Append one row written by `fill` (which ends it with a newline).
+    pub fn row(
+        &mut self,
+        fill: impl FnOnce(&mut dyn Write) -> io::Result<()>,
+    ) -> Result<(), RecordError> {
+        let written = fill(&mut self.out).and_then(|()| {
+            self.rows_since_flush += 1;
+            if self.rows_since_flush >= FLUSH_EVERY_ROWS {
+                self.rows_since_flush = 0;
+                self.out.flush()?;
             }
-        }
-        writeln!(self.out)
-    }
-
-    /// Append the row of one physics step.
-    pub fn row(&mut self, plant: &dyn Plant, applied: &[Command]) -> Result<(), RecordError> {
-        self.write_row(plant, applied)
-            .map_err(|source| RecordError {
-                path: self.path.clone(),
-                source,
-            })
-    }
-
-    fn write_row(&mut self, plant: &dyn Plant, applied: &[Command]) -> io::Result<()> {
-        write!(self.out, "{:.6}", plant.time_s())?;
-        for i in 0..self.modules {
-            let c = applied.get(i).copied().unwrap_or(Command::LIMP);
-            write!(self.out, ",{}", c.position_rad)?;
-        }
-        for i in 0..self.modules {
-            write!(self.out, ",{:.6}", plant.ground_truth(i).position_rad)?;
-        }
-        for i in 0..self.modules {
-            write!(self.out, ",{:.5}", plant.ground_truth(i).torque_nm)?;
-        }
-        writeln!(self.out)?;
-        self.rows_since_flush += 1;
-        if self.rows_since_flush >= FLUSH_EVERY_ROWS {
-            self.rows_since_flush = 0;
-            self.out.flush()?;
-        }
-        Ok(())
+            Ok(())
+        });
+        written.map_err(|source| self.error(source))
     }
 
     /// Flush everything written so far.
     pub fn flush(&mut self) -> Result<(), RecordError> {
         self.rows_since_flush = 0;
-        self.out.flush().map_err(|source| RecordError {
+        self.out.flush().map_err(|source| self.error(source))
+    }
+
+    fn error(&self, source: io::Error) -> RecordError {
+        RecordError {
             path: self.path.clone(),
             source,
+        }
+    }
+}
+
+/// Buffered CSV writer of the ground truth.
+pub struct Recorder {
+    sink: CsvSink,
+    modules: usize,
+}
+
+impl Recorder {
+    /// Create (truncate) `path` and write the header for `modules` joints.
+    pub fn create(path: &Path, modules: usize) -> Result<Self, RecordError> {
+        let sink = CsvSink::create(path, |out| {
+            write!(out, "t_s")?;
+            for kind in ["cmd", "pos", "torque"] {
+                for i in 0..modules {
+                    write!(out, ",{kind}_{i}")?;
+                }
+            }
+            writeln!(out)
+        })?;
+        Ok(Self { sink, modules })
+    }
+
+    pub fn path(&self) -> &Path {
+        self.sink.path()
+    }
+
+    /// Append the row of one physics step.
+    pub fn row(&mut self, plant: &dyn Plant, applied: &[Command]) -> Result<(), RecordError> {
+        let modules = self.modules;
+        self.sink.row(|out| {
+            write!(out, "{:.6}", plant.time_s())?;
+            for i in 0..modules {
+                let c = applied.get(i).copied().unwrap_or(Command::LIMP);
+                write!(out, ",{}", c.position_rad)?;
+            }
+            for i in 0..modules {
+                write!(out, ",{:.6}", plant.ground_truth(i).position_rad)?;
+            }
+            for i in 0..modules {
+                write!(out, ",{:.5}", plant.ground_truth(i).torque_nm)?;
+            }
+            writeln!(out)
         })
+    }
+
+    /// Flush everything written so far.
+    pub fn flush(&mut self) -> Result<(), RecordError> {
+        self.sink.flush()
     }
 }
 
