@@ -308,7 +308,9 @@ fn feedback_keeps_the_newest_and_counts_lost() {
     let f = fakes(&["a", "b"]);
     let mut bus = connect(&f, 7);
     let mut group = GroupFeedback::new(2);
-    // Each module sent seq 1 (time 0) after its SettingsAck.
+    // Each module's own thread sent seq 1 (time 0) after its SettingsAck; wait for both
+    // before the test thread sends more, or a late seq 1 would arrive after seq 2.
+    bus.receive(&mut group, 10, lockstep(0, LONG)).unwrap();
     f[0].send_feedback(7, 2, 1000);
     f[0].send_feedback(7, 5, 2000); // 3 and 4 lost
     f[1].send_feedback(7, 2, 2000);
