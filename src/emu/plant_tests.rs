@@ -232,3 +232,17 @@ fn bad_configs_are_refused() {
     c.noise.gyro_rad_s = -1.0;
     assert!(JointSpacePlant::new(c).is_err());
 }
+
+#[test]
+fn gaussian_has_zero_mean_unit_variance_and_normal_tails() {
+    let mut rng = Pcg64::seed_from_u64(7);
+    let n = 200_000;
+    let xs: Vec<f64> = (0..n).map(|_| gaussian(&mut rng)).collect();
+    let mean = xs.iter().sum::<f64>() / n as f64;
+    let var = xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / n as f64;
+    let beyond_2 = xs.iter().filter(|x| x.abs() > 2.0).count() as f64 / n as f64;
+    assert!(mean.abs() < 0.01, "{mean}");
+    assert!((var - 1.0).abs() < 0.02, "{var}");
+    // P(|x| > 2) = 4.55 % for a standard normal.
+    assert!((beyond_2 - 0.0455).abs() < 0.003, "{beyond_2}");
+}

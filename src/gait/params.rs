@@ -430,9 +430,10 @@ impl GaitParams {
                 taper: 0.4,
                 ..Self::default_for(GaitKind::Sidewinding)
             },
-            // 9 joint pairs of 0.35 rad: a C of about 180°.
+            // 9 joint pairs of 0.2 rad: a C of about 100°. A deeper C cannot roll without
+            // slip (its two ends would have to move apart), so it twists in place.
             GaitKind::Rolling => GaitParams {
-                amplitude_lat_rad: 0.35,
+                amplitude_lat_rad: 0.2,
                 temporal_freq_rad_s: 1.5,
                 ..base
             },

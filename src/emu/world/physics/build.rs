@@ -132,12 +132,37 @@ pub fn start_poses(
                 .clamp(-JOINT_LIMIT_RAD, JOINT_LIMIT_RAD)
         })
         .collect();
-    let head = override_head.unwrap_or_else(|| {
-        let mut h = spec.start.head_m;
-        h[2] += 0.5 * MODULE_DIAMETER_M;
-        head_pose(h, spec.start.yaw_rad, MODULE_LENGTH_M)
-    });
-    chain_poses(head, config.first_plane, &angles, MODULE_LENGTH_M)
+    if let Some(head) = override_head {
+        return chain_poses(head, config.first_plane, &angles, MODULE_LENGTH_M);
+    }
+    let mut h = spec.start.head_m;
+    h[2] += 0.5 * MODULE_DIAMETER_M;
+    let head = head_pose(h, spec.start.yaw_rad, MODULE_LENGTH_M);
+    let mut poses = chain_poses(head, config.first_plane, &angles, MODULE_LENGTH_M);
+    // A shaped body (an arc curling down, say) would start inside the ground: lift it
+    // so its lowest point is `head_m.z` above z = 0, as a straight body's is.
+    let lift = spec.start.head_m[2] - lowest_point_m(&poses);
+    if lift > 0.0 {
+        for p in &mut poses {
+            p.translation.vector.z += lift;
+        }
+    }
+    poses
+}
+
+/// Lowest z of the links' capsules at `poses`.
+fn lowest_point_m(poses: &[Isometry3<f64>]) -> f64 {
+    let (half_len, radius) = (
+        0.5 * MODULE_LENGTH_M - 0.5 * MODULE_DIAMETER_M,
+        0.5 * MODULE_DIAMETER_M,
+    );
+    poses
+        .iter()
+        .map(|p| {
+            let axis = p.rotation * nalgebra::Vector3::x();
+            p.translation.vector.z - half_len * axis.z.abs() - radius
+        })
+        .fold(f64::INFINITY, f64::min)
 }
 
 /// Links (capsules of the module's length and diameter and mass) and revolute

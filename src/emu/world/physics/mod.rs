@@ -84,8 +84,8 @@ impl Default for PhysicsConfig {
             noise: NoiseConfig::default(),
             imu_bias: ImuBias::default(),
             seed: 0,
-            substeps: 2,
-            solver_iterations: 8,
+            substeps: 1,
+            solver_iterations: 3,
             pgs_iterations: 1,
             coulomb_friction: true,
             contact_natural_frequency_hz: 120.0,
@@ -264,6 +264,8 @@ fn validate(c: &PhysicsConfig) -> Result<(), PhysicsError> {
     Ok(())
 }
 
+#[cfg(test)]
+mod coulomb_model;
 #[cfg(test)]
 mod pole_tests;
 #[cfg(test)]

@@ -1,0 +1,160 @@
+//! An independent check on the rigid-body physics: the quasi-static model of a planar
+//! chain on isotropic Coulomb friction. Inertia is neglected (the gaits are slow next to
+//! µ·g), so at each instant the body moves so that the friction forces balance: the rigid
+//! velocity (vx, vy, ω) that, added to the shape's own motion, minimises the dissipation
+//! Σ µ·m_k·|v_k| (Newton's method). Contact points: the two
+//! sphere centres of each capsule link, equal loads.
+
+use nalgebra::{Matrix2x3, Matrix3, Vector2, Vector3};
+
+use crate::gait::{BodyLayout, Plane, Serpenoid};
+
+/// Ground contact points of the chain with joint angles `angles` (lateral joints bend in
+/// the plane, dorsal ones are ignored), head link centred at the origin along +x.
+fn contact_points(layout: &BodyLayout, angles: &[f64], radius_m: f64, out: &mut Vec<Vector2<f64>>) {
+    out.clear();
+    let l = layout.module_length_m;
+    let (mut centre, mut heading) = (Vector2::zeros(), 0.0_f64);
+    for k in 0..=angles.len() {
+        let dir = Vector2::new(heading.cos(), heading.sin());
+        out.push(centre - dir * (0.5 * l - radius_m));
+        out.push(centre + dir * (0.5 * l - radius_m));
+        if let (Some(&a), Some(&plane)) = (angles.get(k), layout.planes.get(k)) {
+            if plane == Plane::Lateral {
+                heading += a;
+            }
+            let next = Vector2::new(heading.cos(), heading.sin());
+            centre += dir * (0.5 * l) + next * (0.5 * l);
+        }
+    }
+}
+
+/// Net displacement of the centre over one gait cycle, m: `[forward, across]`, forward
+/// along the line from the tail to the head at the cycle's start.
+pub fn displacement_per_cycle(
+    gait: &Serpenoid,
+    layout: &BodyLayout,
+    radius_m: f64,
+    steps: usize,
+) -> [f64; 2] {
+    let n = layout.len();
+    let (mut angles, mut ahead) = (vec![0.0; n], vec![0.0; n]);
+    let (mut pts, mut pts_ahead) = (Vec::new(), Vec::new());
+    // World pose of the body frame (the shape's frame).
+    let (mut pos, mut yaw) = (Vector2::zeros(), 0.0_f64);
+    let mut start: Option<(Vector2<f64>, Vector2<f64>)> = None;
+    // The twist changes smoothly with the phase: each solve starts from the last one.
+    let mut u = Vector3::zeros();
+    let dpsi = std::f64::consts::TAU / steps as f64;
+    for k in 0..=steps {
+        let psi = k as f64 * dpsi;
+        gait.evaluate(layout, psi, &mut angles);
+        contact_points(layout, &angles, radius_m, &mut pts);
+        let rot = nalgebra::Rotation2::new(yaw);
+        let centre = pos + rot * (pts.iter().sum::<Vector2<f64>>() / pts.len() as f64);
+        let (centre0, fwd) = *start.get_or_insert_with(|| {
+            let line = pts[0] - pts[pts.len() - 1];
+            (centre, line / line.norm())
+        });
+        if k == steps {
+            let d = centre - centre0;
+            return [d.dot(&fwd), fwd.perp(&d)];
+        }
+        // Shape velocity per unit phase, in the body frame.
+        gait.evaluate(layout, psi + 1e-6, &mut ahead);
+        contact_points(layout, &ahead, radius_m, &mut pts_ahead);
+        let shape_v: Vec<Vector2<f64>> = pts
+            .iter()
+            .zip(&pts_ahead)
+            .map(|(a, b)| (b - a) / 1e-6)
+            .collect();
+        u = balance_friction(&pts, &shape_v, u);
+        // Integrate the body frame (body-frame twist u per unit phase).
+        pos += rot * Vector2::new(u.x, u.y) * dpsi;
+        yaw += u.z * dpsi;
+    }
+    unreachable!("the loop returns at k == steps")
+}
+
+/// Rigid twist (vx, vy, ω about the body origin) that balances isotropic Coulomb
+/// friction on points `pts` moving with `shape_v` relative to the body, from `guess`:
+/// Newton's method on the dissipation Σ |v_k|, smoothed below `EPS` so a sticking point
+/// does not make it singular.
+fn balance_friction(
+    pts: &[Vector2<f64>],
+    shape_v: &[Vector2<f64>],
+    guess: Vector3<f64>,
+) -> Vector3<f64> {
+    const EPS: f64 = 1e-6;
+    let mut u = guess;
+    for _ in 0..50 {
+        let (mut hess, mut grad) = (Matrix3::zeros(), Vector3::zeros());
+        for (p, sv) in pts.iter().zip(shape_v) {
+            let j = Matrix2x3::new(1.0, 0.0, -p.y, 0.0, 1.0, p.x);
+            let v = j * u + sv;
+            let r = (v.norm_squared() + EPS * EPS).sqrt();
+            grad += j.transpose() * v / r;
+            let h = (nalgebra::Matrix2::identity() - v * v.transpose() / (r * r)) / r;
+            hess += j.transpose() * h * j;
+        }
+        let Some(step) = hess.try_inverse().map(|inv| inv * grad) else {
+            break;
+        };
+        // Backtracking: the smoothed |v| is nearly a cone, where full steps overshoot.
+        let f0 = dissipation(pts, shape_v, u, EPS);
+        let mut t = 1.0;
+        while t > 1e-6 && dissipation(pts, shape_v, u - step * t, EPS) > f0 {
+            t *= 0.5;
+        }
+        u -= step * t;
+        if (step * t).norm() < 1e-12 * (1.0 + u.norm()) {
+            break;
+        }
+    }
+    u
+}
+
+/// Σ sqrt(|v_k|² + eps²) for the twist `u`.
+fn dissipation(pts: &[Vector2<f64>], shape_v: &[Vector2<f64>], u: Vector3<f64>, eps: f64) -> f64 {
+    pts.iter()
+        .zip(shape_v)
+        .map(|(p, sv)| {
+            let v = Vector2::new(u.x - u.z * p.y, u.y + u.z * p.x) + sv;
+            (v.norm_squared() + eps * eps).sqrt()
+        })
+        .sum()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::emu::servo::MODULE_LENGTH_M;
+    use crate::gait::{GaitKind, GaitParams};
+
+    fn slithering(amplitude_rad: f64) -> (Serpenoid, BodyLayout) {
+        let layout = BodyLayout::alternating(18, Plane::Lateral, MODULE_LENGTH_M);
+        let params = GaitParams {
+            amplitude_lat_rad: amplitude_rad,
+            ..GaitParams::default_for(GaitKind::Slithering)
+        };
+        (
+            Serpenoid::for_layout(GaitKind::Slithering, &params, &layout),
+            layout,
+        )
+    }
+
+    #[test]
+    fn a_still_body_stays_put_and_the_result_is_converged_in_steps() {
+        let (still, layout) = slithering(0.0);
+        let d = displacement_per_cycle(&still, &layout, 0.0255, 200);
+        assert!(d[0].abs() < 1e-12 && d[1].abs() < 1e-12, "{d:?}");
+        let (gait, layout) = slithering(std::f64::consts::FRAC_PI_4);
+        let coarse = displacement_per_cycle(&gait, &layout, 0.0255, 500);
+        let fine = displacement_per_cycle(&gait, &layout, 0.0255, 2000);
+        assert!(fine[0].abs() > 0.01, "{fine:?}");
+        assert!(
+            (coarse[0] - fine[0]).abs() < 0.02 * fine[0].abs(),
+            "{coarse:?} {fine:?}"
+        );
+    }
+}
