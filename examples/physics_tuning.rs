@@ -56,12 +56,10 @@ fn main() {
     println!("substeps iters pgs friction | RTF pegs | roll rev/cycle  across/ideal");
     for (substeps, iters, pgs, coulomb) in [
         (2, 8, 1, true),
-        (1, 8, 1, true),
         (1, 4, 1, true),
-        (1, 4, 2, true),
-        (1, 2, 4, true),
-        (1, 4, 1, false),
-        (1, 2, 2, false),
+        (1, 3, 1, true),
+        (1, 3, 1, false),
+        (1, 2, 2, true),
         (1, 2, 1, true),
     ] {
         let config = PhysicsConfig {

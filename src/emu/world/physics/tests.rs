@@ -2,7 +2,7 @@
 
 use super::*;
 use crate::emu::Plant;
-use crate::emu::world::Peg;
+use crate::emu::world::{Peg, StartPose};
 use crate::protocol::Command;
 
 pub(super) fn quiet(modules: usize) -> PhysicsConfig {
@@ -15,6 +15,34 @@ pub(super) fn quiet(modules: usize) -> PhysicsConfig {
 
 pub(super) fn hold(angles: &[f64]) -> Vec<Command> {
     angles.iter().map(|&a| Command::position(a)).collect()
+}
+
+#[test]
+fn a_shaped_start_is_lifted_to_rest_on_the_ground() {
+    // Dorsal joints (odd ones with a lateral first plane) bent to curl the body down:
+    // built from the head at z = radius, the tail would be deep inside the ground.
+    let angles: Vec<f64> = (0..8).map(|i| if i % 2 == 1 { 0.6 } else { 0.0 }).collect();
+    for sign in [1.0, -1.0] {
+        let spec = WorldSpec {
+            start: StartPose {
+                joint_angles_rad: angles.iter().map(|a| sign * a).collect(),
+                ..StartPose::default()
+            },
+            ..WorldSpec::default()
+        };
+        let poses = build::start_poses(&spec, &quiet(8), None);
+        let lowest = poses
+            .iter()
+            .map(|p| {
+                let axis = p.rotation * nalgebra::Vector3::x();
+                p.translation.z - (0.032 - 0.0255) * axis.z.abs() - 0.0255
+            })
+            .fold(f64::INFINITY, f64::min);
+        assert!(
+            lowest.abs() < 1e-9,
+            "sign {sign}: lowest point at {lowest} m"
+        );
+    }
 }
 
 #[test]
