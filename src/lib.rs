@@ -6,6 +6,7 @@
 //! - [`emu`]: the module emulator (plant, module endpoints, faults).
 //! - [`gait`]: open-loop gaits and the selector that blends between them.
 //! - [`safety`]: the failsafe state machine.
+//! - [`shape`]: shape-based compliance and the controllers built on it.
 //! - [`rt`]: pacing, the 1 kHz loop, statistics, telemetry.
 //! - [`control`]: the JSON control socket.
 //! - [`daemon`]: configuration and wiring of the service.
@@ -18,3 +19,4 @@ pub mod gait;
 pub mod protocol;
 pub mod rt;
 pub mod safety;
+pub mod shape;

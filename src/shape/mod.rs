@@ -1,0 +1,29 @@
+//! Shape-based compliance (SPEC §3-§5): shape functions with analytic Jacobians,
+//! admittance in shape space, activation windows and their manager, and the
+//! controllers built from them (compliant slithering and its ablations, a CPG baseline).
+
+pub mod controller;
+
+pub use controller::{JointController, Measured, OpenLoopSlithering};
+
+use crate::gait::{BodyLayout, GaitKind, GaitParams};
+
+/// Names of the slithering controllers the lab and the daemon can build, in the order
+/// the lab reports them.
+pub const SLITHERING_CONTROLLERS: &[&str] = &["open_loop"];
+
+/// Builds the slithering controller called `name` for `layout` with nominal `params`.
+pub fn slithering_controller(
+    name: &str,
+    layout: &BodyLayout,
+    params: &GaitParams,
+) -> Result<Box<dyn JointController>, String> {
+    let _ = GaitKind::Slithering;
+    match name {
+        "open_loop" => Ok(Box::new(OpenLoopSlithering::new(layout.clone(), params))),
+        other => Err(format!(
+            "unknown slithering controller {other:?}; known: {}",
+            SLITHERING_CONTROLLERS.join(", ")
+        )),
+    }
+}
