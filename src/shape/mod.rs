@@ -3,10 +3,14 @@
 //! controllers built from them (compliant slithering and its ablations, a CPG baseline).
 
 pub mod controller;
+pub mod function;
+pub mod slithering_shape;
+pub mod window;
 
 pub use controller::{JointController, Measured, OpenLoopSlithering};
+pub use function::ShapeFunction;
 
-use crate::gait::{BodyLayout, GaitKind, GaitParams};
+use crate::gait::{BodyLayout, GaitParams};
 
 /// Names of the slithering controllers the lab and the daemon can build, in the order
 /// the lab reports them.
@@ -18,7 +22,6 @@ pub fn slithering_controller(
     layout: &BodyLayout,
     params: &GaitParams,
 ) -> Result<Box<dyn JointController>, String> {
-    let _ = GaitKind::Slithering;
     match name {
         "open_loop" => Ok(Box::new(OpenLoopSlithering::new(layout.clone(), params))),
         other => Err(format!(
