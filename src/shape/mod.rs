@@ -2,10 +2,13 @@
 //! admittance in shape space, activation windows and their manager, and the
 //! controllers built from them (compliant slithering and its ablations, a CPG baseline).
 
+pub mod admittance;
 pub mod controller;
 pub mod function;
 pub mod slithering_shape;
+pub mod torque;
 pub mod window;
+pub mod window_manager;
 
 pub use controller::{JointController, Measured, OpenLoopSlithering};
 pub use function::ShapeFunction;

@@ -145,7 +145,8 @@ impl ShapeFunction for SlitheringShape {
     fn value(&self, sigma: &[f64], joints_out: &mut [f64]) {
         joints_out.fill(0.0);
         for &(i, s) in &self.lateral {
-            joints_out[i] = self.field_at(sigma, Param::Amplitude, s) * self.phase_at(sigma, s).sin();
+            joints_out[i] =
+                self.field_at(sigma, Param::Amplitude, s) * self.phase_at(sigma, s).sin();
         }
     }
 

@@ -21,7 +21,11 @@ fn central_fields_reproduce_the_serpenoid() {
         shape.value(&[FRAC_PI_4, 3.0 * PI, psi], &mut ours);
         gait.evaluate(&l, psi, &mut theirs);
         for (i, (a, b)) in ours.iter().zip(&theirs).enumerate() {
-            let b = if l.planes[i] == Plane::Lateral { *b } else { 0.0 };
+            let b = if l.planes[i] == Plane::Lateral {
+                *b
+            } else {
+                0.0
+            };
             assert!((a - b).abs() < 1e-12, "joint {i} psi {psi}: {a} vs {b}");
         }
     }
@@ -33,7 +37,10 @@ fn analytic_jacobian_matches_finite_differences() {
     let mut shape = SlitheringShape::new(&l, steepness_for_width(0.05), 8);
     // Windowed amplitude and spatial frequency, central phase; then windowed phase too.
     let edges = [f64::NEG_INFINITY, 0.12, 0.45, 0.8, f64::INFINITY];
-    let windows: Vec<Window> = edges.windows(2).map(|e| Window { a: e[0], b: e[1] }).collect();
+    let windows: Vec<Window> = edges
+        .windows(2)
+        .map(|e| Window { a: e[0], b: e[1] })
+        .collect();
     shape.set_windows(Param::Amplitude, windows.iter().copied());
     shape.set_windows(Param::SpatialFreq, windows.iter().copied());
     let sigma: Vec<f64> = [0.7, 0.9, 0.6, 0.8, 9.0, 10.5, 8.0, 11.0, 1.3].to_vec();
@@ -54,6 +61,9 @@ fn check(shape: &SlitheringShape, sigma: &[f64]) {
     }
     // Not trivially zero: every column is felt by some joint.
     for j in 0..m {
-        assert!((0..n).any(|i| analytic[i * m + j].abs() > 1e-3), "column {j} empty");
+        assert!(
+            (0..n).any(|i| analytic[i * m + j].abs() > 1e-3),
+            "column {j} empty"
+        );
     }
 }

@@ -37,8 +37,16 @@ impl Window {
     /// Weight at `s` for edge steepness `m` (per unit of normalised arc length).
     #[inline]
     pub fn weight(&self, s: f64, m: f64) -> f64 {
-        let left = if self.a.is_finite() { logistic(m * (s - self.a)) } else { 1.0 };
-        let right = if self.b.is_finite() { logistic(m * (self.b - s)) } else { 1.0 };
+        let left = if self.a.is_finite() {
+            logistic(m * (s - self.a))
+        } else {
+            1.0
+        };
+        let right = if self.b.is_finite() {
+            logistic(m * (self.b - s))
+        } else {
+            1.0
+        };
         left + right - 1.0
     }
 
@@ -78,8 +86,14 @@ mod tests {
         assert!(w.weight(0.1, m) < 1e-3 && w.weight(0.6, m) < 1e-3);
         assert!((w.weight(0.2, m) - 0.5).abs() < 1e-9);
         let next = Window { a: 0.5, b: 0.8 };
-        let head = Window { a: f64::NEG_INFINITY, b: 0.2 };
-        let tail = Window { a: 0.8, b: f64::INFINITY };
+        let head = Window {
+            a: f64::NEG_INFINITY,
+            b: 0.2,
+        };
+        let tail = Window {
+            a: 0.8,
+            b: f64::INFINITY,
+        };
         for k in 0..=100 {
             let s = k as f64 / 100.0;
             let sum: f64 = [head, w, next, tail].iter().map(|x| x.weight(s, m)).sum();
@@ -93,8 +107,14 @@ mod tests {
         for w in [
             Window { a: 0.2, b: 0.5 },
             Window { a: -0.1, b: 0.3 },
-            Window { a: 0.7, b: f64::INFINITY },
-            Window { a: f64::NEG_INFINITY, b: 0.4 },
+            Window {
+                a: 0.7,
+                b: f64::INFINITY,
+            },
+            Window {
+                a: f64::NEG_INFINITY,
+                b: 0.4,
+            },
             Window::EVERYWHERE,
         ] {
             let n = 20_000;
