@@ -79,6 +79,11 @@ impl SlitheringShape {
         self.lateral.iter().map(|&(_, s)| s)
     }
 
+    /// (joint index, s) of each lateral joint.
+    pub fn lateral_joints(&self) -> impl Iterator<Item = (usize, f64)> + '_ {
+        self.lateral.iter().copied()
+    }
+
     pub fn lateral_count(&self) -> usize {
         self.lateral.len()
     }

@@ -1,0 +1,164 @@
+use std::f64::consts::PI;
+
+use super::*;
+use crate::emu::servo::MODULE_LENGTH_M;
+use crate::gait::{GaitKind, Plane};
+use crate::shape::controller::OpenLoopSlithering;
+
+const N: usize = 18;
+
+fn layout() -> BodyLayout {
+    BodyLayout::alternating(N, Plane::Lateral, MODULE_LENGTH_M)
+}
+
+fn params() -> GaitParams {
+    GaitParams::default_for(GaitKind::Slithering)
+}
+
+fn full() -> CompliantSlithering {
+    CompliantSlithering::new(
+        "a_ws_omega",
+        &layout(),
+        &params(),
+        SlitheringCompliance::full(),
+    )
+    .unwrap()
+}
+
+/// Runs `c` from `t0` for `seconds` with reported torques from `torque(t, set_points)`.
+fn run_from(
+    c: &mut dyn JointController,
+    t0: f64,
+    seconds: f64,
+    mut torque: impl FnMut(f64, &[f64]) -> [f64; N],
+) -> Vec<f64> {
+    let mut out = vec![0.0; N];
+    let pos = [0.0; N];
+    let mut tau = [0.0; N];
+    for k in 0..(seconds * 1000.0) as usize {
+        let t = t0 + k as f64 * 1e-3;
+        c.step(
+            t,
+            &Measured {
+                position_rad: &pos,
+                torque_nm: &tau,
+            },
+            &mut out,
+        );
+        tau = torque(t, &out);
+    }
+    out
+}
+
+fn run(
+    c: &mut dyn JointController,
+    seconds: f64,
+    torque: impl FnMut(f64, &[f64]) -> [f64; N],
+) -> Vec<f64> {
+    run_from(c, 0.0, seconds, torque)
+}
+
+#[test]
+fn without_torque_every_variant_is_the_open_loop_gait() {
+    let mut open = OpenLoopSlithering::new(layout(), &params());
+    let reference = run(&mut open, 7.3, |_, _| [0.0; N]);
+    for name in SlitheringCompliance::PRESETS {
+        let config = SlitheringCompliance::preset(name).unwrap();
+        let mut c = CompliantSlithering::new("x", &layout(), &params(), config).unwrap();
+        let ours = run(&mut c, 7.3, |_, _| [0.0; N]);
+        for (i, (a, b)) in ours.iter().zip(&reference).enumerate() {
+            assert!((a - b).abs() < 1e-6, "{name} joint {i}: {a} vs {b}");
+        }
+    }
+}
+
+/// SPEC §3's sign test: the environment bending every joint further (reported
+/// torque against the bend, see `shape::torque`) makes a compliant amplitude grow and an
+/// anti-compliant one shrink.
+#[test]
+fn a_push_that_bends_the_body_further_increases_a_compliant_amplitude() {
+    let push = |_: f64, sp: &[f64]| {
+        let mut tau = [0.0; N];
+        for (t, &x) in tau.iter_mut().zip(sp) {
+            *t = -2.0 * x.signum() * (x.abs() > 0.05) as u8 as f64;
+        }
+        tau
+    };
+    let mut c = full();
+    run(&mut c, 3.0, push);
+    let a = c.value_at(Param::Amplitude, 0.5);
+    assert!(a > params().amplitude_lat_rad + 0.1, "compliant: {a}");
+    let mut anti = SlitheringCompliance::full();
+    anti.compliance = crate::shape::admittance::Compliance::AntiCompliant;
+    let mut c = CompliantSlithering::new("anti", &layout(), &params(), anti).unwrap();
+    run(&mut c, 3.0, push);
+    let a = c.value_at(Param::Amplitude, 0.5);
+    assert!(a < params().amplitude_lat_rad - 0.1, "anti-compliant: {a}");
+}
+
+/// Torques resisting the wave's travel (against each joint's motion) delay the phase;
+/// released, the phase catches up with its nominal.
+#[test]
+fn resisting_the_wave_delays_the_phase_and_releasing_it_recovers() {
+    let mut c = full();
+    let mut last = [0.0; N];
+    let mut lag_at = |c: &mut CompliantSlithering, t0: f64, secs: f64, resist: bool| {
+        run_from(c, t0, secs, |_, sp| {
+            let mut tau = [0.0; N];
+            for i in 0..N {
+                let v = sp[i] - last[i];
+                // Environment against the motion: τ_ext = −k·v, reported = +k·v.
+                tau[i] = if resist {
+                    3.0 * v.signum() * (v.abs() > 1e-6) as u8 as f64
+                } else {
+                    0.0
+                };
+                last[i] = sp[i];
+            }
+            tau
+        });
+        let mut lag = 0.0;
+        c.for_each_signal(&mut |name, v| {
+            if name == "phase_lag_rad" {
+                lag = v;
+            }
+        });
+        lag
+    };
+    let held = lag_at(&mut c, 0.0, 3.0, true);
+    assert!(held < -0.2, "{held}");
+    let released = lag_at(&mut c, 3.0, 5.0, false);
+    assert!(released.abs() < 0.05 * held.abs(), "{held} -> {released}");
+}
+
+#[test]
+fn windows_stay_half_waves_and_a_learnt_amplitude_travels_off_the_tail() {
+    let mut c = full();
+    // Push the head half of the body for 1 s, then nothing.
+    let push = |t: f64, sp: &[f64]| {
+        let mut tau = [0.0; N];
+        if t < 1.0 {
+            for (i, (t, &x)) in tau.iter_mut().zip(sp).enumerate().take(N / 3) {
+                let _ = i;
+                *t = -2.0 * x.signum();
+            }
+        }
+        tau
+    };
+    run(&mut c, 1.0, push);
+    let (windows, values, _) = c.field(Param::Amplitude);
+    assert!((3..=5).contains(&windows.len()), "{windows:?}");
+    let head_a = values[0].max(values[1]);
+    assert!(head_a > params().amplitude_lat_rad + 0.05, "{values:?}");
+    // A wave period later (2π / ωT), the learnt windows have left: all back to nominal.
+    let mut c2 = c;
+    run(
+        &mut c2,
+        2.0 * PI / params().temporal_freq_rad_s + 1.0,
+        |_, _| [0.0; N],
+    );
+    let (_, values, _) = c2.field(Param::Amplitude);
+    for v in values {
+        assert!((v - params().amplitude_lat_rad).abs() < 0.02, "{values:?}");
+    }
+}
