@@ -56,7 +56,7 @@ impl SlitheringCompliance {
                 gains: AdmittanceGains {
                     mass: 1.0,
                     damping: 6.0,
-                    stiffness: 9.0,
+                    stiffness: 4.0,
                     min: 0.1,
                     max: 1.2,
                     bias_force: 0.0,
