@@ -1,0 +1,47 @@
+//! Cost of one step of the slithering controllers (torques in, set-points out) for
+//! N = 18 and how it grows up to N = 1024 modules.
+use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
+use snaked::gait::{BodyLayout, GaitKind, GaitParams, Plane};
+use snaked::shape::{Measured, slithering_controller};
+
+fn shape_step(c: &mut Criterion) {
+    let mut group = c.benchmark_group("shape_step");
+    group.sample_size(30);
+    let params = GaitParams::default_for(GaitKind::Slithering);
+    for name in [
+        "open_loop",
+        "a_ws_omega",
+        "a_ws_omega_central",
+        "a_ws_omega_per_joint",
+        "cpg",
+    ] {
+        for n in [18usize, 64, 256, 1024] {
+            if name == "a_ws_omega_per_joint" && n > 256 {
+                continue; // O(N²): one parameter per joint, each felt along the body
+            }
+            let layout = BodyLayout::alternating(n, Plane::Lateral, 0.064);
+            let mut ctl = slithering_controller(name, &layout, &params).unwrap();
+            let pos = vec![0.0; n];
+            let tau: Vec<f64> = (0..n).map(|i| ((i % 7) as f64 - 3.0) * 0.8).collect();
+            let mut out = vec![0.0; n];
+            let mut t = 0.0;
+            group.bench_function(BenchmarkId::new(name, n), |b| {
+                b.iter(|| {
+                    t += 1e-3;
+                    ctl.step(
+                        t,
+                        &Measured {
+                            position_rad: &pos,
+                            torque_nm: &tau,
+                        },
+                        &mut out,
+                    );
+                })
+            });
+        }
+    }
+    group.finish();
+}
+
+criterion_group!(benches, shape_step);
+criterion_main!(benches);
