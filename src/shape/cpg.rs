@@ -209,7 +209,11 @@ mod tests {
                 &mut a,
             );
         }
-        assert!(cpg.osc[0].amplitude > params.amplitude_lat_rad + 0.05, "{}", cpg.osc[0].amplitude);
+        assert!(
+            cpg.osc[0].amplitude > params.amplitude_lat_rad + 0.05,
+            "{}",
+            cpg.osc[0].amplitude
+        );
         assert!((cpg.osc[8].amplitude - params.amplitude_lat_rad).abs() < 0.01);
     }
 }

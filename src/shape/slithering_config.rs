@@ -66,9 +66,9 @@ impl SlitheringCompliance {
                 enabled: true,
                 centralization: Centralization::Windowed,
                 gains: AdmittanceGains {
-                    mass: 0.5,
-                    damping: 3.0,
-                    stiffness: 2.0,
+                    mass: 0.05,
+                    damping: 0.3,
+                    stiffness: 0.3,
                     min: 2.0 * PI,
                     max: 4.0 * PI,
                     bias_force: 0.0,
