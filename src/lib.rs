@@ -9,6 +9,7 @@
 //! - [`shape`]: shape-based compliance and the controllers built on it.
 //! - [`rt`]: pacing, the 1 kHz loop, statistics, telemetry.
 //! - [`control`]: the JSON control socket.
+//! - [`lab`]: controller comparisons in simulation (`snake-lab`).
 //! - [`daemon`]: configuration and wiring of the service.
 
 pub mod bus;
@@ -16,6 +17,7 @@ pub mod control;
 pub mod daemon;
 pub mod emu;
 pub mod gait;
+pub mod lab;
 pub mod protocol;
 pub mod rt;
 pub mod safety;

@@ -1,0 +1,170 @@
+//! `snake-lab`: controller comparisons in simulation. `snake-lab pegboard` runs the
+//! peg-board experiment of SPEC §5 and writes `results.csv`, `summary.md` and PNG plots.
+//! See `docs/lab.md`.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+use snaked::emu::world::scenario::WorldScenario;
+use snaked::lab::board::{Layout, PEG_BOARD_40_TOML};
+use snaked::lab::report::SummaryContext;
+use snaked::lab::runner::{Experiment, RunOptions, run};
+use snaked::lab::trial::TrialConfig;
+use snaked::lab::{LabError, write_report};
+use snaked::shape::SLITHERING_CONTROLLERS;
+
+/// Controller comparisons for the snake robot in simulation (docs/lab.md).
+#[derive(Debug, Parser)]
+#[command(name = "snake-lab", version)]
+struct Cli {
+    #[command(subcommand)]
+    cmd: Cmd,
+}
+
+#[derive(Debug, Subcommand)]
+enum Cmd {
+    /// List the slithering controllers, in report order.
+    List,
+    /// The slithering peg-board experiment (SPEC §5).
+    Pegboard(Pegboard),
+}
+
+#[derive(Debug, clap::Args)]
+struct Pegboard {
+    /// Controllers to compare, comma-separated (default: all, see `snake-lab list`).
+    #[arg(long, value_delimiter = ',')]
+    controllers: Vec<String>,
+    /// Seeded random layouts of the board: seeds seed-base .. seed-base + N - 1.
+    #[arg(long, default_value_t = 20)]
+    layouts: usize,
+    /// Random starts per layout.
+    #[arg(long, default_value_t = 3)]
+    starts: usize,
+    /// Master seed of the first seeded layout.
+    #[arg(long, default_value_t = 1000)]
+    seed_base: u64,
+    /// World scenario the seeded layouts come from (default: the built-in
+    /// scenarios/peg-board-40.toml).
+    #[arg(long, value_name = "FILE")]
+    board: Option<PathBuf>,
+    /// An explicit layout: a world scenario file, run as is (repeatable).
+    #[arg(long = "scenario", value_name = "FILE")]
+    scenarios: Vec<PathBuf>,
+    /// Time limit of a trial, simulated s.
+    #[arg(long, default_value_t = 120.0)]
+    seconds: f64,
+    /// Worker threads (default: the available parallelism).
+    #[arg(long)]
+    threads: Option<usize>,
+    /// Output directory.
+    #[arg(long, default_value = "lab-out/pegboard")]
+    out: PathBuf,
+    /// No progress bar, no list of written files.
+    #[arg(long)]
+    quiet: bool,
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.cmd {
+        Cmd::List => {
+            for name in SLITHERING_CONTROLLERS {
+                println!("{name}");
+            }
+            Ok(())
+        }
+        Cmd::Pegboard(args) => pegboard(args),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprint!("snake-lab: {e}");
+            let mut source = std::error::Error::source(&e);
+            while let Some(s) = source {
+                eprint!(": {s}");
+                source = s.source();
+            }
+            eprintln!();
+            ExitCode::from(if e.is_bad_input() { 2 } else { 1 })
+        }
+    }
+}
+
+fn pegboard(args: Pegboard) -> Result<(), LabError> {
+    let threads = match args.threads {
+        Some(0) => return Err(LabError::BadValue("--threads must be at least 1".into())),
+        Some(n) => n,
+        None => std::thread::available_parallelism().map_or(1, usize::from),
+    };
+    let base = match &args.board {
+        Some(path) => WorldScenario::load(path)?,
+        None => WorldScenario::parse(PEG_BOARD_40_TOML)?,
+    };
+    let mut layouts: Vec<Layout> = (0..args.layouts as u64)
+        .map(|k| Layout::seeded(&base, args.seed_base.wrapping_add(k)))
+        .collect();
+    for path in &args.scenarios {
+        layouts.push(Layout::from_file(path)?);
+    }
+    let controllers = if args.controllers.is_empty() {
+        SLITHERING_CONTROLLERS
+            .iter()
+            .map(|s| s.to_string())
+            .collect()
+    } else {
+        args.controllers
+            .iter()
+            .map(|s| s.trim().to_owned())
+            .collect()
+    };
+    let exp = Experiment {
+        controllers,
+        layouts,
+        starts: args.starts,
+        trial: TrialConfig {
+            limit_s: args.seconds,
+            ..TrialConfig::default()
+        },
+    };
+    let results = run(
+        &exp,
+        RunOptions {
+            threads,
+            progress: !args.quiet,
+        },
+    )?;
+    let ctx = SummaryContext {
+        command: command_line(),
+        layouts: exp.layouts.iter().map(|l| l.name.clone()).collect(),
+        starts: exp.starts,
+        limit_s: exp.trial.limit_s,
+        plots: Vec::new(),
+    };
+    let written = write_report(&args.out, &results, &ctx)?;
+    if !args.quiet {
+        for p in &written {
+            eprintln!("wrote {}", p.display());
+        }
+    }
+    let summary = std::fs::read_to_string(args.out.join("summary.md")).unwrap_or_default();
+    print!("{summary}");
+    Ok(())
+}
+
+/// The command line as typed, each argument shell-quoted where needed.
+fn command_line() -> String {
+    std::iter::once("snake-lab".to_owned())
+        .chain(std::env::args().skip(1).map(|a| {
+            if !a.is_empty()
+                && a.chars()
+                    .all(|c| c.is_ascii_alphanumeric() || "-_./,=:+@".contains(c))
+            {
+                a
+            } else {
+                format!("'{}'", a.replace('\'', r"'\''"))
+            }
+        }))
+        .collect::<Vec<_>>()
+        .join(" ")
+}

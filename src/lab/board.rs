@@ -1,0 +1,238 @@
+//! Layouts of the peg-board experiment and the board a trial has to cross.
+//!
+//! A layout is a world scenario: either the experiment's board with its master seed set
+//! to `seed_base + k` (a new random peg layout and new random starts for each `k`), or a
+//! scenario file given as is. The board's region is the bounding box of the scenario's
+//! `[[peg_board]]` regions and of every peg centre (for explicit layouts: the pegs'
+//! bounding box).
+
+use std::path::Path;
+
+use super::LabError;
+use crate::emu::world::WorldSpec;
+use crate::emu::world::scenario::{Region, WorldScenario};
+
+/// The experiment's board (`scenarios/peg-board-40.toml`), built in so the binary runs
+/// from any directory.
+pub const PEG_BOARD_40_TOML: &str = include_str!("../../scenarios/peg-board-40.toml");
+
+/// One peg layout of the experiment.
+#[derive(Debug, Clone)]
+pub struct Layout {
+    /// Its name in the tables: `seed<N>` or the file's stem.
+    pub name: String,
+    pub scenario: WorldScenario,
+}
+
+impl Layout {
+    /// The board of `base` with master seed `seed`.
+    pub fn seeded(base: &WorldScenario, seed: u64) -> Self {
+        let mut scenario = base.clone();
+        scenario.seed = seed;
+        Self {
+            name: format!("seed{seed}"),
+            scenario,
+        }
+    }
+
+    /// An explicit layout from a scenario file.
+    pub fn from_file(path: &Path) -> Result<Self, LabError> {
+        let scenario = WorldScenario::load(path)?;
+        let name = path.file_stem().map_or_else(
+            || path.display().to_string(),
+            |s| s.to_string_lossy().into(),
+        );
+        Ok(Self { name, scenario })
+    }
+
+    /// The world of start `start` for `modules` modules and the board to cross in it.
+    pub fn world(&self, modules: usize, start: u64) -> Result<(WorldSpec, Board), LabError> {
+        let world = self.scenario.generate_trial(modules, start)?;
+        let region = board_region(&self.scenario, &world).ok_or_else(|| LabError::NoBoard {
+            layout: self.name.clone(),
+        })?;
+        let board = Board::new(region, world.start.yaw_rad);
+        Ok((world, board))
+    }
+
+    /// The seed this layout mixes into its trials' sensor-noise seeds.
+    pub fn seed(&self) -> u64 {
+        self.scenario.seed
+    }
+}
+
+/// Bounding box of the scenario's peg-board regions and of the world's peg centres
+/// (`None` when there is neither).
+pub fn board_region(scenario: &WorldScenario, world: &WorldSpec) -> Option<Region> {
+    let corners = scenario
+        .peg_boards
+        .iter()
+        .flat_map(|b| {
+            let r = b.region;
+            [[r.x_m[0], r.y_m[0]], [r.x_m[1], r.y_m[1]]]
+        })
+        .chain(world.pegs.iter().map(|p| [p.x_m, p.y_m]));
+    let mut bounds: Option<Region> = None;
+    for [x, y] in corners {
+        let r = bounds.get_or_insert(Region {
+            x_m: [x, x],
+            y_m: [y, y],
+        });
+        r.x_m = [r.x_m[0].min(x), r.x_m[1].max(x)];
+        r.y_m = [r.y_m[0].min(y), r.y_m[1].max(y)];
+    }
+    bounds
+}
+
+/// An edge of the board's rectangle.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Edge {
+    XMin,
+    XMax,
+    YMin,
+    YMax,
+}
+
+impl Edge {
+    const ALL: [Edge; 4] = [Edge::XMin, Edge::XMax, Edge::YMin, Edge::YMax];
+
+    fn outward_normal(self) -> [f64; 2] {
+        match self {
+            Edge::XMin => [-1.0, 0.0],
+            Edge::XMax => [1.0, 0.0],
+            Edge::YMin => [0.0, -1.0],
+            Edge::YMax => [0.0, 1.0],
+        }
+    }
+}
+
+/// The board a trial crosses: its region and the edge the snake enters by.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Board {
+    pub region: Region,
+    /// The edge behind the start (the one whose outward normal is nearest the start's
+    /// head-to-tail direction). Leaving by it is backing out, not crossing.
+    pub entry: Edge,
+}
+
+impl Board {
+    /// The board of `region` for a start whose head-to-tail direction is `tail_yaw_rad`.
+    pub fn new(region: Region, tail_yaw_rad: f64) -> Self {
+        let tail = [tail_yaw_rad.cos(), tail_yaw_rad.sin()];
+        let score = |e: Edge| {
+            let n = e.outward_normal();
+            n[0] * tail[0] + n[1] * tail[1]
+        };
+        let entry =
+            Edge::ALL.into_iter().fold(
+                Edge::XMin,
+                |best, e| if score(e) > score(best) { e } else { best },
+            );
+        Self { region, entry }
+    }
+
+    /// True when `p` lies beyond an edge other than the entry edge.
+    pub fn crossed(&self, p: [f64; 2]) -> bool {
+        let r = &self.region;
+        let beyond = |e: Edge| match e {
+            Edge::XMin => p[0] < r.x_m[0],
+            Edge::XMax => p[0] > r.x_m[1],
+            Edge::YMin => p[1] < r.y_m[0],
+            Edge::YMax => p[1] > r.y_m[1],
+        };
+        Edge::ALL.into_iter().any(|e| e != self.entry && beyond(e))
+    }
+}
+
+/// A sensor-noise seed for start `start` of the layout seeded `layout_seed`: the same
+/// for every controller, so controllers meet the same noise (common random numbers).
+pub fn trial_seed(layout_seed: u64, start: u64) -> u64 {
+    // SplitMix64 finaliser of a combination: neighbouring inputs give unrelated seeds.
+    let mut z = layout_seed
+        .wrapping_mul(0x9E37_79B9_7F4A_7C15)
+        .wrapping_add(start.wrapping_mul(0xD1B5_4A32_D192_ED03));
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
+#[cfg(test)]
+mod tests {
+    use std::f64::consts::PI;
+
+    use super::*;
+
+    fn board(yaw: f64) -> Board {
+        Board::new(
+            Region {
+                x_m: [0.0, 2.0],
+                y_m: [-0.6, 0.6],
+            },
+            yaw,
+        )
+    }
+
+    #[test]
+    fn entry_edge_is_behind_the_start() {
+        // yaw = π: the tail points to −x, the snake faces +x and enters by x_min.
+        assert_eq!(board(PI).entry, Edge::XMin);
+        assert_eq!(board(PI + 0.3).entry, Edge::XMin);
+        assert_eq!(board(0.0).entry, Edge::XMax);
+        assert_eq!(board(PI / 2.0).entry, Edge::YMax);
+        assert_eq!(board(-PI / 2.0).entry, Edge::YMin);
+    }
+
+    #[test]
+    fn crossing_needs_an_edge_other_than_the_entry() {
+        let b = board(PI);
+        assert!(!b.crossed([1.0, 0.0]), "inside");
+        assert!(
+            !b.crossed([-0.3, 0.0]),
+            "behind the entry edge: not crossed"
+        );
+        assert!(b.crossed([2.01, 0.0]), "beyond the far edge");
+        assert!(b.crossed([1.0, 0.61]), "beyond a side");
+        assert!(b.crossed([1.0, -0.61]), "beyond the other side");
+    }
+
+    #[test]
+    fn the_experiment_board_region_is_its_peg_board() {
+        let s = WorldScenario::parse(PEG_BOARD_40_TOML).unwrap();
+        let l = Layout::seeded(&s, 1000);
+        let (world, b) = l.world(18, 0).unwrap();
+        assert_eq!(world.pegs.len(), 40);
+        assert_eq!(b.region.x_m, [0.0, 2.0]);
+        assert_eq!(b.region.y_m, [-0.6, 0.6]);
+        assert_eq!(b.entry, Edge::XMin);
+        // Another seed, another layout.
+        let (other, _) = Layout::seeded(&s, 1001).world(18, 0).unwrap();
+        assert_ne!(world.pegs, other.pegs);
+    }
+
+    #[test]
+    fn explicit_pegs_give_their_bounding_box_and_no_pegs_no_board() {
+        let s = WorldScenario::parse(
+            "[[peg]]\nx_m = 0.5\ny_m = -0.2\ndiameter_m = 0.04\n\
+             [[peg]]\nx_m = 1.5\ny_m = 0.3\ndiameter_m = 0.04\n\
+             [start]\nhead_m = [0.2, 0.0]\n",
+        )
+        .unwrap();
+        let w = s.generate(18).unwrap();
+        let r = board_region(&s, &w).unwrap();
+        assert_eq!((r.x_m, r.y_m), ([0.5, 1.5], [-0.2, 0.3]));
+        let flat = WorldScenario::parse("").unwrap();
+        let l = Layout {
+            name: "flat".into(),
+            scenario: flat,
+        };
+        assert!(matches!(l.world(18, 0), Err(LabError::NoBoard { .. })));
+    }
+
+    #[test]
+    fn trial_seeds_differ_by_layout_and_start() {
+        let a = trial_seed(1000, 0);
+        assert_eq!(a, trial_seed(1000, 0));
+        assert_ne!(a, trial_seed(1000, 1));
+        assert_ne!(a, trial_seed(1001, 0));
+    }
+}

@@ -1,0 +1,269 @@
+//! The trial plan (controllers × layouts × starts) and its execution: worker threads
+//! take the next trial from an atomic index; results come back in plan order
+//! (controller, layout, start) whatever the thread count, so the output is identical.
+
+use std::io::IsTerminal;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+
+use super::LabError;
+use super::board::{Board, Layout, trial_seed};
+use super::metrics::{MetricsConfig, TrialMetrics, trial_metrics};
+use super::trial::{TrialConfig, TrialRecord, run_trial, slithering_setup};
+use crate::emu::world::WorldSpec;
+use crate::shape::{SLITHERING_CONTROLLERS, slithering_controller};
+
+/// What to run.
+#[derive(Debug, Clone)]
+pub struct Experiment {
+    /// Controller names (as the factory knows them), in report order.
+    pub controllers: Vec<String>,
+    pub layouts: Vec<Layout>,
+    /// Starts per layout.
+    pub starts: usize,
+    pub trial: TrialConfig,
+}
+
+/// One world of the plan: a layout with one of its starts.
+#[derive(Debug, Clone)]
+pub struct PlannedWorld {
+    pub layout: usize,
+    pub start: usize,
+    pub world: Arc<WorldSpec>,
+    pub board: Board,
+    /// Sensor-noise seed, shared by every controller on this world.
+    pub noise_seed: u64,
+}
+
+/// One finished trial.
+#[derive(Debug, Clone)]
+pub struct TrialResult {
+    pub controller: String,
+    pub layout: String,
+    pub start: usize,
+    pub metrics: TrialMetrics,
+    /// The world and the full record, kept for the trial the report plots (each
+    /// controller's first layout and start).
+    pub plotted: Option<(Arc<WorldSpec>, Board, TrialRecord)>,
+}
+
+/// How to run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct RunOptions {
+    pub threads: usize,
+    /// Show a progress bar (only drawn on a terminal).
+    pub progress: bool,
+}
+
+/// Checks the experiment and generates every world of it (fails before any trial runs).
+pub fn plan(exp: &Experiment) -> Result<Vec<PlannedWorld>, LabError> {
+    let known = || SLITHERING_CONTROLLERS.join(", ");
+    if exp.controllers.is_empty() {
+        return Err(LabError::NoControllers { known: known() });
+    }
+    let (layout, params) = slithering_setup(exp.trial.modules);
+    for (i, name) in exp.controllers.iter().enumerate() {
+        if exp.controllers[..i].contains(name) {
+            return Err(LabError::BadValue(format!(
+                "controller {name:?} given twice"
+            )));
+        }
+        if slithering_controller(name, &layout, &params).is_err() {
+            return Err(LabError::UnknownController {
+                name: name.clone(),
+                known: known(),
+            });
+        }
+    }
+    if exp.layouts.is_empty() {
+        return Err(LabError::NoLayouts);
+    }
+    if exp.starts == 0 {
+        return Err(LabError::NoStarts);
+    }
+    let t = &exp.trial;
+    if !(t.limit_s.is_finite() && t.limit_s > 0.0) {
+        return Err(LabError::BadValue(format!(
+            "the time limit must be positive, not {} s",
+            t.limit_s
+        )));
+    }
+    let mut worlds = Vec::with_capacity(exp.layouts.len() * exp.starts);
+    for (li, l) in exp.layouts.iter().enumerate() {
+        for start in 0..exp.starts {
+            let (world, board) = l.world(t.modules, start as u64)?;
+            worlds.push(PlannedWorld {
+                layout: li,
+                start,
+                world: Arc::new(world),
+                board,
+                noise_seed: trial_seed(l.seed(), start as u64),
+            });
+        }
+    }
+    Ok(worlds)
+}
+
+/// Runs every trial of `exp` and returns them sorted by (controller, layout, start).
+/// Stops at the first failing trial and returns its error.
+pub fn run(exp: &Experiment, opts: RunOptions) -> Result<Vec<TrialResult>, LabError> {
+    let worlds = plan(exp)?;
+    let total = exp.controllers.len() * worlds.len();
+    let bar = progress_bar(total, opts.progress);
+    let next = AtomicUsize::new(0);
+    let failed = AtomicBool::new(false);
+    let threads = opts.threads.clamp(1, total.max(1));
+    let run_one = |i: usize| {
+        let (c, w) = (i / worlds.len(), &worlds[i % worlds.len()]);
+        let name = &exp.controllers[c];
+        let rec = run_trial(name, &w.world, &w.board, w.noise_seed, &exp.trial)?;
+        let metrics = trial_metrics(
+            &rec.centre_m,
+            rec.sample_dt_s,
+            rec.seconds,
+            rec.success,
+            rec.temporal_freq_rad_s,
+            &MetricsConfig::for_wave(rec.temporal_freq_rad_s),
+        );
+        let first = w.layout == 0 && w.start == 0;
+        Ok(TrialResult {
+            controller: name.clone(),
+            layout: exp.layouts[w.layout].name.clone(),
+            start: w.start,
+            metrics,
+            plotted: first.then(|| (Arc::clone(&w.world), w.board, rec)),
+        })
+    };
+    let mut done: Vec<(usize, Result<TrialResult, LabError>)> = std::thread::scope(|s| {
+        let workers: Vec<_> = (0..threads)
+            .map(|_| {
+                s.spawn(|| {
+                    let mut mine = Vec::new();
+                    while !failed.load(Ordering::Relaxed) {
+                        let i = next.fetch_add(1, Ordering::Relaxed);
+                        if i >= total {
+                            break;
+                        }
+                        let r = run_one(i);
+                        failed.fetch_or(r.is_err(), Ordering::Relaxed);
+                        bar.inc(1);
+                        mine.push((i, r));
+                    }
+                    mine
+                })
+            })
+            .collect();
+        workers
+            .into_iter()
+            .flat_map(|h| h.join().expect("a trial thread panicked"))
+            .collect()
+    });
+    bar.finish_and_clear();
+    done.sort_by_key(|(i, _)| *i);
+    done.into_iter().map(|(_, r)| r).collect()
+}
+
+fn progress_bar(total: usize, show: bool) -> ProgressBar {
+    let target = if show && std::io::stderr().is_terminal() {
+        ProgressDrawTarget::stderr()
+    } else {
+        ProgressDrawTarget::hidden()
+    };
+    let style = ProgressStyle::with_template(
+        "{elapsed_precise} [{bar:30}] {pos}/{len} trials, ETA {eta_precise}",
+    )
+    .unwrap_or_else(|_| ProgressStyle::default_bar())
+    .progress_chars("=> ");
+    let bar = ProgressBar::with_draw_target(Some(total as u64), target).with_style(style);
+    // Trials take seconds each: tick so the clock and the ETA move between them.
+    bar.enable_steady_tick(std::time::Duration::from_millis(500));
+    bar
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::emu::world::scenario::WorldScenario;
+    use crate::lab::board::PEG_BOARD_40_TOML;
+
+    fn experiment(controllers: &[&str], layouts: usize) -> Experiment {
+        let base = WorldScenario::parse(PEG_BOARD_40_TOML).unwrap();
+        Experiment {
+            controllers: controllers.iter().map(|s| s.to_string()).collect(),
+            layouts: (0..layouts as u64)
+                .map(|k| Layout::seeded(&base, 1000 + k))
+                .collect(),
+            starts: 2,
+            trial: TrialConfig {
+                limit_s: 0.2,
+                ..TrialConfig::default()
+            },
+        }
+    }
+
+    #[test]
+    fn plan_checks_its_input() {
+        assert!(matches!(
+            plan(&experiment(&["open_loop", "bogus"], 1)),
+            Err(LabError::UnknownController { name, known }) if name == "bogus" && known.contains("open_loop")
+        ));
+        assert!(matches!(
+            plan(&experiment(&[], 1)),
+            Err(LabError::NoControllers { .. })
+        ));
+        assert!(matches!(
+            plan(&experiment(&["open_loop"], 0)),
+            Err(LabError::NoLayouts)
+        ));
+        assert!(matches!(
+            plan(&experiment(&["open_loop", "open_loop"], 1)),
+            Err(LabError::BadValue(_))
+        ));
+        let mut e = experiment(&["open_loop"], 1);
+        e.starts = 0;
+        assert!(matches!(plan(&e), Err(LabError::NoStarts)));
+        let worlds = plan(&experiment(&["open_loop"], 2)).unwrap();
+        assert_eq!(worlds.len(), 4);
+        assert_ne!(worlds[0].world.start, worlds[1].world.start, "two starts");
+        assert_ne!(worlds[0].world.pegs, worlds[2].world.pegs, "two layouts");
+    }
+
+    #[test]
+    fn results_come_in_plan_order_for_any_thread_count() {
+        let e = experiment(&["open_loop"], 2);
+        let one = run(
+            &e,
+            RunOptions {
+                threads: 1,
+                progress: false,
+            },
+        )
+        .unwrap();
+        let two = run(
+            &e,
+            RunOptions {
+                threads: 2,
+                progress: false,
+            },
+        )
+        .unwrap();
+        let keys: Vec<_> = one.iter().map(|r| (r.layout.clone(), r.start)).collect();
+        assert_eq!(
+            keys,
+            [
+                ("seed1000", 0),
+                ("seed1000", 1),
+                ("seed1001", 0),
+                ("seed1001", 1)
+            ]
+            .map(|(l, s)| (l.to_string(), s))
+        );
+        for (a, b) in one.iter().zip(&two) {
+            assert_eq!(a.metrics, b.metrics);
+        }
+        assert!(one[0].plotted.is_some());
+        assert!(one[1..].iter().all(|r| r.plotted.is_none()));
+    }
+}

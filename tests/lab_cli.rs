@@ -1,0 +1,183 @@
+//! `snake-lab` end to end with tiny settings: outputs, determinism, bad input.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+const PNG_SIGNATURE: [u8; 8] = [0x89, b'P', b'N', b'G', 0x0d, 0x0a, 0x1a, 0x0a];
+
+fn lab(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_snake-lab"))
+        .args(args)
+        .output()
+        .expect("snake-lab runs")
+}
+
+/// A tiny peg-board run (1 start, 2 s) into `out`; panics with stderr unless it succeeds.
+fn pegboard(out: &Path, extra: &[&str]) -> Output {
+    let out_s = out.to_str().unwrap();
+    let mut args = vec![
+        "pegboard",
+        "--controllers",
+        "open_loop",
+        "--starts",
+        "1",
+        "--seconds",
+        "2",
+        "--quiet",
+        "--out",
+        out_s,
+    ];
+    args.extend_from_slice(extra);
+    let o = lab(&args);
+    assert!(
+        o.status.success(),
+        "snake-lab {args:?} failed: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    o
+}
+
+fn read(path: &Path) -> String {
+    std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+#[test]
+fn pegboard_writes_csv_summary_and_plots() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = pegboard(dir.path(), &["--layouts", "2", "--threads", "2"]);
+    let csv = read(&dir.path().join("results.csv"));
+    let rows: Vec<Vec<&str>> = csv.lines().map(|l| l.split(',').collect()).collect();
+    assert_eq!(
+        rows[0],
+        [
+            "controller",
+            "layout",
+            "start",
+            "success",
+            "seconds",
+            "cycles",
+            "path_m",
+            "distance_m",
+            "cycles_per_m",
+            "stuck_s"
+        ]
+    );
+    assert_eq!(rows.len(), 3, "header + 2 layouts x 1 start:\n{csv}");
+    for (row, layout) in rows[1..].iter().zip(["seed1000", "seed1001"]) {
+        assert_eq!(row.len(), 10);
+        assert_eq!(&row[..3], ["open_loop", layout, "0"]);
+        assert_eq!(row[3], "false", "2 s cannot cross a 2 m board");
+        assert_eq!(row[4], "2.000");
+        let cycles_per_m: f64 = row[8].parse().unwrap();
+        assert!(cycles_per_m.is_finite() && cycles_per_m > 0.0);
+    }
+    let summary = read(&dir.path().join("summary.md"));
+    assert!(
+        summary.contains("| controller | trials | success |"),
+        "{summary}"
+    );
+    assert!(
+        summary.contains("| open_loop | 2 | 0/2 (0 %) |"),
+        "{summary}"
+    );
+    assert!(summary.contains("snake-lab pegboard --controllers open_loop"));
+    assert_eq!(
+        String::from_utf8_lossy(&o.stdout),
+        summary,
+        "stdout = summary"
+    );
+    for png in [
+        "path-open_loop.png",
+        "signals-open_loop.png",
+        "cycles_per_m.png",
+    ] {
+        let bytes = std::fs::read(dir.path().join(png)).unwrap();
+        assert!(bytes.starts_with(&PNG_SIGNATURE), "{png} is not a PNG");
+        assert!(summary.contains(png), "summary lists {png}");
+    }
+}
+
+#[test]
+fn results_are_deterministic_for_any_thread_count() {
+    let dirs: Vec<_> = (0..3).map(|_| tempfile::tempdir().unwrap()).collect();
+    pegboard(dirs[0].path(), &["--layouts", "2", "--threads", "1"]);
+    pegboard(dirs[1].path(), &["--layouts", "2", "--threads", "2"]);
+    pegboard(dirs[2].path(), &["--layouts", "2", "--threads", "2"]);
+    let csv: Vec<String> = dirs
+        .iter()
+        .map(|d| read(&d.path().join("results.csv")))
+        .collect();
+    assert_eq!(csv[1], csv[2], "same run twice");
+    assert_eq!(csv[0], csv[1], "--threads 1 vs 2");
+    let other_seeds = tempfile::tempdir().unwrap();
+    pegboard(other_seeds.path(), &["--layouts", "2", "--seed-base", "7"]);
+    assert_ne!(read(&other_seeds.path().join("results.csv")), csv[0]);
+}
+
+#[test]
+fn explicit_layouts_come_from_scenario_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("two-pegs.toml");
+    std::fs::write(
+        &file,
+        "[[peg]]\nx_m = 0.5\ny_m = 0.15\ndiameter_m = 0.04\n\
+         [[peg]]\nx_m = 0.8\ny_m = -0.15\ndiameter_m = 0.04\n\
+         [start]\nhead_m = [0.2, 0.0]\n",
+    )
+    .unwrap();
+    let out = dir.path().join("out");
+    pegboard(
+        &out,
+        &["--layouts", "0", "--scenario", file.to_str().unwrap()],
+    );
+    let csv = read(&out.join("results.csv"));
+    let rows: Vec<_> = csv.lines().skip(1).collect();
+    assert_eq!(rows.len(), 1, "{csv}");
+    assert!(rows[0].starts_with("open_loop,two-pegs,0,"), "{csv}");
+}
+
+#[test]
+fn list_names_the_controllers() {
+    let o = lab(&["list"]);
+    assert!(o.status.success());
+    let names = String::from_utf8_lossy(&o.stdout);
+    assert!(names.lines().any(|l| l == "open_loop"), "{names}");
+}
+
+/// Runs `args` expecting exit code 2 and returns stderr.
+fn bad_input(args: &[&str]) -> String {
+    let o = lab(args);
+    let err = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+    err
+}
+
+#[test]
+fn bad_input_exits_2_with_a_clear_message() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().to_str().unwrap();
+    let err = bad_input(&["pegboard", "--controllers", "open_loop,nope", "--out", out]);
+    assert!(
+        err.contains("\"nope\"") && err.contains("known: open_loop"),
+        "{err}"
+    );
+    let err = bad_input(&["pegboard", "--layouts", "0", "--out", out]);
+    assert!(err.contains("no layouts"), "{err}");
+    let err = bad_input(&[
+        "pegboard",
+        "--scenario",
+        "/no/such/board.toml",
+        "--out",
+        out,
+    ]);
+    assert!(err.contains("/no/such/board.toml"), "{err}");
+    let err = bad_input(&["pegboard", "--threads", "0", "--out", out]);
+    assert!(err.contains("--threads"), "{err}");
+    let err = bad_input(&["pegboard", "--seconds", "0", "--out", out]);
+    assert!(err.contains("time limit"), "{err}");
+    bad_input(&["pegboard", "--layouts", "many"]);
+    assert!(
+        !dir.path().join("results.csv").exists(),
+        "nothing written on bad input"
+    );
+}
