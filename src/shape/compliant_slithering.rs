@@ -75,7 +75,7 @@ impl CompliantSlithering {
             vec![ParamState::default(); count]
         });
         let m = 3 * cap;
-        Ok(Self {
+        let mut c = Self {
             name,
             config,
             amplitude0: params.amplitude_lat_rad,
@@ -93,7 +93,12 @@ impl CompliantSlithering {
             last_t: None,
             t: 0.0,
             last_events: WindowEvents::default(),
-        })
+        };
+        // The nominal shape at t = 0, so everything can be read before the first step.
+        let ws0 = c.spatial_freq0;
+        c.manager.update(|s| ws0 * s, [ParamState::default(); 3]);
+        c.assemble();
+        Ok(c)
     }
 
     pub fn config(&self) -> &SlitheringCompliance {

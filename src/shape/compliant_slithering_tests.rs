@@ -162,3 +162,15 @@ fn windows_stay_half_waves_and_a_learnt_amplitude_travels_off_the_tail() {
         assert!((v - params().amplitude_lat_rad).abs() < 0.02, "{values:?}");
     }
 }
+
+#[test]
+fn signals_and_fields_can_be_read_before_the_first_step() {
+    let c = full();
+    let mut names = Vec::new();
+    c.for_each_signal(&mut |n, v| {
+        assert!(v.is_finite(), "{n} = {v}");
+        names.push(n.to_owned());
+    });
+    assert!(names.iter().any(|n| n == "amplitude_mean_rad"), "{names:?}");
+    assert!((c.value_at(Param::Amplitude, 0.5) - params().amplitude_lat_rad).abs() < 1e-9);
+}
