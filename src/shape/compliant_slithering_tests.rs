@@ -162,3 +162,46 @@ fn windows_stay_half_waves_and_a_learnt_amplitude_travels_off_the_tail() {
         assert!((v - params().amplitude_lat_rad).abs() < 0.02, "{values:?}");
     }
 }
+
+#[test]
+fn the_report_shows_each_field_and_reset_starts_afresh() {
+    let push = |_: f64, sp: &[f64]| {
+        let mut tau = [0.0; N];
+        for (t, &x) in tau.iter_mut().zip(sp).take(N / 2) {
+            *t = -2.0 * x.signum();
+        }
+        tau
+    };
+    let mut c = full();
+    let mut report = crate::shape::ComplianceReport::default();
+    c.compliance_report(&mut report);
+    assert!(!report.available, "nothing before the first step");
+    run(&mut c, 2.0, push);
+    c.compliance_report(&mut report);
+    assert!(report.available);
+    let (windows, values, forces) = c.field(Param::Amplitude);
+    let amp = &report.fields[Param::Amplitude.index()];
+    assert_eq!(amp.count, windows.len());
+    assert_eq!(amp.centralization, Centralization::Windowed);
+    assert_eq!(&amp.value[..amp.len()], values);
+    assert_eq!(&amp.force[..amp.len()], forces);
+    assert_eq!(report.travelling_windows, windows.len());
+    let phase = &report.fields[Param::Phase.index()];
+    assert_eq!(phase.count, 1, "central phase");
+    assert!((phase.value[0] - report.phase_lag_rad).abs() < 1e-9);
+    let mut lag = f64::NAN;
+    c.for_each_signal(&mut |name, v| {
+        if name == "phase_lag_rad" {
+            lag = v;
+        }
+    });
+    assert!((lag - report.phase_lag_rad).abs() < 1e-9);
+
+    c.reset();
+    c.compliance_report(&mut report);
+    assert!(!report.available);
+    let mut fresh = full();
+    let ours = run_from(&mut c, 5.0, 1.0, push);
+    let theirs = run_from(&mut fresh, 5.0, 1.0, push);
+    assert_eq!(ours, theirs, "a reset controller is a new one");
+}
