@@ -2,6 +2,9 @@
 //!
 //! Exit status: 0 success, 1 the daemon answered with an error, 2 usage error,
 //! 3 cannot reach the daemon (not running, connection lost, no answer).
+#[path = "snakectl/compliance.rs"]
+mod compliance;
+
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Duration;
@@ -85,11 +88,16 @@ enum GaitCmd {
 enum ParamsCmd {
     /// One gait's parameters, or all of them.
     Get { gait: Option<String> },
-    /// `params set GAIT key=value ...` or `params set --blend-time S`.
+    /// `params set GAIT key=value ...`, `params set slithering --compliance C` or
+    /// `params set --blend-time S`.
     Set {
         /// Gait blend time, s (0.1..=30).
-        #[arg(long, value_name = "S", conflicts_with_all = ["gait", "assignments"])]
+        #[arg(long, value_name = "S", conflicts_with_all = ["gait", "assignments", "compliance"])]
         blend_time: Option<f64>,
+        /// Slithering's controller: a name (open_loop, a, a_ws, a_ws_omega, ..., cpg) or
+        /// a JSON object such as '{"controller":"a_ws","amplitude":{"gains":{"stiffness":6}}}'.
+        #[arg(long, value_name = "NAME|JSON")]
+        compliance: Option<String>,
         #[arg(required_unless_present = "blend_time")]
         gait: Option<String>,
         /// key=value pairs, e.g. amplitude_lat_rad=0.6 temporal_freq_rad_s=1.2
@@ -173,12 +181,13 @@ fn request(cmd: &Cmd) -> Result<(&str, Option<Value>), Failure> {
             cmd:
                 ParamsCmd::Set {
                     blend_time,
+                    compliance,
                     gait,
                     assignments,
                 },
         } => (
             "params.set",
-            Some(params_set(*blend_time, gait, assignments)?),
+            Some(params_set(*blend_time, compliance, gait, assignments)?),
         ),
         Cmd::Hold => ("hold", None),
         Cmd::Limp => ("limp", None),
@@ -201,6 +210,7 @@ fn request(cmd: &Cmd) -> Result<(&str, Option<Value>), Failure> {
 
 fn params_set(
     blend_time: Option<f64>,
+    compliance: &Option<String>,
     gait: &Option<String>,
     assignments: &[String],
 ) -> Result<Value, Failure> {
@@ -209,9 +219,16 @@ fn params_set(
     }
     let mut p = Map::new();
     p.insert("gait".into(), json!(gait));
-    if assignments.is_empty() {
+    if let Some(c) = compliance {
+        p.insert(
+            "compliance".into(),
+            compliance::arg(c).map_err(Failure::Usage)?,
+        );
+    } else if assignments.is_empty() {
         return Err(Failure::Usage(
-            "give at least one KEY=VALUE, e.g. amplitude_lat_rad=0.6".into(),
+            "give at least one KEY=VALUE, e.g. amplitude_lat_rad=0.6 (or, for slithering, \
+             --compliance NAME)"
+                .into(),
         ));
     }
     for a in assignments {
@@ -289,12 +306,14 @@ fn print_human(cmd: &Cmd, r: &Value) {
                 print_params(&r["params"], "  ");
             }
             println!("blend_time_s  {}", num(&r["blend_time_s"], 2));
+            compliance::print_setting(&r["compliance"]);
         }
         Cmd::Params { .. } => match r.get("blend_time_s") {
             Some(t) => println!("blend_time_s = {}", num(t, 2)),
             None => {
                 println!("{} (applied)", text(&r["gait"]));
                 print_params(&r["params"], "  ");
+                compliance::print_setting(&r["compliance"]);
             }
         },
         Cmd::Stats => print_stats(r),
@@ -352,6 +371,7 @@ fn print_status(r: &Value) {
     );
     println!("position  {}", joined(&j["position_rad"], 2));
     println!("torque    {}", joined(&j["torque_nm"], 2));
+    compliance::print_status(&r["compliance"]);
     println!("daemon    snaked {}", text(&d["version"]));
 }
 

@@ -1,7 +1,8 @@
 //! `EchoBus`: an ideal plant for tests and benchmarks. Every module instantly
 //! reaches its position set-point (or stays put when limp) and reports it, with a
 //! simulated clock that advances one period per `receive`. Modules can be made to
-//! fall silent or report non-finite data, to exercise the failsafe.
+//! fall silent or report non-finite data, to exercise the failsafe, and report torques
+//! from a scripted model, to exercise compliant controllers.
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
@@ -15,7 +16,13 @@ pub struct EchoBus {
     faults: Arc<EchoFaults>,
     seq: u32,
     counters: BusCounters,
+    torque: Option<TorqueModel>,
 }
+
+/// Reported torque, N·m, of joint `i` at position `position_rad` (the protocol's sign:
+/// the torque the motor applies to the output, so an obstacle pushing the joint toward
+/// negative angles reads positive).
+pub type TorqueModel = fn(i: usize, position_rad: f32) -> f32;
 
 impl EchoBus {
     pub fn new(n: usize, period_ns: u64) -> Self {
@@ -29,7 +36,14 @@ impl EchoBus {
             }),
             seq: 0,
             counters: BusCounters::default(),
+            torque: None,
         }
+    }
+
+    /// Report torques from `model` (otherwise 0).
+    pub fn with_torque(mut self, model: TorqueModel) -> Self {
+        self.torque = Some(model);
+        self
     }
 
     /// Start from this pose.
@@ -88,6 +102,7 @@ impl Bus for EchoBus {
                 module_time_us: self.time_us,
                 last_command_seq: self.seq,
                 position_rad: if corrupt { f32::NAN } else { self.positions[i] },
+                torque_nm: self.torque.map_or(0.0, |model| model(i, self.positions[i])),
                 accel_m_s2: [0.0, 0.0, 9.81],
                 ..Feedback::default()
             };

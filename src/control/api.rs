@@ -224,6 +224,17 @@ impl Params {
             })
     }
 
+    /// A param of any JSON type, parsed: absent → `None`; a number that is not a
+    /// finite double (`1e999`) → an error naming the field.
+    pub fn take_json(&mut self, name: &str) -> Result<Option<Value>, RpcError> {
+        let Some(raw) = self.fields.remove(name) else {
+            return Ok(None);
+        };
+        serde_json::from_str::<Value>(raw.get())
+            .map(Some)
+            .map_err(|e| RpcError::invalid_params(format!("`{name}`: {e}")))
+    }
+
     /// A gait name param.
     pub fn take_gait(&mut self, name: &str) -> Result<Option<GaitKind>, RpcError> {
         match self.take_str(name)? {

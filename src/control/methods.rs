@@ -5,10 +5,11 @@ use std::sync::Arc;
 use serde_json::{Value, json};
 
 use super::api::{PATCH_FIELDS, Params, RpcError, code};
+use super::compliance;
 use super::conn::Session;
 use super::server::Shared;
 use super::views;
-use crate::gait::ParamPatch;
+use crate::gait::{GaitKind, ParamPatch};
 use crate::rt::messages::LoopRequest;
 
 /// Every method the server knows (listed in the unknown-method error).
@@ -63,7 +64,11 @@ pub(crate) async fn dispatch(
             let gait = p.take_gait("gait")?;
             p.finish(&["gait"])?;
             let s = shared.telemetry.latest();
-            Ok(views::params(&s.params, s.blend_time_s, gait))
+            let mut v = views::params(&s.params, s.blend_time_s, gait);
+            if gait.is_none_or(|g| g == GaitKind::Slithering) {
+                v["compliance"] = compliance::setting_view(&s.compliance.setting);
+            }
+            Ok(v)
         }
         "params.set" => params_set(shared, p).await,
         "hold" => act(shared, p, LoopRequest::Hold).await,
@@ -107,7 +112,8 @@ async fn act(shared: &Shared, p: Params, request: LoopRequest) -> Result<Value, 
     Ok(json!({ "ok": true }))
 }
 
-/// `params.set`: either `{"blend_time_s": x}` or `{"gait": name, <field>: x, ...}`.
+/// `params.set`: either `{"blend_time_s": x}` or `{"gait": name, <field>: x, ...}`,
+/// for slithering also `"compliance": {...}`.
 async fn params_set(shared: &Shared, mut p: Params) -> Result<Value, RpcError> {
     if p.contains("blend_time_s") {
         let (min, max) = BLEND_TIME_RANGE_S;
@@ -126,14 +132,25 @@ async fn params_set(shared: &Shared, mut p: Params) -> Result<Value, RpcError> {
         .take_gait("gait")?
         .ok_or_else(|| RpcError::invalid_params("missing `gait` (or `blend_time_s`)"))?;
     let patch = p.take_patch()?;
+    let compliance = p.take_json("compliance")?;
     let mut expected = vec!["gait"];
     expected.extend(PATCH_FIELDS);
+    expected.push("compliance");
     p.finish(&expected)?;
-    if patch == ParamPatch::default() {
+    if compliance.is_some() && gait != GaitKind::Slithering {
         return Err(RpcError::invalid_params(format!(
-            "nothing to change: give at least one of {}",
+            "`compliance`: only slithering has compliant controllers, not {}",
+            gait.name()
+        )));
+    }
+    if patch == ParamPatch::default() && compliance.is_none() {
+        return Err(RpcError::invalid_params(format!(
+            "nothing to change: give at least one of {} (or, for slithering, compliance)",
             PATCH_FIELDS.join(", ")
         )));
+    }
+    if gait == GaitKind::Slithering {
+        return compliance::set_slithering(shared, patch, compliance).await;
     }
     // Validated against the table the loop published last; the loop checks again.
     let current = *shared.telemetry.latest().params.get(gait);

@@ -13,11 +13,14 @@
 //! - `server`: binding, the runtime thread, accept loops, the client limit.
 //! - `conn`: one connection: reading lines, answering in order, the writer.
 //! - `methods`: what each method does; `views`: JSON views of a snapshot.
+//! - `compliance`: slithering's compliant controller in `params.set`/`params.get`,
+//!   `status` and telemetry.
 //! - `router`: tickets and acks between connections and the loop.
 //! - [`client`]: a small blocking client (used by `snakectl` and the tests).
 
 pub mod api;
 pub mod client;
+mod compliance;
 mod conn;
 mod lines;
 mod methods;
@@ -30,8 +33,10 @@ use std::time::Duration;
 
 use serde::Serialize;
 
+use crate::gait::BodyLayout;
 use crate::rt::messages::{Ack, Envelope};
 use crate::rt::telemetry::TelemetryReader;
+use crate::shape::JointController;
 
 pub use methods::{BLEND_TIME_RANGE_S, DEFAULT_RATE_HZ, METHODS, RATE_RANGE_HZ};
 pub use server::{RunningServer, ServerError, start};
@@ -77,6 +82,10 @@ pub struct LoopHandle {
     pub acks: crossbeam_channel::Receiver<Ack>,
     pub telemetry: TelemetryReader,
     pub info: DaemonInfo,
+    /// The loop's body: slithering controllers are built for it here, off the loop.
+    pub layout: BodyLayout,
+    /// Controllers the loop replaced; the server frees them.
+    pub retired: crossbeam_channel::Receiver<Box<dyn JointController>>,
 }
 
 /// How the daemon talks to its modules.

@@ -14,6 +14,7 @@ use crossbeam_channel::{Receiver, RecvTimeoutError, Sender, TrySendError};
 use tokio::sync::oneshot;
 
 use super::api::{RpcError, code};
+use crate::rt::compliance::ControllerChange;
 use crate::rt::messages::{Ack, Envelope, LoopRequest, Rejection};
 
 type Pending = Arc<Mutex<HashMap<u64, oneshot::Sender<Result<(), Rejection>>>>>;
@@ -77,6 +78,16 @@ impl AckRouter {
 
     /// Send `request` to the loop and wait for its ack (at most `ack_timeout`).
     pub(crate) async fn call(&self, request: LoopRequest) -> Result<(), RpcError> {
+        self.call_with(request, None).await
+    }
+
+    /// [`Self::call`] with a slithering controller change attached. When the queue is
+    /// full the controller comes back here and is dropped with the envelope.
+    pub(crate) async fn call_with(
+        &self,
+        request: LoopRequest,
+        controller: Option<ControllerChange>,
+    ) -> Result<(), RpcError> {
         let ticket = self.next_ticket.fetch_add(1, Ordering::Relaxed);
         let (tx, rx) = oneshot::channel();
         lock(&self.pending).insert(ticket, tx);
@@ -84,7 +95,12 @@ impl AckRouter {
             pending: &self.pending,
             ticket,
         };
-        match self.requests.try_send(Envelope { ticket, request }) {
+        let envelope = Envelope {
+            ticket,
+            request,
+            controller,
+        };
+        match self.requests.try_send(envelope) {
             Ok(()) => {}
             Err(TrySendError::Full(_)) => {
                 return Err(RpcError::new(

@@ -51,6 +51,11 @@ pub(crate) struct Shared {
     pub(crate) telemetry: TelemetryReader,
     pub(crate) info: super::DaemonInfo,
     pub(crate) max_line_bytes: usize,
+    pub(crate) layout: crate::gait::BodyLayout,
+    pub(crate) retired: crossbeam_channel::Receiver<Box<dyn crate::shape::JointController>>,
+    /// Held by a slithering change from reading the setting to the loop's ack, so each
+    /// one builds on what the previous one left.
+    pub(crate) slithering: tokio::sync::Mutex<()>,
 }
 
 /// A started server. `shutdown` (or dropping it) stops accepting, closes every
@@ -149,6 +154,9 @@ pub fn start(cfg: ServerConfig, handle: LoopHandle) -> Result<RunningServer, Ser
         telemetry: handle.telemetry,
         info: handle.info,
         max_line_bytes: cfg.max_line_bytes.max(1),
+        layout: handle.layout,
+        retired: handle.retired,
+        slithering: tokio::sync::Mutex::new(()),
     });
     let clients = Arc::new(Clients {
         active: AtomicUsize::new(0),

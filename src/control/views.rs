@@ -4,6 +4,7 @@
 use serde_json::{Value, json};
 
 use super::DaemonInfo;
+use super::compliance::telemetry_view;
 use crate::gait::{GaitKind, GaitTable};
 use crate::rt::telemetry::Snapshot;
 
@@ -21,6 +22,7 @@ pub(crate) fn status(s: &Snapshot, info: &DaemonInfo) -> Value {
         "requests_applied": s.requests_applied,
         "requests_refused": s.requests_refused,
         "joints": joints_summary(s),
+        "compliance": telemetry_view(&s.compliance),
         "daemon": info,
     })
 }
@@ -105,6 +107,7 @@ pub(crate) fn telemetry(s: &Snapshot) -> Value {
         "gait": s.gait,
         "blend_progress": s.blend_progress,
         "joints": s.joints,
+        "compliance": telemetry_view(&s.compliance),
     })
 }
 

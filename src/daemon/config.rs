@@ -156,6 +156,9 @@ pub struct GaitSection {
     pub max_joint_speed_rad_s: f64,
     /// Per-gait parameter overrides, e.g. `[gait.params.sidewinding]`.
     pub params: std::collections::HashMap<GaitKind, crate::gait::ParamPatch>,
+    /// Controller of slithering: "open_loop" or one of `shape::SLITHERING_CONTROLLERS`
+    /// with its preset compliance.
+    pub slithering_controller: String,
 }
 
 impl Default for GaitSection {
@@ -166,6 +169,7 @@ impl Default for GaitSection {
             blend_time_s: 2.0,
             max_joint_speed_rad_s: 3.46,
             params: Default::default(),
+            slithering_controller: crate::rt::compliance::OPEN_LOOP.to_owned(),
         }
     }
 }
@@ -353,6 +357,17 @@ impl Config {
             60.0,
         )?;
         range("emulator.modules", self.emulator.modules as f64, 2.0, 64.0)?;
+        if !crate::shape::SLITHERING_CONTROLLERS.contains(&self.gait.slithering_controller.as_str())
+        {
+            return Err(bad(
+                "gait.slithering_controller",
+                self.gait.slithering_controller.clone(),
+                &format!(
+                    "must be one of {}",
+                    crate::shape::SLITHERING_CONTROLLERS.join(", ")
+                ),
+            ));
+        }
         if self.network.targets.is_empty() {
             return Err(bad(
                 "network.targets",
@@ -437,6 +452,23 @@ mod tests {
         assert!(Config::parse("[gait]\ninitial = \"moonwalk\"\n", Path::new("x")).is_err());
         assert!(
             Config::parse("[gait.params.sidewinding]\nwobble = 1.0\n", Path::new("x")).is_err()
+        );
+    }
+
+    #[test]
+    fn the_slithering_controller_must_be_known() {
+        let cfg = Config::parse(
+            "[gait]\nslithering_controller = \"a_ws_omega\"\n",
+            Path::new("x"),
+        )
+        .unwrap();
+        assert_eq!(cfg.gait.slithering_controller, "a_ws_omega");
+        let err = Config::parse("[gait]\nslithering_controller = \"fast\"\n", Path::new("x"))
+            .unwrap_err();
+        let msg = err.to_string();
+        assert!(
+            msg.contains("gait.slithering_controller") && msg.contains("cpg"),
+            "{msg}"
         );
     }
 

@@ -15,6 +15,7 @@ use anyhow::{Context, Result};
 
 use crate::control::{self, DaemonInfo, LoopHandle, ServerConfig};
 use crate::gait::{BodyLayout, GaitSelector, GaitTable};
+use crate::rt::compliance::{ComplianceSetting, ControllerChange};
 use crate::rt::control_loop::{ControlLoop, LoopParts};
 use crate::rt::pacer::{LockstepPacer, Pacer, RealTimePacer};
 use crate::rt::telemetry::{self, Snapshot, TelemetryReader};
@@ -85,6 +86,7 @@ pub fn run(cfg: Config, emulated: bool) -> Result<()> {
 
     // Everything that can be refused without the robot is checked before discovery.
     let table = gait_table(&cfg)?;
+    let slithering = slithering_setting(&cfg, &table)?;
     let period_ns = (1e9 / cfg.loop_.rate_hz).round() as u64;
     let built = bus_setup::build(&cfg, emulated, period_ns)?;
     let n = built.bus.module_count();
@@ -92,8 +94,14 @@ pub fn run(cfg: Config, emulated: bool) -> Result<()> {
     service::notify_status(&format!("group of {n} modules found"));
 
     let layout = BodyLayout::alternating(n, cfg.body.first_joint_plane, cfg.body.module_length_m);
+    let params = table.get(crate::gait::GaitKind::Slithering);
+    let slithering_controller = match slithering.build(&layout, params) {
+        Ok(ControllerChange::Install(c)) => Some(c),
+        Ok(ControllerChange::OpenLoop) => None,
+        Err(e) => anyhow::bail!("gait.slithering_controller: {e}"),
+    };
     let selector = GaitSelector::new(
-        layout,
+        layout.clone(),
         table,
         cfg.gait.initial,
         cfg.gait.blend_time_s,
@@ -117,6 +125,9 @@ pub fn run(cfg: Config, emulated: bool) -> Result<()> {
         crossbeam_channel::bounded::<messages::Envelope>(cfg.control.channel_capacity);
     let (ack_tx, ack_rx) =
         crossbeam_channel::bounded::<messages::Ack>(cfg.control.channel_capacity);
+    // Each request retires at most one controller and the server drains before it
+    // sends one: this never fills.
+    let (retired_tx, retired_rx) = crossbeam_channel::bounded(cfg.control.channel_capacity + 2);
     let (tel_writer, tel_reader) = telemetry::channel(Snapshot::new(
         n,
         cfg.gait.initial,
@@ -142,6 +153,8 @@ pub fn run(cfg: Config, emulated: bool) -> Result<()> {
                     Pacing::Lockstep => control::Pacing::Lockstep,
                 },
             },
+            layout,
+            retired: retired_rx,
         },
     )
     .context("starting the control socket")?;
@@ -158,6 +171,8 @@ pub fn run(cfg: Config, emulated: bool) -> Result<()> {
         stop: stop.clone(),
         velocity_feedforward: cfg.loop_.velocity_feedforward,
         hold_at_start: cfg.gait.start == StartMode::Hold,
+        retired: retired_tx,
+        slithering_controller,
     };
     let rt = cfg.loop_.clone();
     let loop_thread = std::thread::Builder::new()
@@ -183,6 +198,20 @@ pub fn run(cfg: Config, emulated: bool) -> Result<()> {
         "stopped safely"
     );
     Ok(())
+}
+
+/// The configured slithering controller, checked against the configured slithering
+/// parameters (it is built once the body is known).
+fn slithering_setting(cfg: &Config, table: &GaitTable) -> Result<ComplianceSetting> {
+    let name = &cfg.gait.slithering_controller;
+    let bad = |e: String| {
+        anyhow::anyhow!("bad configuration: gait.slithering_controller = {name:?}: {e}")
+    };
+    let setting = ComplianceSetting::named(name).map_err(bad)?;
+    setting
+        .check(table.get(crate::gait::GaitKind::Slithering))
+        .map_err(bad)?;
+    Ok(setting)
 }
 
 fn server_config(cfg: &Config) -> ServerConfig {

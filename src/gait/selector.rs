@@ -162,6 +162,11 @@ impl GaitSelector {
         self.psi[self.active.index()]
     }
 
+    /// The per-joint speed limit of the set-points, rad/s.
+    pub fn max_joint_speed_rad_s(&self) -> f64 {
+        self.max_joint_speed_rad_s
+    }
+
     /// Update cycles in which the slew limiter had to clamp some joint.
     pub fn limited_cycles(&self) -> u64 {
         self.limited_cycles

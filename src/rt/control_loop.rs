@@ -10,13 +10,16 @@ use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use crossbeam_channel::{Receiver, Sender};
 
 use crate::bus::{Bus, GroupFeedback};
-use crate::gait::GaitSelector;
+use crate::gait::{GaitKind, GaitSelector, ParamPatch};
 use crate::protocol::Command;
+use crate::rt::compliance::{ControllerChange, InstalledController};
 use crate::rt::messages::{Ack, Envelope, LoopRequest, Rejection};
 use crate::rt::pacer::{Cycle, Pacer};
+use crate::rt::slithering_driver::SlitheringDriver;
 use crate::rt::stats::{LoopStats, StatsReport};
 use crate::rt::telemetry::TelemetryWriter;
 use crate::safety::failsafe::{Event, Failsafe, Health, Mode, Output};
+use crate::shape::{JointController, Measured};
 
 /// Requests applied per cycle at most, so a flood cannot stretch a cycle.
 const MAX_REQUESTS_PER_CYCLE: usize = 8;
@@ -37,6 +40,11 @@ pub struct LoopParts {
     pub velocity_feedforward: bool,
     /// Hold the measured pose after start-up instead of running the gait.
     pub hold_at_start: bool,
+    /// Slithering controllers the loop replaced, for the control side to free (bounded;
+    /// the loop only `try_send`s).
+    pub retired: Sender<Box<dyn JointController>>,
+    /// The slithering controller to start with (`None`: open loop).
+    pub slithering_controller: Option<InstalledController>,
 }
 
 /// Whether the loop goes on.
@@ -53,6 +61,9 @@ pub struct ControlLoop {
     positions: Vec<f64>,
     velocities: Vec<f64>,
     measured: Vec<f64>,
+    /// Reported joint torques, N·m (what compliant controllers feel).
+    torques: Vec<f64>,
+    slithering: SlitheringDriver,
     held: Vec<f64>,
     held_valid: bool,
     stats: LoopStats,
@@ -66,8 +77,13 @@ pub struct ControlLoop {
 }
 
 impl ControlLoop {
-    pub fn new(parts: LoopParts) -> Self {
+    pub fn new(mut parts: LoopParts) -> Self {
         let n = parts.bus.module_count();
+        let mut slithering = SlitheringDriver::new(n, parts.retired.clone());
+        if let Some(c) = parts.slithering_controller.take() {
+            // Not driving yet: no hand-back, the commanded pose is not used.
+            slithering.install(ControllerChange::Install(c), &mut parts.selector, &[], 0.0);
+        }
         Self {
             p: parts,
             group: GroupFeedback::new(n),
@@ -75,6 +91,8 @@ impl ControlLoop {
             positions: vec![0.0; n],
             velocities: vec![0.0; n],
             measured: vec![0.0; n],
+            torques: vec![0.0; n],
+            slithering,
             held: vec![0.0; n],
             held_valid: false,
             stats: LoopStats::default(),
@@ -146,7 +164,7 @@ impl ControlLoop {
             let Ok(env) = self.p.requests.try_recv() else {
                 break;
             };
-            let result = self.apply(env.request, now_s, t_s, &health);
+            let result = self.apply(env.request, env.controller, now_s, t_s, &health);
             if result.is_ok() {
                 self.applied += 1;
             } else {
@@ -164,6 +182,7 @@ impl ControlLoop {
         let flow = match output {
             Output::Resync => {
                 self.p.selector.resync(&self.measured, t_s);
+                self.slithering.pause();
                 self.p.failsafe.resynced(now_s);
                 if self.p.hold_at_start && !self.started {
                     let _ = self.p.failsafe.request(now_s, Event::Hold);
@@ -238,6 +257,7 @@ impl ControlLoop {
                 non_finite = true;
             }
             self.measured[i] = f.position_rad as f64;
+            self.torques[i] = f.torque_nm as f64;
             min_module_time =
                 Some(min_module_time.map_or(f.module_time_us, |t| t.min(f.module_time_us)));
         }
@@ -261,10 +281,22 @@ impl ControlLoop {
     fn apply(
         &mut self,
         req: LoopRequest,
+        controller: Option<ControllerChange>,
         now_s: f64,
         t_s: f64,
         _health: &Health,
     ) -> Result<(), Rejection> {
+        match req {
+            LoopRequest::SetParams(GaitKind::Slithering, patch) => {
+                return self.set_slithering(Some(patch), controller, t_s);
+            }
+            LoopRequest::SetCompliance => return self.set_slithering(None, controller, t_s),
+            _ => {
+                if let Some(c) = controller {
+                    self.slithering.refuse(c);
+                }
+            }
+        }
         let fs = &mut self.p.failsafe;
         match req {
             LoopRequest::SetGait(kind) => {
@@ -276,6 +308,10 @@ impl ControlLoop {
                     Mode::Hold | Mode::Limp => fs.request(now_s, Event::Arm)?,
                 }
                 self.p.selector.set_gait(kind, t_s);
+                if kind != GaitKind::Slithering {
+                    let (selector, commanded) = (&mut self.p.selector, &self.positions);
+                    self.slithering.hand_back(selector, commanded, t_s);
+                }
                 Ok(())
             }
             LoopRequest::SetParams(kind, patch) => self
@@ -296,6 +332,43 @@ impl ControlLoop {
                 self.stop_seen = true;
                 fs.request(now_s, Event::Shutdown)
             }
+            LoopRequest::SetCompliance => Err(Rejection::NoController),
+        }
+    }
+
+    /// Slithering's parameters and / or its controller, changed together at this
+    /// cycle boundary. A controller set stays consistent with the parameters: new
+    /// parameters must come with a controller rebuilt for them.
+    fn set_slithering(
+        &mut self,
+        patch: Option<ParamPatch>,
+        controller: Option<ControllerChange>,
+        t_s: f64,
+    ) -> Result<(), Rejection> {
+        let refused = match (&patch, &controller) {
+            (None, None) => Some(Rejection::NoController),
+            (Some(_), None) if self.slithering.has_controller() => Some(Rejection::StaleController),
+            (Some(patch), _) => self
+                .p
+                .selector
+                .set_params(GaitKind::Slithering, patch, t_s)
+                .err()
+                .map(|_| Rejection::InvalidParams),
+            (None, Some(_)) => None,
+        };
+        match (refused, controller) {
+            (Some(why), c) => {
+                if let Some(c) = c {
+                    self.slithering.refuse(c);
+                }
+                Err(why)
+            }
+            (None, Some(c)) => {
+                let (selector, commanded) = (&mut self.p.selector, &self.positions);
+                self.slithering.install(c, selector, commanded, t_s);
+                Ok(())
+            }
+            (None, None) => Ok(()),
         }
     }
 
@@ -304,6 +377,17 @@ impl ControlLoop {
         self.p
             .selector
             .update(t_s, &mut self.positions, &mut self.velocities);
+        let measured = Measured {
+            position_rad: &self.measured,
+            torque_nm: &self.torques,
+        };
+        self.slithering.drive(
+            t_s,
+            &self.p.selector,
+            &measured,
+            &mut self.positions,
+            &mut self.velocities,
+        );
         for i in 0..self.commands.len() {
             let velocity = if self.p.velocity_feedforward {
                 self.velocities[i] as f32
@@ -321,6 +405,7 @@ impl ControlLoop {
     /// Freeze the set-points: the last commanded ones when there are any, else the
     /// measured pose (coming out of limp).
     fn hold_commands(&mut self) {
+        self.slithering.pause();
         if !self.held_valid {
             for i in 0..self.commands.len() {
                 let last = self.commands[i].position_rad;
@@ -342,6 +427,7 @@ impl ControlLoop {
     }
 
     fn limp_commands(&mut self) {
+        self.slithering.pause();
         self.held_valid = false;
         self.commands.fill(Command::LIMP);
     }
@@ -360,6 +446,7 @@ impl ControlLoop {
     fn publish(&mut self, c: &Cycle) {
         let (group, commands, stats) = (&self.group, &self.commands, &self.stats);
         let (selector, failsafe, bus) = (&self.p.selector, &self.p.failsafe, &self.p.bus);
+        let slithering = &self.slithering;
         let (applied, refused) = (self.applied, self.refused);
         self.p.telemetry.write(|snap| {
             snap.cycle = c.index;
@@ -388,6 +475,7 @@ impl ControlLoop {
             snap.bus = bus.counters();
             snap.requests_applied = applied;
             snap.requests_refused = refused;
+            slithering.publish(&mut snap.compliance);
         });
     }
 }

@@ -7,7 +7,7 @@ use crate::safety::failsafe::{FailsafeConfig, Mode, Reason};
 
 fn request(h: &mut Harness, ticket: u64, r: LoopRequest) -> Result<(), Rejection> {
     h.requests
-        .try_send(Envelope { ticket, request: r })
+        .try_send(Envelope::new(ticket, r))
         .expect("queue has room");
     h.control.step();
     let ack = h

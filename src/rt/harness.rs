@@ -12,8 +12,11 @@ use crate::rt::messages::{Ack, Envelope};
 use crate::rt::pacer::LockstepPacer;
 use crate::rt::telemetry::{self, Snapshot, TelemetryReader};
 use crate::safety::failsafe::{Failsafe, FailsafeConfig};
+use crate::shape::JointController;
 
 pub const PERIOD_NS: u64 = 1_000_000;
+/// Module length of the harness's body, m.
+pub const MODULE_LENGTH_M: f64 = 0.064;
 
 pub struct Harness {
     pub control: ControlLoop,
@@ -22,6 +25,10 @@ pub struct Harness {
     pub telemetry: TelemetryReader,
     pub stop: Arc<AtomicBool>,
     pub faults: Arc<EchoFaults>,
+    /// Slithering controllers the loop replaced (drain and drop them off the loop).
+    pub retired: Receiver<Box<dyn JointController>>,
+    /// The body the gaits (and controllers built for this loop) use.
+    pub layout: BodyLayout,
 }
 
 /// `n` modules starting at `pose` (or straight), running `gait`.
@@ -36,17 +43,30 @@ pub fn echo_harness(
     if let Some(p) = pose {
         bus = bus.with_positions(p);
     }
+    echo_harness_on(bus, GaitTable::default(), gait, hold_at_start, failsafe)
+}
+
+/// A loop over `bus` (e.g. with scripted torques) with gait parameters `table`.
+pub fn echo_harness_on(
+    bus: EchoBus,
+    table: GaitTable,
+    gait: GaitKind,
+    hold_at_start: bool,
+    failsafe: FailsafeConfig,
+) -> Harness {
+    use crate::bus::Bus;
+    let n = bus.module_count();
     let faults = bus.faults();
-    let table = GaitTable::default();
-    let layout = BodyLayout::alternating(n, Plane::Lateral, 0.064);
+    let layout = BodyLayout::alternating(n, Plane::Lateral, MODULE_LENGTH_M);
     let (req_tx, req_rx) = crossbeam_channel::bounded(16);
     let (ack_tx, ack_rx) = crossbeam_channel::bounded(16);
+    let (retired_tx, retired_rx) = crossbeam_channel::bounded(18);
     let (writer, reader) = telemetry::channel(Snapshot::new(n, gait, table, 2.0));
     let stop = Arc::new(AtomicBool::new(false));
     let control = ControlLoop::new(LoopParts {
         bus: Box::new(bus),
         pacer: Box::new(LockstepPacer::new(PERIOD_NS, 1_000_000_000)),
-        selector: GaitSelector::new(layout, table, gait, 2.0, 3.46),
+        selector: GaitSelector::new(layout.clone(), table, gait, 2.0, 3.46),
         failsafe: Failsafe::new(failsafe),
         requests: req_rx,
         acks: ack_tx,
@@ -55,6 +75,8 @@ pub fn echo_harness(
         stop: stop.clone(),
         velocity_feedforward: true,
         hold_at_start,
+        retired: retired_tx,
+        slithering_controller: None,
     });
     Harness {
         control,
@@ -63,5 +85,7 @@ pub fn echo_harness(
         telemetry: reader,
         stop,
         faults,
+        retired: retired_rx,
+        layout,
     }
 }

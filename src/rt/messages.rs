@@ -1,14 +1,21 @@
-//! What crosses between the control socket and the loop. Everything is `Copy`
-//! so the bounded crossbeam channels never allocate per message.
+//! What crosses between the control socket and the loop. Requests and acks are
+//! `Copy`; the only heap object is a slithering controller attached to an envelope,
+//! built on the control side and moved (a pointer) through the bounded channel, so
+//! nothing allocates per message.
 use crate::gait::{GaitKind, ParamPatch};
+use crate::rt::compliance::ControllerChange;
 
 /// An operator request, applied by the loop at a cycle boundary.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum LoopRequest {
     /// Blend into this gait (arms the loop if it was held or limp and feedback is healthy).
     SetGait(GaitKind),
-    /// Change a gait's parameters (validated again by the loop before use).
+    /// Change a gait's parameters (validated again by the loop before use). For
+    /// slithering while a controller is set, the envelope carries the controller
+    /// rebuilt for the new parameters.
     SetParams(GaitKind, ParamPatch),
+    /// Change the slithering controller to the one the envelope carries.
+    SetCompliance,
     /// Change the gait blend time, s.
     SetBlendTime(f64),
     /// Freeze the set-points where they are.
@@ -25,10 +32,25 @@ pub enum LoopRequest {
 }
 
 /// A request with the ticket its answer will carry.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug)]
 pub struct Envelope {
     pub ticket: u64,
     pub request: LoopRequest,
+    /// A slithering controller change that goes with `request` (`SetCompliance`, or
+    /// `SetParams` of slithering). The loop never frees it: a refused or replaced
+    /// controller goes back through the retired channel.
+    pub controller: Option<ControllerChange>,
+}
+
+impl Envelope {
+    /// A request without a controller.
+    pub fn new(ticket: u64, request: LoopRequest) -> Self {
+        Self {
+            ticket,
+            request,
+            controller: None,
+        }
+    }
 }
 
 /// Why the loop refused a request.
@@ -42,6 +64,12 @@ pub enum Rejection {
     InvalidParams,
     #[error("shutting down")]
     ShuttingDown,
+    #[error(
+        "a slithering controller is set: its parameters must come with a controller rebuilt for them"
+    )]
+    StaleController,
+    #[error("no slithering controller attached")]
+    NoController,
 }
 
 /// The loop's answer to one envelope.

@@ -7,6 +7,7 @@ use serde::Serialize;
 
 use crate::bus::BusCounters;
 use crate::gait::{GaitKind, GaitTable};
+use crate::rt::compliance::ComplianceTelemetry;
 use crate::rt::stats::LoopStats;
 use crate::safety::failsafe::{Mode, Reason};
 
@@ -42,6 +43,8 @@ pub struct Snapshot {
     /// Requests the loop has applied or refused.
     pub requests_applied: u64,
     pub requests_refused: u64,
+    /// The slithering controller and, while it drives, its windows and shape forces.
+    pub compliance: ComplianceTelemetry,
 }
 
 impl Snapshot {
@@ -60,6 +63,7 @@ impl Snapshot {
             bus: BusCounters::default(),
             requests_applied: 0,
             requests_refused: 0,
+            compliance: ComplianceTelemetry::default(),
         }
     }
 }

@@ -5,6 +5,7 @@
 use super::admittance::ParamState;
 use super::controller::{JointController, Measured};
 use super::function::ShapeFunction;
+use super::report::ComplianceReport;
 use super::slithering_config::{Centralization, SlitheringCompliance};
 use super::slithering_shape::{Param, SlitheringShape};
 use super::torque::TorqueFilter;
@@ -94,11 +95,16 @@ impl CompliantSlithering {
             t: 0.0,
             last_events: WindowEvents::default(),
         };
-        // The nominal shape at t = 0, so everything can be read before the first step.
-        let ws0 = c.spatial_freq0;
-        c.manager.update(|s| ws0 * s, [ParamState::default(); 3]);
-        c.assemble();
+        c.start_nominal();
         Ok(c)
+    }
+
+    /// The nominal shape at t = 0, so everything can be read before the first step.
+    /// Allocates nothing (capacities are set at construction).
+    fn start_nominal(&mut self) {
+        let ws0 = self.spatial_freq0;
+        self.manager.update(|s| ws0 * s, [ParamState::default(); 3]);
+        self.assemble();
     }
 
     pub fn config(&self) -> &SlitheringCompliance {
@@ -273,6 +279,59 @@ impl JointController for CompliantSlithering {
         f("force_amplitude_peak", peak(Param::Amplitude));
         f("force_spatial_freq_peak", peak(Param::SpatialFreq));
         f("force_phase_peak", peak(Param::Phase));
+    }
+
+    fn reset(&mut self) {
+        self.manager.clear();
+        for states in &mut self.fixed {
+            states.fill(ParamState::default());
+        }
+        self.filter.reset();
+        self.sigma.clear();
+        self.forces.clear();
+        self.last_t = None;
+        self.t = 0.0;
+        self.last_events = WindowEvents::default();
+        self.start_nominal();
+    }
+
+    fn compliance_report(&self, out: &mut ComplianceReport) {
+        out.clear();
+        if self.sigma.len() != self.shape.param_count() {
+            return; // Not stepped since construction or reset.
+        }
+        let nominal_phase = self.temporal_freq * self.t;
+        for p in Param::ALL {
+            let (windows, values, forces) = self.field(p);
+            let pc = self.config.param(p);
+            let offset = if p == Param::Phase {
+                nominal_phase
+            } else {
+                0.0
+            };
+            out.fields[p.index()].fill(
+                pc.enabled,
+                pc.centralization,
+                windows,
+                values,
+                forces,
+                offset,
+            );
+        }
+        let lat = self.shape.lateral_count().max(1) as f64;
+        let mean = |p: Param| {
+            self.shape
+                .lateral_s()
+                .map(|s| self.value_at(p, s))
+                .sum::<f64>()
+                / lat
+        };
+        out.amplitude_mean_rad = mean(Param::Amplitude);
+        out.spatial_freq_mean_rad = mean(Param::SpatialFreq);
+        out.phase_lag_rad = mean(Param::Phase) - nominal_phase;
+        out.travelling_windows = self.manager.len();
+        out.events = self.last_events;
+        out.available = true;
     }
 }
 

@@ -174,3 +174,57 @@ fn signals_and_fields_can_be_read_before_the_first_step() {
     assert!(names.iter().any(|n| n == "amplitude_mean_rad"), "{names:?}");
     assert!((c.value_at(Param::Amplitude, 0.5) - params().amplitude_lat_rad).abs() < 1e-9);
 }
+
+#[test]
+fn the_report_shows_each_field_and_reset_starts_afresh() {
+    let push = |_: f64, sp: &[f64]| {
+        let mut tau = [0.0; N];
+        for (t, &x) in tau.iter_mut().zip(sp).take(N / 2) {
+            *t = -2.0 * x.signum();
+        }
+        tau
+    };
+    let mut c = full();
+    let mut report = crate::shape::ComplianceReport::default();
+    c.compliance_report(&mut report);
+    assert!(report.available, "the nominal shape before the first step");
+    let nominal = &report.fields[Param::Amplitude.index()];
+    assert!(
+        nominal.value[..nominal.len()]
+            .iter()
+            .all(|&v| v == params().amplitude_lat_rad)
+    );
+    run(&mut c, 2.0, push);
+    c.compliance_report(&mut report);
+    assert!(report.available);
+    let (windows, values, forces) = c.field(Param::Amplitude);
+    let amp = &report.fields[Param::Amplitude.index()];
+    assert_eq!(amp.count, windows.len());
+    assert_eq!(amp.centralization, Centralization::Windowed);
+    assert_eq!(&amp.value[..amp.len()], values);
+    assert_eq!(&amp.force[..amp.len()], forces);
+    assert_eq!(report.travelling_windows, windows.len());
+    let phase = &report.fields[Param::Phase.index()];
+    assert_eq!(phase.count, 1, "central phase");
+    assert!((phase.value[0] - report.phase_lag_rad).abs() < 1e-9);
+    let mut lag = f64::NAN;
+    c.for_each_signal(&mut |name, v| {
+        if name == "phase_lag_rad" {
+            lag = v;
+        }
+    });
+    assert!((lag - report.phase_lag_rad).abs() < 1e-9);
+
+    c.reset();
+    c.compliance_report(&mut report);
+    let amp = &report.fields[Param::Amplitude.index()];
+    assert!(
+        amp.value[..amp.len()]
+            .iter()
+            .all(|&v| v == params().amplitude_lat_rad)
+    );
+    let mut fresh = full();
+    let ours = run_from(&mut c, 5.0, 1.0, push);
+    let theirs = run_from(&mut fresh, 5.0, 1.0, push);
+    assert_eq!(ours, theirs, "a reset controller is a new one");
+}

@@ -1,6 +1,7 @@
 //! The interface every joint-space controller offers to the lab and the daemon: time is
 //! an argument, the measured joints come in, set-points go out, nothing allocates.
 
+use super::report::ComplianceReport;
 use crate::gait::{BodyLayout, GaitKind, GaitParams, Plane, Serpenoid};
 
 /// What a controller sees of the modules each step.
@@ -26,6 +27,15 @@ pub trait JointController: Send {
     /// Named values worth logging or plotting (shape parameters, forces), in a fixed
     /// order for a given controller: `f(name, value)` for each.
     fn for_each_signal(&self, _f: &mut dyn FnMut(&str, f64)) {}
+    /// Forgets everything learnt and starts afresh: the next step behaves like the first
+    /// step of a new controller (the daemon resets a controller before each takeover).
+    /// Allocates nothing. Controllers with state must override it.
+    fn reset(&mut self) {}
+    /// Writes the compliance state after the last step into `out` (fixed size, no
+    /// allocation). The default reports nothing (`out.available` false).
+    fn compliance_report(&self, out: &mut ComplianceReport) {
+        out.clear();
+    }
 }
 
 /// Open-loop slithering: the serpenoid of `params`, lateral joints only (the thesis

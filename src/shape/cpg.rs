@@ -5,6 +5,7 @@
 //! open-loop serpenoid.
 
 use super::controller::{JointController, Measured};
+use super::report::ComplianceReport;
 use super::torque::TorqueFilter;
 use crate::gait::{BodyLayout, GaitParams, Plane};
 
@@ -166,6 +167,31 @@ impl JointController for Cpg {
                 .fold(f64::INFINITY, f64::min);
         f("phase_spread_rad", spread);
     }
+
+    fn reset(&mut self) {
+        for o in &mut self.osc {
+            o.phase = 0.0;
+            o.amplitude = self.amplitude0;
+        }
+        self.rates.fill(0.0);
+        self.filter.reset();
+        self.last_t = None;
+        self.t = 0.0;
+    }
+
+    /// Means only: the CPG has no windows.
+    fn compliance_report(&self, out: &mut ComplianceReport) {
+        out.clear();
+        if self.last_t.is_none() {
+            return;
+        }
+        let n = self.osc.len().max(1) as f64;
+        let nominal = self.temporal_freq * self.t;
+        out.amplitude_mean_rad = self.osc.iter().map(|o| o.amplitude).sum::<f64>() / n;
+        out.spatial_freq_mean_rad = self.spatial_freq;
+        out.phase_lag_rad = self.osc.iter().map(|o| o.phase - nominal).sum::<f64>() / n;
+        out.available = true;
+    }
 }
 
 #[cfg(test)]
@@ -215,5 +241,17 @@ mod tests {
             cpg.osc[0].amplitude
         );
         assert!((cpg.osc[8].amplitude - params.amplitude_lat_rad).abs() < 0.01);
+        let mut report = ComplianceReport::default();
+        cpg.compliance_report(&mut report);
+        assert!(report.available && report.amplitude_mean_rad > params.amplitude_lat_rad);
+        // Reset: the next steps are a new CPG's.
+        cpg.reset();
+        let mut fresh = Cpg::new(&layout, &params, CpgGains::default());
+        for k in 0..500 {
+            let t = 10.0 + k as f64 * 1e-3;
+            cpg.step(t, &m, &mut a);
+            fresh.step(t, &m, &mut b);
+        }
+        assert_eq!(a, b);
     }
 }

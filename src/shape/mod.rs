@@ -7,6 +7,7 @@ pub mod compliant_slithering;
 pub mod controller;
 pub mod cpg;
 pub mod function;
+pub mod report;
 pub mod slithering_config;
 pub mod slithering_shape;
 pub mod torque;
@@ -16,6 +17,7 @@ pub mod window_manager;
 pub use compliant_slithering::CompliantSlithering;
 pub use controller::{JointController, Measured, OpenLoopSlithering};
 pub use function::ShapeFunction;
+pub use report::{ComplianceReport, FieldReport, REPORT_MAX_WINDOWS};
 pub use slithering_config::{Centralization, SlitheringCompliance};
 
 use crate::gait::{BodyLayout, GaitParams};

@@ -11,7 +11,7 @@ use std::time::Duration;
 use serde_json::Value;
 use snaked::control::client::{Client, Endpoint};
 use snaked::control::{BusKind, DaemonInfo, LoopHandle, Pacing, RunningServer, ServerConfig};
-use snaked::gait::{GaitKind, GaitParams, GaitTable};
+use snaked::gait::{BodyLayout, GaitKind, GaitParams, GaitTable, Plane};
 use snaked::rt::messages::{Ack, Envelope, LoopRequest, Rejection};
 use snaked::rt::telemetry::{self, Snapshot};
 use snaked::safety::failsafe::{Mode, Reason};
@@ -79,11 +79,18 @@ pub struct FakeLoop {
     thread: Option<JoinHandle<()>>,
     /// Every request the loop received, in order.
     pub seen: Arc<Mutex<Vec<LoopRequest>>>,
+    /// The slithering controller attached to each request that carried one
+    /// ("open_loop" or the built controller's name), in order.
+    pub controllers: Arc<Mutex<Vec<String>>>,
 }
 
 impl FakeLoop {
     pub fn seen(&self) -> Vec<LoopRequest> {
         self.seen.lock().unwrap().clone()
+    }
+
+    pub fn controllers(&self) -> Vec<String> {
+        self.controllers.lock().unwrap().clone()
     }
 }
 
@@ -113,6 +120,7 @@ fn apply(s: &mut Snapshot, r: &LoopRequest) {
         LoopRequest::Limp | LoopRequest::Shutdown => s.mode = Mode::Limp,
         LoopRequest::EStop => s.mode = Mode::EStop,
         LoopRequest::Arm => s.mode = Mode::Running,
+        LoopRequest::SetCompliance => {}
     }
     s.reason = Reason::Operator;
 }
@@ -122,10 +130,12 @@ pub fn fake_loop(spec: LoopSpec) -> (FakeLoop, LoopHandle) {
     let (ack_tx, ack_rx) = crossbeam_channel::bounded::<Ack>(64);
     let initial = Snapshot::new(spec.joints, GaitKind::Slithering, table(), 2.0);
     let (mut writer, reader) = telemetry::channel(initial.clone());
+    let (_retired_tx, retired_rx) = crossbeam_channel::bounded(4);
     let stop = Arc::new(AtomicBool::new(false));
     let seen = Arc::new(Mutex::new(Vec::new()));
+    let controllers = Arc::new(Mutex::new(Vec::new()));
     let thread = {
-        let (stop, seen) = (stop.clone(), seen.clone());
+        let (stop, seen, controllers) = (stop.clone(), seen.clone(), controllers.clone());
         std::thread::spawn(move || {
             let mut state = initial;
             // The receiver lives here even when not draining, so sends see "full".
@@ -133,9 +143,18 @@ pub fn fake_loop(spec: LoopSpec) -> (FakeLoop, LoopHandle) {
                 if spec.drains {
                     while let Ok(env) = req_rx.try_recv() {
                         seen.lock().unwrap().push(env.request);
+                        if let Some(c) = &env.controller {
+                            controllers
+                                .lock()
+                                .unwrap()
+                                .push(c.setting().controller.to_owned());
+                        }
                         if let Some(result) = (spec.policy)(&env.request) {
                             if result.is_ok() {
                                 apply(&mut state, &env.request);
+                                if let Some(c) = &env.controller {
+                                    state.compliance.setting = c.setting();
+                                }
                                 state.requests_applied += 1;
                             } else {
                                 state.requests_refused += 1;
@@ -181,11 +200,14 @@ pub fn fake_loop(spec: LoopSpec) -> (FakeLoop, LoopHandle) {
         acks: ack_rx,
         telemetry: reader,
         info,
+        layout: BodyLayout::alternating(spec.joints, Plane::Lateral, 0.064),
+        retired: retired_rx,
     };
     let fake = FakeLoop {
         stop,
         thread: Some(thread),
         seen,
+        controllers,
     };
     (fake, handle)
 }
