@@ -1,8 +1,15 @@
 //! Hardware in the loop: snaked drives slithering over UDP through a peg board in
-//! snake-emu (physics plant, lockstep). On this board open-loop slithering stalls
-//! against the pegs while the full shape-based compliant controller (`a_ws_omega`,
-//! set in the daemon's config) gets through: the contrast the lab measures over many
-//! boards (docs/lab.md), shown end to end on one.
+//! snake-emu (physics plant, lockstep), open loop and with the full shape-based
+//! compliant controller (`a_ws_omega`, set in the daemon's config).
+//!
+//! What one board shows end to end: the compliant controller engages, the pegs' torques
+//! come back over UDP and reshape the wave (window amplitudes leave their nominal value,
+//! the phase runs late), the shape-forces are non-zero, and the body gets through the
+//! pegs. Whether it beats open loop on one board is a coin toss in this physics (one
+//! trial's outcome swings with the start transient; on the lab's board seed 1002 the
+//! in-process lab had open loop stuck 28 of 30 s and the compliant controller 2 s, over
+//! UDP both moved about 0.4-0.5 m): the contrast is a statistic, and the lab measures it
+//! over 40 trials (docs/lab.md). This test prints both runs' figures.
 mod common;
 
 use std::path::Path;
@@ -13,7 +20,7 @@ use common::Rig;
 const N: usize = 18;
 const SIM_S: f64 = 30.0;
 /// The peg-board experiment's board with a layout where the contrast is clear.
-const BOARD_SEED: u64 = 59;
+const BOARD_SEED: u64 = 1002;
 
 /// Mean x of the links (the body's progress along the board), first and last row.
 fn progress_m(poses: &Path) -> (f64, f64) {
@@ -32,6 +39,9 @@ struct Outcome {
     progress_m: f64,
     mean_abs_torque_nm: f64,
     saturated: f64,
+    /// Largest |A_window − A₀| seen in `status`, rad, and the most negative phase lag.
+    amplitude_excursion_rad: f64,
+    min_phase_lag_rad: f64,
 }
 
 fn run(controller: &str) -> Outcome {
@@ -65,13 +75,33 @@ fn run(controller: &str) -> Outcome {
         ),
     );
     let mut rig = rig;
-    let s = rig
-        .client
-        .wait_status(Duration::from_secs(300), "simulated time", |s| {
-            s["t_s"].as_f64().unwrap() >= SIM_S
-        });
-    if controller != "open_loop" {
-        assert_eq!(s["compliance"]["state"], "engaged", "{s}");
+    let a0 = std::f64::consts::FRAC_PI_4;
+    let (mut excursion, mut min_lag) = (0.0f64, 0.0f64);
+    let deadline = std::time::Instant::now() + Duration::from_secs(300);
+    loop {
+        let s = rig.client.call("status", serde_json::json!({}));
+        let c = &s["compliance"];
+        if c["state"] == "engaged" {
+            for w in c["fields"]["amplitude"]["windows"]
+                .as_array()
+                .into_iter()
+                .flatten()
+            {
+                excursion = excursion.max((w["value"].as_f64().unwrap() - a0).abs());
+            }
+            min_lag = min_lag.min(c["phase_lag_rad"].as_f64().unwrap());
+        }
+        if s["t_s"].as_f64().unwrap() >= SIM_S {
+            if controller != "open_loop" {
+                assert_eq!(c["state"], "engaged", "{s}");
+            }
+            break;
+        }
+        assert!(
+            std::time::Instant::now() < deadline,
+            "timed out; last status {s}"
+        );
+        std::thread::sleep(Duration::from_millis(20));
     }
     let rec = rig.stop(N);
     let (first, last) = progress_m(&poses);
@@ -87,21 +117,42 @@ fn run(controller: &str) -> Outcome {
         progress_m: last - first,
         mean_abs_torque_nm: sum / count as f64,
         saturated: sat as f64 / count as f64,
+        amplitude_excursion_rad: excursion,
+        min_phase_lag_rad: min_lag,
     };
     println!(
         "{controller}: body centre moved {:.3} m along the board in {SIM_S} s; lateral joints' \
-         mean |torque| {:.2} N·m, above 6 N·m {:.1} % of the time",
+         mean |torque| {:.2} N·m, above 6 N·m {:.1} % of the time; amplitude windows up to \
+         {:.3} rad off nominal, phase lag down to {:.3} rad",
         o.progress_m,
         o.mean_abs_torque_nm,
-        100.0 * o.saturated
+        100.0 * o.saturated,
+        o.amplitude_excursion_rad,
+        o.min_phase_lag_rad
     );
     o
 }
 
 #[test]
-fn compliant_slithering_gets_through_pegs_where_open_loop_stalls() {
+fn compliant_slithering_over_udp_reshapes_to_the_pegs_and_gets_through() {
     let open = run("open_loop");
     let compliant = run("a_ws_omega");
-    println!("{:.3} {:.3}", open.saturated, compliant.saturated);
-    assert!(compliant.progress_m > 0.0 && open.progress_m > 0.0 && open.mean_abs_torque_nm > 0.0 && compliant.mean_abs_torque_nm > 0.0);
+    assert!(
+        compliant.progress_m > 0.3,
+        "compliant moved {:.3} m",
+        compliant.progress_m
+    );
+    assert!(
+        compliant.amplitude_excursion_rad > 0.05,
+        "the pegs reshaped the wave: {:.3} rad",
+        compliant.amplitude_excursion_rad
+    );
+    assert!(
+        compliant.min_phase_lag_rad < -0.01,
+        "{:.3}",
+        compliant.min_phase_lag_rad
+    );
+    // Open loop never reports a shape (its wave is fixed) and moved too on this board.
+    assert_eq!(open.amplitude_excursion_rad, 0.0);
+    assert!(open.progress_m > 0.0);
 }
