@@ -113,6 +113,11 @@ pub fn run(exp: &Experiment, opts: RunOptions) -> Result<Vec<TrialResult>, LabEr
     let total = exp.controllers.len() * worlds.len();
     let bar = progress_bar(total, opts.progress);
     let next = AtomicUsize::new(0);
+    let finished = AtomicUsize::new(0);
+    // Not on a terminal (a log, CI): a plain line every 5 % instead of the bar.
+    let plain = opts.progress && !std::io::stderr().is_terminal();
+    let every = (total / 20).max(1);
+    let started = std::time::Instant::now();
     let failed = AtomicBool::new(false);
     let threads = opts.threads.clamp(1, total.max(1));
     let run_one = |i: usize| {
@@ -149,6 +154,13 @@ pub fn run(exp: &Experiment, opts: RunOptions) -> Result<Vec<TrialResult>, LabEr
                         let r = run_one(i);
                         failed.fetch_or(r.is_err(), Ordering::Relaxed);
                         bar.inc(1);
+                        let n = finished.fetch_add(1, Ordering::Relaxed) + 1;
+                        if plain && (n % every == 0 || n == total) {
+                            eprintln!(
+                                "snake-lab: {n}/{total} trials, {:.0} s",
+                                started.elapsed().as_secs_f64()
+                            );
+                        }
                         mine.push((i, r));
                     }
                     mine
