@@ -155,7 +155,7 @@ pub fn run(exp: &Experiment, opts: RunOptions) -> Result<Vec<TrialResult>, LabEr
                         failed.fetch_or(r.is_err(), Ordering::Relaxed);
                         bar.inc(1);
                         let n = finished.fetch_add(1, Ordering::Relaxed) + 1;
-                        if plain && (n % every == 0 || n == total) {
+                        if plain && (n.is_multiple_of(every) || n == total) {
                             eprintln!(
                                 "snake-lab: {n}/{total} trials, {:.0} s",
                                 started.elapsed().as_secs_f64()
