@@ -21,5 +21,11 @@ fn control_step(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, control_step);
+// No plots: criterion's plotters backend finds no font once plotters' `ab_glyph`
+// feature (the lab's PNGs) is on; the figures are the printed estimates.
+criterion_group! {
+    name = benches;
+    config = Criterion::default().without_plots();
+    targets = control_step
+}
 criterion_main!(benches);

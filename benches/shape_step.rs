@@ -43,5 +43,11 @@ fn shape_step(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, shape_step);
+// No plots: criterion's plotters backend finds no font once plotters' `ab_glyph`
+// feature (the lab's PNGs) is on; the figures are the printed estimates.
+criterion_group! {
+    name = benches;
+    config = Criterion::default().without_plots();
+    targets = shape_step
+}
 criterion_main!(benches);

@@ -82,7 +82,7 @@ impl CompliantSlithering {
             amplitude0: params.amplitude_lat_rad,
             spatial_freq0: params.spatial_freq_rad,
             temporal_freq: params.temporal_freq_rad_s,
-            manager: WindowManager::new(4 * n + 9, MAX_WINDOWS),
+            manager: WindowManager::new(n + 9, MAX_WINDOWS),
             shape,
             fixed,
             per_joint_windows,
