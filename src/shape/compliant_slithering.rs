@@ -212,6 +212,16 @@ impl CompliantSlithering {
         (self.shape.windows(p), &self.sigma[at..at + len], forces)
     }
 
+    /// `p`'s mean over the lateral joints.
+    pub fn lateral_mean(&self, p: Param) -> f64 {
+        let lat = self.shape.lateral_count().max(1) as f64;
+        self.shape
+            .lateral_s()
+            .map(|s| self.value_at(p, s))
+            .sum::<f64>()
+            / lat
+    }
+
     /// `p`'s value at normalised arc length `s`.
     pub fn value_at(&self, p: Param, s: f64) -> f64 {
         self.shape.field_at(&self.sigma, p, s)
@@ -260,14 +270,7 @@ impl JointController for CompliantSlithering {
     }
 
     fn for_each_signal(&self, f: &mut dyn FnMut(&str, f64)) {
-        let lat = self.shape.lateral_count().max(1) as f64;
-        let mean = |p: Param| {
-            self.shape
-                .lateral_s()
-                .map(|s| self.value_at(p, s))
-                .sum::<f64>()
-                / lat
-        };
+        let mean = |p: Param| self.lateral_mean(p);
         f("amplitude_mean_rad", mean(Param::Amplitude));
         f("spatial_freq_mean_rad", mean(Param::SpatialFreq));
         f(
@@ -318,14 +321,7 @@ impl JointController for CompliantSlithering {
                 offset,
             );
         }
-        let lat = self.shape.lateral_count().max(1) as f64;
-        let mean = |p: Param| {
-            self.shape
-                .lateral_s()
-                .map(|s| self.value_at(p, s))
-                .sum::<f64>()
-                / lat
-        };
+        let mean = |p: Param| self.lateral_mean(p);
         out.amplitude_mean_rad = mean(Param::Amplitude);
         out.spatial_freq_mean_rad = mean(Param::SpatialFreq);
         out.phase_lag_rad = mean(Param::Phase) - nominal_phase;
