@@ -228,3 +228,20 @@ fn the_report_shows_each_field_and_reset_starts_afresh() {
     let theirs = run_from(&mut fresh, 5.0, 1.0, push);
     assert_eq!(ours, theirs, "a reset controller is a new one");
 }
+
+#[test]
+fn presets_are_the_compliant_controller_names() {
+    assert_eq!(SlitheringCompliance::PRESETS.first(), Some(&"a"));
+    assert_eq!(
+        SlitheringCompliance::PRESETS.last(),
+        Some(&"a_ws_omega_windowed_phase")
+    );
+    for name in crate::shape::SLITHERING_CONTROLLERS {
+        let is_preset = SlitheringCompliance::PRESETS.contains(name);
+        assert_eq!(
+            SlitheringCompliance::preset(name).is_some(),
+            is_preset,
+            "{name}"
+        );
+    }
+}

@@ -137,14 +137,13 @@ impl SlitheringCompliance {
         Some(c)
     }
 
-    pub const PRESETS: &'static [&'static str] = &[
-        "a",
-        "a_ws",
-        "a_ws_omega",
-        "a_ws_omega_central",
-        "a_ws_omega_per_joint",
-        "a_ws_omega_windowed_phase",
-    ];
+    /// The compliant entries of [`crate::shape::SLITHERING_CONTROLLERS`] (between
+    /// `open_loop` and `cpg`), which this type's presets build.
+    pub const PRESETS: &'static [&'static str] = crate::shape::SLITHERING_CONTROLLERS
+        .split_at(1)
+        .1
+        .split_at(crate::shape::SLITHERING_CONTROLLERS.len() - 2)
+        .0;
 
     /// Every gain valid, positive cutoff, non-negative band, positive edge width.
     pub fn validate(&self) -> Result<(), String> {
