@@ -2,8 +2,6 @@
 //! control cycles (feedback, requests, failsafe, gait blend, compliant controllers,
 //! commands, telemetry). Allocations and frees are counted per thread, so the tests
 //! can run in parallel.
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
 
 use snaked::bus::echo::EchoBus;
 use snaked::gait::{GaitKind, GaitTable, ParamPatch};
@@ -12,46 +10,9 @@ use snaked::rt::harness::{Harness, PERIOD_NS, echo_harness, echo_harness_on};
 use snaked::rt::messages::{Envelope, LoopRequest};
 use snaked::safety::failsafe::{FailsafeConfig, Mode};
 
-struct Counting;
-
-thread_local! {
-    static COUNTING: Cell<bool> = const { Cell::new(false) };
-    static CALLS: Cell<u64> = const { Cell::new(0) };
-}
-
-fn count() {
-    let on = COUNTING.try_with(Cell::get).unwrap_or(false);
-    if on {
-        let _ = CALLS.try_with(|c| c.set(c.get() + 1));
-    }
-}
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        count();
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        count();
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        count();
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
-
-#[global_allocator]
-static GLOBAL: Counting = Counting;
-
-/// Allocator calls (alloc, realloc, free) this thread makes in `f`.
-fn allocator_calls(f: impl FnOnce()) -> u64 {
-    CALLS.with(|c| c.set(0));
-    COUNTING.with(|c| c.set(true));
-    f();
-    COUNTING.with(|c| c.set(false));
-    CALLS.with(Cell::get)
-}
+#[path = "support/counting_alloc.rs"]
+mod counting_alloc;
+use counting_alloc::allocator_calls;
 
 fn steps(h: &mut Harness, k: usize) {
     for _ in 0..k {

@@ -1,8 +1,6 @@
 //! Proof that the bus's real-time path (`send`, `receive`, including the lockstep
 //! wait and the handling of bad datagrams) allocates nothing: a counting global
 //! allocator that counts only on the thread under test.
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
 use std::net::UdpSocket;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -15,39 +13,9 @@ use snaked::protocol::{
     decode, encode,
 };
 
-struct Counting;
-
-thread_local! {
-    static COUNTING: Cell<bool> = const { Cell::new(false) };
-    static ALLOCS: Cell<u64> = const { Cell::new(0) };
-}
-
-fn note() {
-    // `try_with`: thread-locals may be gone while a thread shuts down.
-    if COUNTING.try_with(Cell::get).unwrap_or(false) {
-        let _ = ALLOCS.try_with(|a| a.set(a.get() + 1));
-    }
-}
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        note();
-        // SAFETY: forwarded unchanged to the system allocator.
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        // SAFETY: forwarded unchanged to the system allocator.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        note();
-        // SAFETY: forwarded unchanged to the system allocator.
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
-
-#[global_allocator]
-static GLOBAL: Counting = Counting;
+#[path = "support/counting_alloc.rs"]
+mod counting_alloc;
+use counting_alloc::allocations;
 
 /// A lockstep module: grants, acknowledges, and answers every command with one
 /// feedback 1 ms later, plus some junk the bus must count and drop.
@@ -144,15 +112,15 @@ fn send_and_receive_do_not_allocate() {
     bus.send(&commands).unwrap();
     bus.receive(&mut group, 0, wait(1)).unwrap();
 
-    COUNTING.with(|c| c.set(true));
+    let before = allocations();
     for k in 2..=40u64 {
         bus.send(&commands).unwrap();
         bus.receive(&mut group, k, wait(k)).unwrap();
         bus.receive(&mut group, k, FeedbackWait::None).unwrap();
     }
-    COUNTING.with(|c| c.set(false));
+    let allocated = allocations() - before;
 
-    assert_eq!(ALLOCS.with(Cell::get), 0, "the real-time path allocated");
+    assert_eq!(allocated, 0, "the real-time path allocated");
     let c = bus.counters();
     // The junk really went through the counted-and-dropped paths.
     assert!(

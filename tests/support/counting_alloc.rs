@@ -1,33 +1,39 @@
 //! A counting global allocator for the allocation tests: each test binary that
 //! includes this module (`#[path = "support/counting_alloc.rs"] mod counting_alloc;`)
-//! counts the allocations each thread makes.
+//! counts the allocator calls each thread makes. Per thread, because the test
+//! harness and the tests running beside it allocate on their own threads.
+#![allow(dead_code)] // each test binary uses part of it
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 
 pub struct Counting;
 
 thread_local! {
-    pub static ALLOCATIONS: Cell<u64> = const { Cell::new(0) };
+    static ALLOCATIONS: Cell<u64> = const { Cell::new(0) };
+    static FREES: Cell<u64> = const { Cell::new(0) };
 }
 
-fn count() {
-    let _ = ALLOCATIONS.try_with(|c| c.set(c.get() + 1));
+fn bump(counter: &'static std::thread::LocalKey<Cell<u64>>) {
+    // `try_with`: thread-locals may be gone while a thread shuts down.
+    let _ = counter.try_with(|c| c.set(c.get() + 1));
 }
 
+// SAFETY: every call is forwarded unchanged to the system allocator.
 unsafe impl GlobalAlloc for Counting {
     unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        count();
+        bump(&ALLOCATIONS);
         unsafe { System.alloc(layout) }
     }
     unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
-        count();
+        bump(&ALLOCATIONS);
         unsafe { System.alloc_zeroed(layout) }
     }
     unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        count();
+        bump(&ALLOCATIONS);
         unsafe { System.realloc(ptr, layout, new_size) }
     }
     unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        bump(&FREES);
         unsafe { System.dealloc(ptr, layout) }
     }
 }
@@ -35,7 +41,14 @@ unsafe impl GlobalAlloc for Counting {
 #[global_allocator]
 static GLOBAL: Counting = Counting;
 
-/// Allocations made by this thread so far.
+/// Allocations (alloc, alloc_zeroed, realloc) made by this thread so far.
 pub fn allocations() -> u64 {
     ALLOCATIONS.with(Cell::get)
+}
+
+/// Allocator calls, frees included, this thread makes in `f`.
+pub fn allocator_calls(f: impl FnOnce()) -> u64 {
+    let before = allocations() + FREES.with(Cell::get);
+    f();
+    allocations() + FREES.with(Cell::get) - before
 }
