@@ -137,6 +137,33 @@ fn explicit_layouts_come_from_scenario_files() {
 }
 
 #[test]
+fn variants_run_beside_the_named_controllers() {
+    let dir = tempfile::tempdir().unwrap();
+    pegboard(
+        dir.path(),
+        &[
+            "--layouts",
+            "1",
+            "--variant",
+            r#"soft_a={"controller":"a","amplitude":{"gains":{"stiffness":1}}}"#,
+        ],
+    );
+    let csv = read(&dir.path().join("results.csv"));
+    let labels: Vec<_> = csv
+        .lines()
+        .skip(1)
+        .map(|r| r.split(',').next().unwrap())
+        .collect();
+    assert_eq!(labels, ["open_loop", "soft_a"], "{csv}");
+    let summary = read(&dir.path().join("summary.md"));
+    assert!(summary.contains("| soft_a |"), "{summary}");
+    assert!(
+        summary.contains("stiffness"),
+        "the command line is in the summary"
+    );
+}
+
+#[test]
 fn list_names_the_controllers() {
     let o = lab(&["list"]);
     assert!(o.status.success());
@@ -176,6 +203,16 @@ fn bad_input_exits_2_with_a_clear_message() {
     let err = bad_input(&["pegboard", "--seconds", "0", "--out", out]);
     assert!(err.contains("time limit"), "{err}");
     bad_input(&["pegboard", "--layouts", "many"]);
+    let err = bad_input(&["pegboard", "--variant", "soft", "--out", out]);
+    assert!(err.contains("LABEL=JSON"), "{err}");
+    let err = bad_input(&[
+        "pegboard",
+        "--variant",
+        r#"soft={"amplitude":{"gains":{"stifness":1}}}"#,
+        "--out",
+        out,
+    ]);
+    assert!(err.contains("compliance.amplitude.gains.stifness"), "{err}");
     assert!(
         !dir.path().join("results.csv").exists(),
         "nothing written on bad input"

@@ -8,6 +8,7 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand};
 use snaked::emu::world::scenario::WorldScenario;
 use snaked::lab::board::{Layout, PEG_BOARD_40_TOML};
+use snaked::lab::controllers::LabController;
 use snaked::lab::report::SummaryContext;
 use snaked::lab::runner::{Experiment, RunOptions, run};
 use snaked::lab::trial::TrialConfig;
@@ -35,6 +36,12 @@ struct Pegboard {
     /// Controllers to compare, comma-separated (default: all, see `snake-lab list`).
     #[arg(long, value_delimiter = ',')]
     controllers: Vec<String>,
+    /// A controller with its own gains, LABEL=JSON (repeatable), compared after the
+    /// named ones. JSON is the `compliance` object of the daemon's `params.set`,
+    /// over the full controller a_ws_omega unless it names another (docs/lab.md), e.g.
+    /// 'stiff={"amplitude":{"gains":{"stiffness":8}}}'.
+    #[arg(long = "variant", value_name = "LABEL=JSON")]
+    variants: Vec<String>,
     /// Seeded random layouts of the board: seeds seed-base .. seed-base + N - 1.
     #[arg(long, default_value_t = 20)]
     layouts: usize,
@@ -107,7 +114,7 @@ fn pegboard(args: Pegboard) -> Result<(), LabError> {
     for path in &args.scenarios {
         layouts.push(Layout::from_file(path)?);
     }
-    let controllers = if args.controllers.is_empty() {
+    let names: Vec<String> = if args.controllers.is_empty() {
         SLITHERING_CONTROLLERS
             .iter()
             .map(|s| s.to_string())
@@ -118,6 +125,13 @@ fn pegboard(args: Pegboard) -> Result<(), LabError> {
             .map(|s| s.trim().to_owned())
             .collect()
     };
+    let mut controllers = names
+        .iter()
+        .map(|n| LabController::named(n))
+        .collect::<Result<Vec<_>, _>>()?;
+    for spec in &args.variants {
+        controllers.push(LabController::variant(spec)?);
+    }
     let exp = Experiment {
         controllers,
         layouts,

@@ -2,6 +2,8 @@ use serde_json::json;
 
 use super::*;
 use crate::rt::compliance::Engagement;
+use crate::shape::Centralization;
+use crate::shape::admittance::Compliance;
 
 fn open() -> ComplianceSetting {
     ComplianceSetting::OPEN_LOOP

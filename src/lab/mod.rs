@@ -5,6 +5,7 @@
 //! explicit layouts, several starts each. One concern per file:
 //! - [`board`]: the layouts (seeded boards, explicit scenario files), the board's region,
 //!   when a trial has crossed it.
+//! - [`controllers`]: the compared controllers, named ones and `--variant`s.
 //! - [`trial`]: one trial, world + controller stepped at 1 ms, recorded at 20 Hz.
 //! - [`metrics`]: pure functions from a recorded path to the experiment's figures.
 //! - [`runner`]: the trial plan and its execution across threads, with a progress bar.
@@ -14,6 +15,7 @@
 //! Definitions and the command line are in `docs/lab.md`.
 
 pub mod board;
+pub mod controllers;
 pub mod metrics;
 pub mod plots;
 pub mod report;

@@ -10,16 +10,17 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use super::LabError;
 use super::board::{Board, Layout, trial_seed};
+use super::controllers::LabController;
 use super::metrics::{MetricsConfig, TrialMetrics, trial_metrics};
 use super::trial::{TrialConfig, TrialRecord, run_trial, slithering_setup};
 use crate::emu::world::WorldSpec;
-use crate::shape::{SLITHERING_CONTROLLERS, slithering_controller};
+use crate::shape::SLITHERING_CONTROLLERS;
 
 /// What to run.
 #[derive(Debug, Clone)]
 pub struct Experiment {
-    /// Controller names (as the factory knows them), in report order.
-    pub controllers: Vec<String>,
+    /// The compared controllers, in report order.
+    pub controllers: Vec<LabController>,
     pub layouts: Vec<Layout>,
     /// Starts per layout.
     pub starts: usize,
@@ -64,18 +65,14 @@ pub fn plan(exp: &Experiment) -> Result<Vec<PlannedWorld>, LabError> {
         return Err(LabError::NoControllers { known: known() });
     }
     let (layout, params) = slithering_setup(exp.trial.modules);
-    for (i, name) in exp.controllers.iter().enumerate() {
-        if exp.controllers[..i].contains(name) {
+    for (i, c) in exp.controllers.iter().enumerate() {
+        if exp.controllers[..i].iter().any(|o| o.label == c.label) {
             return Err(LabError::BadValue(format!(
-                "controller {name:?} given twice"
+                "controller {:?} given twice",
+                c.label
             )));
         }
-        if slithering_controller(name, &layout, &params).is_err() {
-            return Err(LabError::UnknownController {
-                name: name.clone(),
-                known: known(),
-            });
-        }
+        c.build(&layout, &params)?;
     }
     if exp.layouts.is_empty() {
         return Err(LabError::NoLayouts);
@@ -122,8 +119,8 @@ pub fn run(exp: &Experiment, opts: RunOptions) -> Result<Vec<TrialResult>, LabEr
     let threads = opts.threads.clamp(1, total.max(1));
     let run_one = |i: usize| {
         let (c, w) = (i / worlds.len(), &worlds[i % worlds.len()]);
-        let name = &exp.controllers[c];
-        let rec = run_trial(name, &w.world, &w.board, w.noise_seed, &exp.trial)?;
+        let controller = &exp.controllers[c];
+        let rec = run_trial(controller, &w.world, &w.board, w.noise_seed, &exp.trial)?;
         let metrics = trial_metrics(
             &rec.centre_m,
             rec.sample_dt_s,
@@ -134,7 +131,7 @@ pub fn run(exp: &Experiment, opts: RunOptions) -> Result<Vec<TrialResult>, LabEr
         );
         let first = w.layout == 0 && w.start == 0;
         Ok(TrialResult {
-            controller: name.clone(),
+            controller: controller.label.clone(),
             layout: exp.layouts[w.layout].name.clone(),
             start: w.start,
             metrics,
@@ -203,7 +200,10 @@ mod tests {
     fn experiment(controllers: &[&str], layouts: usize) -> Experiment {
         let base = WorldScenario::parse(PEG_BOARD_40_TOML).unwrap();
         Experiment {
-            controllers: controllers.iter().map(|s| s.to_string()).collect(),
+            controllers: controllers
+                .iter()
+                .map(|s| LabController::named(s).unwrap())
+                .collect(),
             layouts: (0..layouts as u64)
                 .map(|k| Layout::seeded(&base, 1000 + k))
                 .collect(),
@@ -218,9 +218,16 @@ mod tests {
     #[test]
     fn plan_checks_its_input() {
         assert!(matches!(
-            plan(&experiment(&["open_loop", "bogus"], 1)),
+            LabController::named("bogus"),
             Err(LabError::UnknownController { name, known }) if name == "bogus" && known.contains("open_loop")
         ));
+        // A variant whose amplitude range excludes the nominal amplitude.
+        let mut e = experiment(&["open_loop"], 1);
+        e.controllers.push(
+            LabController::variant(r#"narrow={"amplitude":{"gains":{"min":0.1,"max":0.2}}}"#)
+                .unwrap(),
+        );
+        assert!(matches!(plan(&e), Err(LabError::BadValue(m)) if m.contains("narrow")));
         assert!(matches!(
             plan(&experiment(&[], 1)),
             Err(LabError::NoControllers { .. })

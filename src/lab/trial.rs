@@ -4,13 +4,14 @@
 
 use super::LabError;
 use super::board::Board;
+use super::controllers::LabController;
 use crate::emu::Plant;
 use crate::emu::world::WorldSpec;
 use crate::emu::world::physics::{PhysicsConfig, PhysicsPlant};
 use crate::emu::world::scenario::MODULE_LENGTH_M;
 use crate::gait::{BodyLayout, GaitKind, GaitParams, Plane};
 use crate::protocol::Command;
-use crate::shape::{Measured, slithering_controller};
+use crate::shape::Measured;
 
 /// How a trial runs.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -84,7 +85,7 @@ pub fn slithering_setup(modules: usize) -> (BodyLayout, GaitParams) {
 /// Runs `controller` in `world` until the front half crosses `board` or the time limit.
 /// Deterministic given `noise_seed` (the plant's sensor noise).
 pub fn run_trial(
-    controller: &str,
+    controller: &LabController,
     world: &WorldSpec,
     board: &Board,
     noise_seed: u64,
@@ -92,19 +93,14 @@ pub fn run_trial(
 ) -> Result<TrialRecord, LabError> {
     let n = config.modules;
     let (layout, params) = slithering_setup(n);
-    let mut ctrl = slithering_controller(controller, &layout, &params).map_err(|_| {
-        LabError::UnknownController {
-            name: controller.to_owned(),
-            known: crate::shape::SLITHERING_CONTROLLERS.join(", "),
-        }
-    })?;
+    let mut ctrl = controller.build(&layout, &params)?;
     let physics = PhysicsConfig {
         modules: n,
         seed: noise_seed,
         ..PhysicsConfig::default()
     };
     let mut plant = PhysicsPlant::new(world, physics).map_err(|source| LabError::Physics {
-        trial: format!("{controller} (seed {noise_seed})"),
+        trial: format!("{} (seed {noise_seed})", controller.label),
         source,
     })?;
 
@@ -256,7 +252,8 @@ mod tests {
             limit_s: 0.5,
             ..TrialConfig::default()
         };
-        let rec = run_trial("open_loop", &world, &board, 7, &config).unwrap();
+        let open_loop = LabController::named("open_loop").unwrap();
+        let rec = run_trial(&open_loop, &world, &board, 7, &config).unwrap();
         assert!(!rec.success);
         assert!((rec.seconds - 0.5).abs() < 1e-9);
         assert_eq!(rec.centre_m.len(), 11, "t = 0 and every 50 ms");
@@ -264,12 +261,8 @@ mod tests {
         assert_ne!(rec.start_links_m, rec.end_links_m, "the body moved");
         assert_eq!(rec.temporal_freq_rad_s, 1.0);
         assert_eq!(rec.signal_names.len(), rec.signals.len());
-        let again = run_trial("open_loop", &world, &board, 7, &config).unwrap();
+        let again = run_trial(&open_loop, &world, &board, 7, &config).unwrap();
         assert_eq!(rec, again, "deterministic");
-        assert!(matches!(
-            run_trial("nope", &world, &board, 7, &config),
-            Err(LabError::UnknownController { .. })
-        ));
     }
 
     #[test]
@@ -288,7 +281,8 @@ mod tests {
             limit_s: 2.0,
             ..TrialConfig::default()
         };
-        let rec = run_trial("open_loop", &world, &board, 1, &config).unwrap();
+        let open_loop = LabController::named("open_loop").unwrap();
+        let rec = run_trial(&open_loop, &world, &board, 1, &config).unwrap();
         assert!(rec.success);
         assert!((rec.seconds - 0.05).abs() < 1e-9, "{}", rec.seconds);
     }

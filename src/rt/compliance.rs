@@ -122,19 +122,28 @@ impl ComplianceSetting {
         if self.is_open_loop() {
             return Ok(ControllerChange::OpenLoop);
         }
-        let controller: Box<dyn JointController> = match self.config {
-            Some(config) => Box::new(CompliantSlithering::new(
+        Ok(ControllerChange::Install(InstalledController {
+            controller: self.controller(layout, params)?,
+            setting: *self,
+        }))
+    }
+
+    /// The controller itself, open loop included (allocates). The lab runs these.
+    pub fn controller(
+        &self,
+        layout: &BodyLayout,
+        params: &GaitParams,
+    ) -> Result<Box<dyn JointController>, String> {
+        self.check(params)?;
+        match self.config {
+            Some(config) => Ok(Box::new(CompliantSlithering::new(
                 self.controller,
                 layout,
                 params,
                 config,
-            )?),
-            None => slithering_controller(self.controller, layout, params)?,
-        };
-        Ok(ControllerChange::Install(InstalledController {
-            controller,
-            setting: *self,
-        }))
+            )?)),
+            None => slithering_controller(self.controller, layout, params),
+        }
     }
 }
 

@@ -2,6 +2,7 @@
 //! and telemetry that connect it to the rest of the daemon.
 
 pub mod compliance;
+pub mod compliance_json;
 pub mod control_loop;
 pub mod harness;
 pub mod messages;
