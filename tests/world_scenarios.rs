@@ -27,6 +27,7 @@ fn every_example_scenario_generates() {
         names,
         [
             "flat.toml",
+            "peg-board-40-inside.toml",
             "peg-board-40.toml",
             "peg-row.toml",
             "pole.toml",

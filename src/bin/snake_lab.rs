@@ -7,7 +7,7 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 use snaked::emu::world::scenario::WorldScenario;
-use snaked::lab::board::{Layout, PEG_BOARD_40_TOML};
+use snaked::lab::board::{Layout, PEG_BOARD_TOML};
 use snaked::lab::controllers::LabController;
 use snaked::lab::report::SummaryContext;
 use snaked::lab::runner::{Experiment, RunOptions, run};
@@ -52,7 +52,8 @@ struct Pegboard {
     #[arg(long, default_value_t = 1000)]
     seed_base: u64,
     /// World scenario the seeded layouts come from (default: the built-in
-    /// scenarios/peg-board-40.toml).
+    /// scenarios/peg-board-40-inside.toml, starts among the pegs as in the thesis;
+    /// scenarios/peg-board-40.toml starts at the board's edge).
     #[arg(long, value_name = "FILE")]
     board: Option<PathBuf>,
     /// An explicit layout: a world scenario file, run as is (repeatable).
@@ -106,7 +107,7 @@ fn pegboard(args: Pegboard) -> Result<(), LabError> {
     };
     let base = match &args.board {
         Some(path) => WorldScenario::load(path)?,
-        None => WorldScenario::parse(PEG_BOARD_40_TOML)?,
+        None => WorldScenario::parse(PEG_BOARD_TOML)?,
     };
     let mut layouts: Vec<Layout> = (0..args.layouts as u64)
         .map(|k| Layout::seeded(&base, args.seed_base.wrapping_add(k)))

@@ -12,9 +12,13 @@ use super::LabError;
 use crate::emu::world::WorldSpec;
 use crate::emu::world::scenario::{Region, WorldScenario};
 
-/// The experiment's board (`scenarios/peg-board-40.toml`), built in so the binary runs
-/// from any directory.
-pub const PEG_BOARD_40_TOML: &str = include_str!("../../scenarios/peg-board-40.toml");
+/// The experiment's default board (`scenarios/peg-board-40-inside.toml`: the thesis's
+/// protocol, starts among the pegs), built in so the binary runs from any directory.
+pub const PEG_BOARD_TOML: &str = include_str!("../../scenarios/peg-board-40-inside.toml");
+
+/// The same board with starts at its edge, the body behind it off the board
+/// (`scenarios/peg-board-40.toml`).
+pub const PEG_BOARD_EDGE_TOML: &str = include_str!("../../scenarios/peg-board-40.toml");
 
 /// One peg layout of the experiment.
 #[derive(Debug, Clone)]
@@ -197,10 +201,20 @@ mod tests {
 
     #[test]
     fn the_experiment_board_region_is_its_peg_board() {
-        let s = WorldScenario::parse(PEG_BOARD_40_TOML).unwrap();
+        let s = WorldScenario::parse(PEG_BOARD_TOML).unwrap();
         let l = Layout::seeded(&s, 1000);
         let (world, b) = l.world(18, 0).unwrap();
         assert_eq!(world.pegs.len(), 40);
+        // The default starts among the pegs, the edge board at the edge; same pegs.
+        assert!(
+            (1.0..=1.3).contains(&world.start.head_m[0]),
+            "{:?}",
+            world.start
+        );
+        let edge = WorldScenario::parse(PEG_BOARD_EDGE_TOML).unwrap();
+        let (edge_world, _) = Layout::seeded(&edge, 1000).world(18, 0).unwrap();
+        assert_eq!(edge_world.pegs, world.pegs);
+        assert!(edge_world.start.head_m[0] < 0.5);
         assert_eq!(b.region.x_m, [0.0, 2.0]);
         assert_eq!(b.region.y_m, [-0.6, 0.6]);
         assert_eq!(b.entry, Edge::XMin);

@@ -195,10 +195,10 @@ fn progress_bar(total: usize, show: bool) -> ProgressBar {
 mod tests {
     use super::*;
     use crate::emu::world::scenario::WorldScenario;
-    use crate::lab::board::PEG_BOARD_40_TOML;
+    use crate::lab::board::PEG_BOARD_TOML;
 
     fn experiment(controllers: &[&str], layouts: usize) -> Experiment {
-        let base = WorldScenario::parse(PEG_BOARD_40_TOML).unwrap();
+        let base = WorldScenario::parse(PEG_BOARD_TOML).unwrap();
         Experiment {
             controllers: controllers
                 .iter()
