@@ -14,11 +14,13 @@
 
 pub mod bus;
 pub mod control;
+pub mod controller;
 pub mod daemon;
 pub mod emu;
 pub mod gait;
 pub mod lab;
 pub mod protocol;
+pub mod record;
 pub mod rt;
 pub mod safety;
 pub mod shape;

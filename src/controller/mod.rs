@@ -1,0 +1,8 @@
+//! The controller seam: what every controller offers the loop (engaged from a
+//! handover, stepped as a pure function of time and an observation, reporting named
+//! signals), the typed configurations and the one registry of controllers. The
+//! runtime (`rt/`), the socket, `snakectl` and the lab know controllers only through
+//! this module. See `docs/architecture.md`.
+
+pub mod catalog;
+pub mod report;
