@@ -1,8 +1,10 @@
 //! Cost of one step of the slithering controllers (torques in, set-points out) for
 //! N = 18 and how it grows up to N = 1024 modules.
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
+use snaked::controller::registry::{BuildContext, Selection, build};
+use snaked::controller::testing::{ObservationBuf, engage_at};
+use snaked::controllers::REGISTRY;
 use snaked::gait::{BodyLayout, GaitKind, GaitParams, Plane};
-use snaked::shape::{Measured, slithering_controller};
 
 fn shape_step(c: &mut Criterion) {
     let mut group = c.benchmark_group("shape_step");
@@ -20,7 +22,16 @@ fn shape_step(c: &mut Criterion) {
                 continue; // O(N²): one parameter per joint, each felt along the body
             }
             let layout = BodyLayout::alternating(n, Plane::Lateral, 0.064);
-            let mut ctl = slithering_controller(name, &layout, &params).unwrap();
+            let ctx = BuildContext {
+                gait: GaitKind::Slithering,
+                layout: &layout,
+                params: &params,
+            };
+            let mut ctl = build(REGISTRY, &Selection::named(name), &ctx)
+                .expect("a registered name")
+                .controller;
+            engage_at(ctl.as_mut(), &layout, &params, 0.0);
+            let buf = ObservationBuf::new(n);
             let pos = vec![0.0; n];
             let tau: Vec<f64> = (0..n).map(|i| ((i % 7) as f64 - 3.0) * 0.8).collect();
             let mut out = vec![0.0; n];
@@ -28,14 +39,7 @@ fn shape_step(c: &mut Criterion) {
             group.bench_function(BenchmarkId::new(name, n), |b| {
                 b.iter(|| {
                     t += 1e-3;
-                    ctl.step(
-                        t,
-                        &Measured {
-                            position_rad: &pos,
-                            torque_nm: &tau,
-                        },
-                        &mut out,
-                    );
+                    ctl.step(t, &buf.observe(&pos, &tau), &mut out);
                 })
             });
         }

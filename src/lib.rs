@@ -15,6 +15,7 @@
 pub mod bus;
 pub mod control;
 pub mod controller;
+pub mod controllers;
 pub mod daemon;
 pub mod emu;
 pub mod gait;

@@ -36,11 +36,11 @@ fn a_bad_configuration_is_named_and_exits_non_zero() {
     assert!(err.contains("slithering"), "{err}");
     // A compliant spatial frequency must comply around the nominal one.
     let (code, err) = run_with_config(
-        "[gait]\nslithering_controller = \"a_ws\"\n[gait.params.slithering]\nspatial_freq_rad = 15.0\n",
+        "[gait.controllers.slithering]\ncontroller = \"a_ws\"\n[gait.params.slithering]\nspatial_freq_rad = 15.0\n",
     );
-    assert_ne!(code, 0, "{err}");
+    assert_eq!(code, 2, "{err}");
     assert!(
-        err.contains("gait.slithering_controller") && err.contains("spatial_freq_rad"),
+        err.contains("gait.controllers.slithering") && err.contains("spatial_freq_rad"),
         "{err}"
     );
 }

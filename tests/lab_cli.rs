@@ -212,7 +212,10 @@ fn bad_input_exits_2_with_a_clear_message() {
         "--out",
         out,
     ]);
-    assert!(err.contains("compliance.amplitude.gains.stifness"), "{err}");
+    assert!(
+        err.contains("config.amplitude.gains") && err.contains("stifness"),
+        "{err}"
+    );
     assert!(
         !dir.path().join("results.csv").exists(),
         "nothing written on bad input"

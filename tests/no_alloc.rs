@@ -4,8 +4,10 @@
 //! can run in parallel.
 
 use snaked::bus::echo::EchoBus;
+use snaked::controller::registry::{BuildContext, for_gait};
+use snaked::controllers::REGISTRY;
 use snaked::gait::{GaitKind, GaitTable, ParamPatch};
-use snaked::rt::compliance::{ComplianceSetting, ControllerChange, Engagement};
+use snaked::rt::controller_slots::{Engagement, Installed};
 use snaked::rt::harness::{Harness, PERIOD_NS, echo_harness, echo_harness_on};
 use snaked::rt::messages::{Envelope, LoopRequest};
 use snaked::safety::failsafe::{FailsafeConfig, Mode};
@@ -70,12 +72,13 @@ fn pegs(i: usize, position_rad: f32) -> f32 {
     }
 }
 
-/// A compliant controller takes over (windows born and dropped, torques shaping
-/// them), is replaced, hands back to another gait and to hold, takes over again; then
-/// the CPG, then open loop. None of it allocates or frees in the loop: controllers are
-/// built before and freed after, off the loop.
+/// Every registered controller, every preset, on every gait it runs: installed while
+/// running, taking over after the hand-back blend, stepped with torques coming in
+/// (windows born and dropped), replaced by the next; for compliant slithering also
+/// handing back to another gait and to hold, and taking over again. None of it
+/// allocates or frees in the loop: controllers are built before and freed after.
 #[test]
-fn compliant_slithering_allocates_nothing() {
+fn every_registered_controller_in_the_loop_allocates_nothing() {
     let mut table = GaitTable::default();
     // A faster wave: windows are born and dropped every ~1 s.
     table.get_mut(GaitKind::Slithering).temporal_freq_rad_s = 3.0;
@@ -87,20 +90,6 @@ fn compliant_slithering_allocates_nothing() {
         false,
         FailsafeConfig::default(),
     );
-    let params = *table.get(GaitKind::Slithering);
-    let build = |name: &str| {
-        ComplianceSetting::named(name)
-            .unwrap()
-            .build(&h.layout, &params)
-            .unwrap()
-    };
-    let mut changes = vec![
-        build("a_ws_omega"),
-        build("a_ws_omega_per_joint"),
-        build("cpg"),
-        ControllerChange::OpenLoop,
-    ]
-    .into_iter();
     steps(&mut h, 100);
     let mut ticket = 0;
     let mut send = |h: &mut Harness, request: LoopRequest, controller| {
@@ -112,60 +101,70 @@ fn compliant_slithering_allocates_nothing() {
         };
         h.requests.try_send(envelope).unwrap();
     };
-
     let mut calls = 0;
-    let full = changes.next();
-    calls += allocator_calls(|| {
-        send(&mut h, LoopRequest::SetCompliance, full);
-        steps(&mut h, 7000);
-    });
-    let snap = h.telemetry.latest();
-    let c = &snap.compliance;
-    assert_eq!(
-        (c.setting.controller, c.engagement),
-        ("a_ws_omega", Engagement::Engaged)
-    );
-    assert!(c.windows_born >= 2 && c.windows_dropped >= 2, "{c:?}");
-    let forces = &c.report.fields[0].force[..c.report.fields[0].len()];
-    assert!(forces.iter().any(|f| f.abs() > 0.01), "{forces:?}");
-
-    let per_joint = changes.next();
-    calls += allocator_calls(|| {
-        send(&mut h, LoopRequest::SetCompliance, per_joint);
-        steps(&mut h, 2500);
-        send(&mut h, LoopRequest::SetGait(GaitKind::Rolling), None);
-        steps(&mut h, 700);
-        send(&mut h, LoopRequest::SetGait(GaitKind::Slithering), None);
-        steps(&mut h, 2500);
-        send(&mut h, LoopRequest::Hold, None);
-        steps(&mut h, 100);
-        send(&mut h, LoopRequest::Arm, None);
-        steps(&mut h, 2500);
-    });
-    let snap = h.telemetry.latest();
-    assert_eq!(snap.mode, Mode::Running);
-    let c = &snap.compliance;
-    assert_eq!(
-        (c.setting.controller, c.engagement),
-        ("a_ws_omega_per_joint", Engagement::Engaged)
-    );
-    assert_eq!(
-        c.takeovers, 3,
-        "after the swap, back from rolling, after hold"
-    );
-
-    let (cpg, open) = (changes.next(), changes.next());
-    calls += allocator_calls(|| {
-        send(&mut h, LoopRequest::SetCompliance, cpg);
-        steps(&mut h, 2500);
-        send(&mut h, LoopRequest::SetCompliance, open);
-        steps(&mut h, 500);
-        while h.acks.try_recv().is_ok() {}
-    });
+    let mut runs = 0;
+    let layout = h.layout.clone();
+    for gait in GaitKind::ALL {
+        let ctx = BuildContext {
+            gait,
+            layout: &layout,
+            params: table.get(gait),
+        };
+        calls += allocator_calls(|| {
+            send(&mut h, LoopRequest::SetGait(gait), None);
+            steps(&mut h, 2100);
+        });
+        for family in for_gait(REGISTRY, gait) {
+            for (preset, _) in family.presets() {
+                let built = family.build(preset, None, &ctx).unwrap();
+                let info = h.catalog.insert(built.info);
+                let c = Installed {
+                    id: info.id,
+                    controller: built.controller,
+                };
+                let compliant = family.name() == "compliant_slithering";
+                calls += allocator_calls(|| {
+                    send(&mut h, LoopRequest::SetController(gait), Some(c));
+                    steps(&mut h, 4500);
+                    if compliant && *preset == "a_ws_omega" {
+                        send(&mut h, LoopRequest::SetGait(GaitKind::Rolling), None);
+                        steps(&mut h, 700);
+                        send(&mut h, LoopRequest::SetGait(gait), None);
+                        steps(&mut h, 2500);
+                        send(&mut h, LoopRequest::Hold, None);
+                        steps(&mut h, 100);
+                        send(&mut h, LoopRequest::Arm, None);
+                        steps(&mut h, 2500);
+                    }
+                    while h.acks.try_recv().is_ok() {}
+                });
+                let snap = h.telemetry.latest();
+                let what = format!("{gait:?} {}/{preset}", family.name());
+                assert_eq!(snap.mode, Mode::Running, "{what}");
+                let ctl = &snap.controller;
+                assert_eq!(
+                    (ctl.active_id, ctl.engagement),
+                    (info.id, Engagement::Engaged),
+                    "{what}"
+                );
+                if compliant && *preset == "a_ws_omega" {
+                    assert_eq!(ctl.takeovers, 3, "after install, back from rolling, hold");
+                    let born = ctl.report.signals[4];
+                    assert!(
+                        born >= 1.0,
+                        "windows were born since the last takeover: {born}"
+                    );
+                }
+                assert_eq!(snap.guard.non_finite, 0, "{what}");
+                // Freed here, off the loop.
+                while let Ok(old) = h.retired.try_recv() {
+                    drop(old);
+                }
+                runs += 1;
+            }
+        }
+    }
     assert_eq!(calls, 0, "{calls} allocator calls in the real-time path");
-    let snap = h.telemetry.latest();
-    assert_eq!(snap.compliance.engagement, Engagement::Off);
-    assert_eq!(snap.compliance.freed_in_loop, 0);
-    let retired: Vec<_> = h.retired.try_iter().map(|c| c.name()).collect();
-    assert_eq!(retired, ["a_ws_omega", "a_ws_omega_per_joint", "cpg"]);
+    assert!(runs >= 13, "every family's presets: {runs}");
+    assert_eq!(h.telemetry.latest().controller.freed_in_loop, 0);
 }

@@ -7,13 +7,14 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 use snaked::emu::world::scenario::WorldScenario;
+use snaked::gait::GaitKind;
+use snaked::lab::PEGBOARD_CONTROLLERS;
 use snaked::lab::board::{Layout, PEG_BOARD_TOML};
 use snaked::lab::controllers::LabController;
 use snaked::lab::report::SummaryContext;
 use snaked::lab::runner::{Experiment, RunOptions, run};
 use snaked::lab::trial::TrialConfig;
 use snaked::lab::{LabError, write_report};
-use snaked::shape::SLITHERING_CONTROLLERS;
 
 /// Controller comparisons for the snake robot in simulation (docs/lab.md).
 #[derive(Debug, Parser)]
@@ -25,7 +26,7 @@ struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Cmd {
-    /// List the slithering controllers, in report order.
+    /// List the peg-board experiment's controllers, in report order.
     List,
     /// The slithering peg-board experiment (SPEC §5).
     Pegboard(Pegboard),
@@ -36,9 +37,10 @@ struct Pegboard {
     /// Controllers to compare, comma-separated (default: all, see `snake-lab list`).
     #[arg(long, value_delimiter = ',')]
     controllers: Vec<String>,
-    /// A controller with its own gains, LABEL=JSON (repeatable), compared after the
-    /// named ones. JSON is the `compliance` object of the daemon's `params.set`,
-    /// over the full controller a_ws_omega unless it names another (docs/lab.md), e.g.
+    /// A controller with its own configuration, LABEL=JSON (repeatable), compared after
+    /// the named ones. JSON is a selection as `controller.set` takes it
+    /// ({"controller", "preset", "config"}), over the full controller a_ws_omega unless
+    /// it names another; other keys override the configuration (docs/lab.md), e.g.
     /// 'stiff={"amplitude":{"gains":{"stiffness":8}}}'.
     #[arg(long = "variant", value_name = "LABEL=JSON")]
     variants: Vec<String>,
@@ -77,7 +79,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.cmd {
         Cmd::List => {
-            for name in SLITHERING_CONTROLLERS {
+            for name in PEGBOARD_CONTROLLERS {
                 println!("{name}");
             }
             Ok(())
@@ -116,10 +118,7 @@ fn pegboard(args: Pegboard) -> Result<(), LabError> {
         layouts.push(Layout::from_file(path)?);
     }
     let names: Vec<String> = if args.controllers.is_empty() {
-        SLITHERING_CONTROLLERS
-            .iter()
-            .map(|s| s.to_string())
-            .collect()
+        PEGBOARD_CONTROLLERS.iter().map(|s| s.to_string()).collect()
     } else {
         args.controllers
             .iter()
@@ -128,10 +127,10 @@ fn pegboard(args: Pegboard) -> Result<(), LabError> {
     };
     let mut controllers = names
         .iter()
-        .map(|n| LabController::named(n))
+        .map(|n| LabController::named(GaitKind::Slithering, n))
         .collect::<Result<Vec<_>, _>>()?;
     for spec in &args.variants {
-        controllers.push(LabController::variant(spec)?);
+        controllers.push(LabController::variant(GaitKind::Slithering, spec)?);
     }
     let exp = Experiment {
         controllers,

@@ -2,8 +2,8 @@
 //!
 //! Exit status: 0 success, 1 the daemon answered with an error, 2 usage error,
 //! 3 cannot reach the daemon (not running, connection lost, no answer).
-#[path = "snakectl/compliance.rs"]
-mod compliance;
+#[path = "snakectl/controller.rs"]
+mod controller;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -49,6 +49,11 @@ enum Cmd {
         #[command(subcommand)]
         cmd: ParamsCmd,
     },
+    /// List, show or choose each gait's controller.
+    Controller {
+        #[command(subcommand)]
+        cmd: ControllerCmd,
+    },
     /// Freeze the joints where they are.
     Hold,
     /// Stop driving the joints.
@@ -85,18 +90,39 @@ enum GaitCmd {
 }
 
 #[derive(Subcommand, Debug)]
+enum ControllerCmd {
+    /// Every gait's controllers with their presets and signals (or one gait's).
+    List { gait: Option<String> },
+    /// What each gait runs, with its configuration (or one gait).
+    Get { gait: Option<String> },
+    /// Run controller NAME (a controller or a preset) for GAIT, e.g.
+    /// `controller set slithering a_ws_omega amplitude.gains.stiffness=6`.
+    Set {
+        gait: String,
+        name: String,
+        /// A preset of the controller.
+        #[arg(long)]
+        preset: Option<String>,
+        /// Configuration overrides as a JSON object.
+        #[arg(long, value_name = "JSON")]
+        config: Option<String>,
+        /// Configuration overrides, KEY.PATH=VALUE (merged onto --config).
+        #[arg(value_name = "KEY=VALUE", allow_hyphen_values = true)]
+        assignments: Vec<String>,
+    },
+}
+
+#[derive(Subcommand, Debug)]
 enum ParamsCmd {
     /// One gait's parameters, or all of them.
     Get { gait: Option<String> },
-    /// `params set GAIT key=value ...`, `params set slithering --compliance C` or
-    /// `params set --blend-time S`.
+    /// `params set GAIT key=value ...` or `params set --blend-time S`.
     Set {
         /// Gait blend time, s (0.1..=30).
         #[arg(long, value_name = "S", conflicts_with_all = ["gait", "assignments", "compliance"])]
         blend_time: Option<f64>,
-        /// Slithering's controller: a name (open_loop, a, a_ws, a_ws_omega, ..., cpg) or
-        /// a JSON object such as '{"controller":"a_ws","amplitude":{"gains":{"stiffness":6}}}'.
-        #[arg(long, value_name = "NAME|JSON")]
+        /// Replaced by `snakectl controller set GAIT NAME` (refused with that hint).
+        #[arg(long, value_name = "NAME|JSON", hide = true)]
         compliance: Option<String>,
         #[arg(required_unless_present = "blend_time")]
         gait: Option<String>,
@@ -189,6 +215,38 @@ fn request(cmd: &Cmd) -> Result<(&str, Option<Value>), Failure> {
             "params.set",
             Some(params_set(*blend_time, compliance, gait, assignments)?),
         ),
+        Cmd::Controller {
+            cmd: ControllerCmd::List { gait },
+        } => (
+            "controller.list",
+            gait.as_ref().map(|g| json!({ "gait": g })),
+        ),
+        Cmd::Controller {
+            cmd: ControllerCmd::Get { gait },
+        } => (
+            "controller.get",
+            gait.as_ref().map(|g| json!({ "gait": g })),
+        ),
+        Cmd::Controller {
+            cmd:
+                ControllerCmd::Set {
+                    gait,
+                    name,
+                    preset,
+                    config,
+                    assignments,
+                },
+        } => {
+            let mut p = json!({ "gait": gait, "controller": name });
+            if let Some(preset) = preset {
+                p["preset"] = json!(preset);
+            }
+            if config.is_some() || !assignments.is_empty() {
+                p["config"] = controller::config_overrides(config.as_deref(), assignments)
+                    .map_err(Failure::Usage)?;
+            }
+            ("controller.set", Some(p))
+        }
         Cmd::Hold => ("hold", None),
         Cmd::Limp => ("limp", None),
         Cmd::Estop => ("estop", None),
@@ -220,15 +278,13 @@ fn params_set(
     let mut p = Map::new();
     p.insert("gait".into(), json!(gait));
     if let Some(c) = compliance {
-        p.insert(
-            "compliance".into(),
-            compliance::arg(c).map_err(Failure::Usage)?,
-        );
+        return Err(Failure::Usage(format!(
+            "--compliance was replaced: snakectl controller set {} {c}",
+            gait.as_deref().unwrap_or("GAIT")
+        )));
     } else if assignments.is_empty() {
         return Err(Failure::Usage(
-            "give at least one KEY=VALUE, e.g. amplitude_lat_rad=0.6 (or, for slithering, \
-             --compliance NAME)"
-                .into(),
+            "give at least one KEY=VALUE, e.g. amplitude_lat_rad=0.6".into(),
         ));
     }
     for a in assignments {
@@ -306,16 +362,18 @@ fn print_human(cmd: &Cmd, r: &Value) {
                 print_params(&r["params"], "  ");
             }
             println!("blend_time_s  {}", num(&r["blend_time_s"], 2));
-            compliance::print_setting(&r["compliance"]);
         }
         Cmd::Params { .. } => match r.get("blend_time_s") {
             Some(t) => println!("blend_time_s = {}", num(t, 2)),
             None => {
                 println!("{} (applied)", text(&r["gait"]));
                 print_params(&r["params"], "  ");
-                compliance::print_setting(&r["compliance"]);
             }
         },
+        Cmd::Controller {
+            cmd: ControllerCmd::List { .. },
+        } => controller::print_list(r),
+        Cmd::Controller { .. } => controller::print_installed(r),
         Cmd::Stats => print_stats(r),
         _ => println!("ok"),
     }
@@ -371,7 +429,7 @@ fn print_status(r: &Value) {
     );
     println!("position  {}", joined(&j["position_rad"], 2));
     println!("torque    {}", joined(&j["torque_nm"], 2));
-    compliance::print_status(&r["compliance"]);
+    controller::print_status(&r["controller"]);
     println!("daemon    snaked {}", text(&d["version"]));
 }
 

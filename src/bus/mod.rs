@@ -102,4 +102,9 @@ pub trait Bus: Send {
     fn counters(&self) -> BusCounters;
     /// Hand the modules back (release the session). Called once at shutdown.
     fn release(&mut self) {}
+    /// The simulated plant behind an in-process bus, for ground truth (the lab's
+    /// metrics, the recorder's 3-D scene); `None` for real modules.
+    fn plant(&self) -> Option<&dyn crate::emu::Plant> {
+        None
+    }
 }

@@ -127,6 +127,10 @@ impl Bus for SimBus {
         self.counters
     }
 
+    fn plant(&self) -> Option<&dyn Plant> {
+        Some(self.plant.as_ref())
+    }
+
     fn release(&mut self) {
         self.commands.fill(Command::LIMP);
         self.last_send_s = None;

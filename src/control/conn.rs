@@ -6,63 +6,19 @@
 //! telemetry messages never wait: when the queue is full they are dropped and
 //! counted, so a slow subscriber costs nobody else anything.
 use std::sync::Arc;
-use std::sync::atomic::{AtomicU64, Ordering};
-use std::time::Duration;
 
 use serde_json::Value;
 use tokio::io::{AsyncRead, AsyncWrite, AsyncWriteExt, BufWriter};
 use tokio::sync::mpsc;
-use tokio::task::JoinHandle;
-use tokio::time::MissedTickBehavior;
 
 use super::api::{self, RpcError, code};
 use super::lines::{Line, LineReader};
 use super::methods;
-use super::server::Shared;
-use super::views;
-use crate::rt::telemetry::TelemetryReader;
+use super::session::Session;
+use super::shared::Shared;
 
 /// Lines queued for one client's writer.
 const OUT_QUEUE: usize = 32;
-
-/// Per-connection state the methods can change.
-pub(crate) struct Session {
-    out: mpsc::Sender<String>,
-    stream: Option<JoinHandle<()>>,
-    /// Set by `telemetry.subscribe`; started after its answer is queued.
-    pending_rate_hz: Option<f64>,
-    /// Telemetry messages dropped because this client read too slowly.
-    dropped: Arc<AtomicU64>,
-}
-
-impl Session {
-    pub(crate) fn subscribe_after_answer(&mut self, rate_hz: f64) {
-        self.pending_rate_hz = Some(rate_hz);
-    }
-
-    /// Stop the stream (if any); returns the messages dropped so far.
-    pub(crate) async fn unsubscribe(&mut self) -> u64 {
-        if let Some(task) = self.stream.take() {
-            task.abort();
-            // Wait until it has really stopped: nothing of it may follow our answer.
-            let _ = task.await;
-        }
-        self.dropped.load(Ordering::Relaxed)
-    }
-
-    async fn start_pending(&mut self, telemetry: &TelemetryReader) {
-        if let Some(rate_hz) = self.pending_rate_hz.take() {
-            self.unsubscribe().await;
-            self.dropped.store(0, Ordering::Relaxed);
-            self.stream = Some(tokio::spawn(stream_telemetry(
-                telemetry.clone(),
-                Duration::from_secs_f64(1.0 / rate_hz),
-                self.out.clone(),
-                self.dropped.clone(),
-            )));
-        }
-    }
-}
 
 /// Serve one client until it closes (or the runtime shuts down).
 pub(crate) async fn serve<S>(stream: S, shared: Arc<Shared>)
@@ -73,12 +29,7 @@ where
     let (out, out_rx) = mpsc::channel::<String>(OUT_QUEUE);
     let writer = tokio::spawn(write_lines(write_half, out_rx));
     let mut reader = LineReader::new(read_half, shared.max_line_bytes);
-    let mut session = Session {
-        out,
-        stream: None,
-        pending_rate_hz: None,
-        dropped: Arc::default(),
-    };
+    let mut session = Session::new(out);
     loop {
         let answer = match reader.next().await {
             Ok(Line::Complete) if reader.line().iter().all(u8::is_ascii_whitespace) => continue,
@@ -96,17 +47,19 @@ where
             Ok(Line::Eof) => {
                 // Half-closed (`echo '...subscribe...' | socat`): a subscriber keeps
                 // its stream until the peer closes completely and the writer fails.
-                if let Some(stream) = session.stream.take() {
+                if let Some(stream) = session.take_stream() {
                     let _ = stream.await;
                 }
                 break;
             }
             Err(_) => break,
         };
-        if session.out.send(answer).await.is_err() {
+        if session.send(answer).await.is_err() {
             break; // The writer stopped: the peer is gone.
         }
-        session.start_pending(&shared.telemetry).await;
+        session
+            .start_pending(&shared.telemetry, &shared.catalog)
+            .await;
     }
     session.unsubscribe().await;
     drop(session); // Closes the queue: the writer flushes what is left and ends.
@@ -136,25 +89,4 @@ async fn write_lines<W: AsyncWrite + Unpin>(w: W, mut rx: mpsc::Receiver<String>
     }
     let _ = w.flush().await;
     let _ = w.shutdown().await;
-}
-
-async fn stream_telemetry(
-    telemetry: TelemetryReader,
-    period: Duration,
-    out: mpsc::Sender<String>,
-    dropped: Arc<AtomicU64>,
-) {
-    let mut ticks = tokio::time::interval(period);
-    ticks.set_missed_tick_behavior(MissedTickBehavior::Skip);
-    loop {
-        ticks.tick().await;
-        let line = api::stream_line("telemetry", &views::telemetry(&telemetry.latest()));
-        match out.try_send(line) {
-            Ok(()) => {}
-            Err(mpsc::error::TrySendError::Full(_)) => {
-                dropped.fetch_add(1, Ordering::Relaxed);
-            }
-            Err(mpsc::error::TrySendError::Closed(_)) => return,
-        }
-    }
 }

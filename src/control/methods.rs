@@ -5,20 +5,24 @@ use std::sync::Arc;
 use serde_json::{Value, json};
 
 use super::api::{PATCH_FIELDS, Params, RpcError, code};
-use super::compliance;
-use super::conn::Session;
-use super::server::Shared;
+use super::controllers;
+use super::session::Session;
+use super::shared::Shared;
 use super::views;
+use crate::controller::Selection;
 use crate::gait::{GaitKind, ParamPatch};
 use crate::rt::messages::LoopRequest;
 
 /// Every method the server knows (listed in the unknown-method error).
-pub const METHODS: [&str; 13] = [
+pub const METHODS: [&str; 16] = [
     "status",
     "gait.list",
     "gait.set",
     "params.get",
     "params.set",
+    "controller.list",
+    "controller.get",
+    "controller.set",
     "hold",
     "limp",
     "estop",
@@ -48,7 +52,11 @@ pub(crate) async fn dispatch(
         }
         "status" => {
             p.finish(&[])?;
-            Ok(views::status(&shared.telemetry.latest(), &shared.info))
+            Ok(views::status(
+                &shared.telemetry.latest(),
+                &shared.info,
+                &shared.catalog,
+            ))
         }
         "gait.list" => {
             p.finish(&[])?;
@@ -64,13 +72,34 @@ pub(crate) async fn dispatch(
             let gait = p.take_gait("gait")?;
             p.finish(&["gait"])?;
             let s = shared.telemetry.latest();
-            let mut v = views::params(&s.params, s.blend_time_s, gait);
-            if gait.is_none_or(|g| g == GaitKind::Slithering) {
-                v["compliance"] = compliance::setting_view(&s.compliance.setting);
-            }
-            Ok(v)
+            Ok(views::params(&s.params, s.blend_time_s, gait))
         }
         "params.set" => params_set(shared, p).await,
+        "controller.list" => {
+            let gait = p.take_gait("gait")?;
+            p.finish(&["gait"])?;
+            Ok(controllers::list(shared, gait))
+        }
+        "controller.get" => {
+            let gait = p.take_gait("gait")?;
+            p.finish(&["gait"])?;
+            Ok(controllers::get(shared, gait))
+        }
+        "controller.set" => {
+            let gait = p.take_gait("gait")?.ok_or_else(|| missing("gait"))?;
+            let controller = p
+                .take_str("controller")?
+                .ok_or_else(|| missing("controller"))?;
+            let preset = p.take_str("preset")?;
+            let config = p.take_json("config")?;
+            p.finish(&["gait", "controller", "preset", "config"])?;
+            let sel = Selection {
+                controller,
+                preset,
+                config,
+            };
+            controllers::set(shared, gait, sel).await
+        }
         "hold" => act(shared, p, LoopRequest::Hold).await,
         "limp" => act(shared, p, LoopRequest::Limp).await,
         "estop" => act(shared, p, LoopRequest::EStop).await,
@@ -112,8 +141,8 @@ async fn act(shared: &Shared, p: Params, request: LoopRequest) -> Result<Value, 
     Ok(json!({ "ok": true }))
 }
 
-/// `params.set`: either `{"blend_time_s": x}` or `{"gait": name, <field>: x, ...}`,
-/// for slithering also `"compliance": {...}`.
+/// `params.set`: either `{"blend_time_s": x}` or `{"gait": name, <field>: x, ...}`;
+/// for slithering also the old `"compliance": {...}` (now `controller.set`).
 async fn params_set(shared: &Shared, mut p: Params) -> Result<Value, RpcError> {
     if p.contains("blend_time_s") {
         let (min, max) = BLEND_TIME_RANGE_S;
@@ -139,23 +168,25 @@ async fn params_set(shared: &Shared, mut p: Params) -> Result<Value, RpcError> {
     p.finish(&expected)?;
     if compliance.is_some() && gait != GaitKind::Slithering {
         return Err(RpcError::invalid_params(format!(
-            "`compliance`: only slithering has compliant controllers, not {}",
+            "`compliance` was slithering's controller; every gait's controller is now set \
+             with controller.set (gait {})",
             gait.name()
         )));
     }
     if patch == ParamPatch::default() && compliance.is_none() {
         return Err(RpcError::invalid_params(format!(
-            "nothing to change: give at least one of {} (or, for slithering, compliance)",
+            "nothing to change: give at least one of {}",
             PATCH_FIELDS.join(", ")
         )));
     }
-    if gait == GaitKind::Slithering {
-        return compliance::set_slithering(shared, patch, compliance).await;
+    if let Some(c) = compliance {
+        return controllers::set_compliance(shared, gait, patch, c, &shared.layout).await;
     }
-    // Validated against the table the loop published last; the loop checks again.
+    // Validated against the table the loop published last; the loop checks again, also
+    // against the gait's controller.
     let current = *shared.telemetry.latest().params.get(gait);
     let new = current
-        .patched(gait, &patch)
+        .patched_for(gait, &patch, shared.layout.module_length_m)
         .map_err(|e| RpcError::invalid_params(format!("{}: {e}", gait.name())))?;
     shared
         .router

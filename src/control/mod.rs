@@ -11,21 +11,25 @@
 //!
 //! - [`api`]: wire format, params, error codes.
 //! - `server`: binding, the runtime thread, accept loops, the client limit.
+//! - `shared`: what every connection shares; `session`: one connection's state
+//!   (its telemetry stream).
 //! - `conn`: one connection: reading lines, answering in order, the writer.
 //! - `methods`: what each method does; `views`: JSON views of a snapshot.
-//! - `compliance`: slithering's compliant controller in `params.set`/`params.get`,
-//!   `status` and telemetry.
+//! - `controllers`: the controller methods (`controller.list/get/set`), any gait's
+//!   controller in `status` and telemetry, read from the registry.
 //! - `router`: tickets and acks between connections and the loop.
 //! - [`client`]: a small blocking client (used by `snakectl` and the tests).
 
 pub mod api;
 pub mod client;
-mod compliance;
 mod conn;
+mod controllers;
 mod lines;
 mod methods;
 mod router;
 mod server;
+mod session;
+mod shared;
 mod views;
 
 use std::path::PathBuf;
@@ -33,10 +37,11 @@ use std::time::Duration;
 
 use serde::Serialize;
 
+use crate::controller::catalog::Catalog;
 use crate::gait::BodyLayout;
+use crate::rt::controller_slots::Installed;
 use crate::rt::messages::{Ack, Envelope};
 use crate::rt::telemetry::TelemetryReader;
-use crate::shape::JointController;
 
 pub use methods::{BLEND_TIME_RANGE_S, DEFAULT_RATE_HZ, METHODS, RATE_RANGE_HZ};
 pub use server::{RunningServer, ServerError, start};
@@ -82,10 +87,13 @@ pub struct LoopHandle {
     pub acks: crossbeam_channel::Receiver<Ack>,
     pub telemetry: TelemetryReader,
     pub info: DaemonInfo,
-    /// The loop's body: slithering controllers are built for it here, off the loop.
+    /// The loop's body: controllers are built for it here, off the loop.
     pub layout: BodyLayout,
     /// Controllers the loop replaced; the server frees them.
-    pub retired: crossbeam_channel::Receiver<Box<dyn JointController>>,
+    pub retired: crossbeam_channel::Receiver<Installed>,
+    /// Where the installed controllers' names and configurations are (the daemon
+    /// put the initial ones there).
+    pub catalog: Catalog,
 }
 
 /// How the daemon talks to its modules.

@@ -14,7 +14,7 @@ use crossbeam_channel::{Receiver, RecvTimeoutError, Sender, TrySendError};
 use tokio::sync::oneshot;
 
 use super::api::{RpcError, code};
-use crate::rt::compliance::ControllerChange;
+use crate::rt::controller_slots::Installed;
 use crate::rt::messages::{Ack, Envelope, LoopRequest, Rejection};
 
 type Pending = Arc<Mutex<HashMap<u64, oneshot::Sender<Result<(), Rejection>>>>>;
@@ -81,12 +81,12 @@ impl AckRouter {
         self.call_with(request, None).await
     }
 
-    /// [`Self::call`] with a slithering controller change attached. When the queue is
+    /// [`Self::call`] with a controller attached. When the queue is
     /// full the controller comes back here and is dropped with the envelope.
     pub(crate) async fn call_with(
         &self,
         request: LoopRequest,
-        controller: Option<ControllerChange>,
+        controller: Option<Installed>,
     ) -> Result<(), RpcError> {
         let ticket = self.next_ticket.fetch_add(1, Ordering::Relaxed);
         let (tx, rx) = oneshot::channel();

@@ -16,8 +16,8 @@ use tokio::net::{TcpListener, UnixListener};
 
 use super::api::{self, RpcError, code};
 use super::router::AckRouter;
+use super::shared::Shared;
 use super::{LoopHandle, ServerConfig, conn};
-use crate::rt::telemetry::TelemetryReader;
 
 /// Why the server could not start. Every variant names the path or port.
 #[derive(Debug, thiserror::Error)]
@@ -43,19 +43,6 @@ pub enum ServerError {
     },
     #[error("control socket: cannot start its runtime: {0}")]
     Runtime(#[source] io::Error),
-}
-
-/// What every connection shares.
-pub(crate) struct Shared {
-    pub(crate) router: AckRouter,
-    pub(crate) telemetry: TelemetryReader,
-    pub(crate) info: super::DaemonInfo,
-    pub(crate) max_line_bytes: usize,
-    pub(crate) layout: crate::gait::BodyLayout,
-    pub(crate) retired: crossbeam_channel::Receiver<Box<dyn crate::shape::JointController>>,
-    /// Held by a slithering change from reading the setting to the loop's ack, so each
-    /// one builds on what the previous one left.
-    pub(crate) slithering: tokio::sync::Mutex<()>,
 }
 
 /// A started server. `shutdown` (or dropping it) stops accepting, closes every
@@ -156,7 +143,8 @@ pub fn start(cfg: ServerConfig, handle: LoopHandle) -> Result<RunningServer, Ser
         max_line_bytes: cfg.max_line_bytes.max(1),
         layout: handle.layout,
         retired: handle.retired,
-        slithering: tokio::sync::Mutex::new(()),
+        catalog: handle.catalog,
+        controller_change: tokio::sync::Mutex::new(()),
     });
     let clients = Arc::new(Clients {
         active: AtomicUsize::new(0),

@@ -4,12 +4,13 @@
 use serde_json::{Value, json};
 
 use super::DaemonInfo;
-use super::compliance::telemetry_view;
+use super::controllers::telemetry_view;
+use crate::controller::catalog::Catalog;
 use crate::gait::{GaitKind, GaitTable};
 use crate::rt::telemetry::Snapshot;
 
 /// `status`: mode, gait, blend, loop time, counters and a compact joint summary.
-pub(crate) fn status(s: &Snapshot, info: &DaemonInfo) -> Value {
+pub(crate) fn status(s: &Snapshot, info: &DaemonInfo, catalog: &Catalog) -> Value {
     json!({
         "mode": s.mode,
         "reason": s.reason,
@@ -22,7 +23,8 @@ pub(crate) fn status(s: &Snapshot, info: &DaemonInfo) -> Value {
         "requests_applied": s.requests_applied,
         "requests_refused": s.requests_refused,
         "joints": joints_summary(s),
-        "compliance": telemetry_view(&s.compliance),
+        "controller": telemetry_view(&s.controller, catalog),
+        "guard": s.guard,
         "daemon": info,
     })
 }
@@ -94,11 +96,13 @@ pub(crate) fn stats(s: &Snapshot) -> Value {
         "bus": s.bus,
         "requests_applied": s.requests_applied,
         "requests_refused": s.requests_refused,
+        "guard": s.guard,
+        "record_dropped": s.record_dropped,
     })
 }
 
 /// The params of one `telemetry` stream message.
-pub(crate) fn telemetry(s: &Snapshot) -> Value {
+pub(crate) fn telemetry(s: &Snapshot, catalog: &Catalog) -> Value {
     json!({
         "t_s": s.t_s,
         "cycle": s.cycle,
@@ -107,7 +111,7 @@ pub(crate) fn telemetry(s: &Snapshot) -> Value {
         "gait": s.gait,
         "blend_progress": s.blend_progress,
         "joints": s.joints,
-        "compliance": telemetry_view(&s.compliance),
+        "controller": telemetry_view(&s.controller, catalog),
     })
 }
 
@@ -137,7 +141,7 @@ mod tests {
     #[test]
     fn status_summarises_joints_and_hides_non_finite_values() {
         let info = DaemonInfo::default();
-        let v = status(&snapshot(), &info);
+        let v = status(&snapshot(), &info, &Catalog::default());
         assert_eq!(v["mode"], "limp");
         assert_eq!(v["gait"], "rolling");
         assert_eq!(v["modules"], 3);

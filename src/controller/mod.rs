@@ -5,4 +5,15 @@
 //! this module. See `docs/architecture.md`.
 
 pub mod catalog;
+pub mod config;
+pub mod interface;
+pub mod nominal;
+pub mod registry;
 pub mod report;
+
+pub use config::ConfigError;
+pub use interface::{
+    BodyEstimate, Controller, Estimator, Handover, Imu, NominalMismatch, Observation,
+};
+pub use registry::{BuildContext, Built, ControllerKind, Family, Selection};
+pub mod testing;

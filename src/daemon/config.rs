@@ -67,7 +67,7 @@ impl Default for BodyConfig {
     fn default() -> Self {
         Self {
             first_joint_plane: Plane::Lateral,
-            module_length_m: 0.064,
+            module_length_m: crate::gait::SEA_MODULE_LENGTH_M,
         }
     }
 }
@@ -156,9 +156,12 @@ pub struct GaitSection {
     pub max_joint_speed_rad_s: f64,
     /// Per-gait parameter overrides, e.g. `[gait.params.sidewinding]`.
     pub params: std::collections::HashMap<GaitKind, crate::gait::ParamPatch>,
-    /// Controller of slithering: "open_loop" or one of `shape::SLITHERING_CONTROLLERS`
-    /// with its preset compliance.
-    pub slithering_controller: String,
+    /// Per-gait controllers, e.g. `[gait.controllers.slithering] controller =
+    /// "a_ws_omega"`; a gait not named runs `open_loop`.
+    pub controllers: std::collections::HashMap<GaitKind, crate::controller::Selection>,
+    /// Replaced by `controllers`; kept only to say so.
+    #[serde(default)]
+    pub slithering_controller: Option<String>,
 }
 
 impl Default for GaitSection {
@@ -167,9 +170,10 @@ impl Default for GaitSection {
             initial: GaitKind::Sidewinding,
             start: StartMode::Hold,
             blend_time_s: 2.0,
-            max_joint_speed_rad_s: 3.46,
+            max_joint_speed_rad_s: crate::gait::SEA_MAX_JOINT_SPEED_RAD_S,
             params: Default::default(),
-            slithering_controller: crate::rt::compliance::OPEN_LOOP.to_owned(),
+            controllers: Default::default(),
+            slithering_controller: None,
         }
     }
 }
@@ -240,6 +244,18 @@ pub enum ConfigError {
         value: String,
         why: String,
     },
+    #[error("{path}: [gait.params.{gait}]: {source}")]
+    GaitParams {
+        path: PathBuf,
+        gait: &'static str,
+        source: crate::gait::ParamError,
+    },
+    #[error("{path}: [gait.controllers.{gait}]: {source}")]
+    Controller {
+        path: PathBuf,
+        gait: &'static str,
+        source: crate::controller::ConfigError,
+    },
 }
 
 impl Config {
@@ -259,6 +275,63 @@ impl Config {
         })?;
         cfg.validate(path)?;
         Ok(cfg)
+    }
+
+    /// The default gait parameters with `[gait.params.*]` applied, each checked for
+    /// this body's module length.
+    pub fn gait_table(&self, path: &Path) -> Result<crate::gait::GaitTable, ConfigError> {
+        let l = self.body.module_length_m;
+        let mut table = crate::gait::GaitTable::default();
+        let mut kinds: Vec<_> = self.gait.params.keys().copied().collect();
+        kinds.sort_by_key(|k| k.index());
+        for kind in kinds {
+            let p = table
+                .get(kind)
+                .patched_for(kind, &self.gait.params[&kind], l)
+                .map_err(|source| ConfigError::GaitParams {
+                    path: path.to_owned(),
+                    gait: kind.name(),
+                    source,
+                })?;
+            *table.get_mut(kind) = p;
+        }
+        Ok(table)
+    }
+
+    /// Each gait's controller: `[gait.controllers.*]` or `open_loop`.
+    pub fn controller_selection(&self, gait: GaitKind) -> crate::controller::Selection {
+        self.gait
+            .controllers
+            .get(&gait)
+            .cloned()
+            .unwrap_or_else(|| crate::controller::Selection::named("open_loop"))
+    }
+
+    /// Builds every configured controller once (for a body of `emulator.modules`
+    /// modules) so a bad one is named before the daemon starts.
+    fn check_gaits(&self, path: &Path) -> Result<(), ConfigError> {
+        let table = self.gait_table(path)?;
+        let layout = crate::gait::BodyLayout::alternating(
+            self.emulator.modules.max(2),
+            self.body.first_joint_plane,
+            self.body.module_length_m,
+        );
+        for gait in GaitKind::ALL {
+            let ctx = crate::controller::BuildContext {
+                gait,
+                layout: &layout,
+                params: table.get(gait),
+            };
+            let sel = self.controller_selection(gait);
+            crate::controller::registry::build(crate::controllers::REGISTRY, &sel, &ctx).map_err(
+                |source| ConfigError::Controller {
+                    path: path.to_owned(),
+                    gait: gait.name(),
+                    source,
+                },
+            )?;
+        }
+        Ok(())
     }
 
     pub fn validate(&self, path: &Path) -> Result<(), ConfigError> {
@@ -330,7 +403,7 @@ impl Config {
             "gait.max_joint_speed_rad_s",
             self.gait.max_joint_speed_rad_s,
             0.1,
-            3.46,
+            crate::gait::SEA_MAX_JOINT_SPEED_RAD_S,
         )?;
         range(
             "control.max_line_bytes",
@@ -357,17 +430,17 @@ impl Config {
             60.0,
         )?;
         range("emulator.modules", self.emulator.modules as f64, 2.0, 64.0)?;
-        if !crate::shape::SLITHERING_CONTROLLERS.contains(&self.gait.slithering_controller.as_str())
-        {
+        if let Some(old) = &self.gait.slithering_controller {
             return Err(bad(
                 "gait.slithering_controller",
-                self.gait.slithering_controller.clone(),
+                format!("{old:?}"),
                 &format!(
-                    "must be one of {}",
-                    crate::shape::SLITHERING_CONTROLLERS.join(", ")
+                    "replaced by a table per gait: [gait.controllers.slithering] controller = \
+                     {old:?} (docs/control-socket.md)"
                 ),
             ));
         }
+        self.check_gaits(path)?;
         if self.network.targets.is_empty() {
             return Err(bad(
                 "network.targets",
@@ -456,20 +529,44 @@ mod tests {
     }
 
     #[test]
-    fn the_slithering_controller_must_be_known() {
+    fn controllers_are_built_and_named_in_errors() {
         let cfg = Config::parse(
-            "[gait]\nslithering_controller = \"a_ws_omega\"\n",
+            "[gait.controllers.slithering]\ncontroller = \"a_ws_omega\"\n\
+             config = { amplitude = { gains = { stiffness = 6.0 } } }\n",
             Path::new("x"),
         )
         .unwrap();
-        assert_eq!(cfg.gait.slithering_controller, "a_ws_omega");
-        let err = Config::parse("[gait]\nslithering_controller = \"fast\"\n", Path::new("x"))
-            .unwrap_err();
-        let msg = err.to_string();
-        assert!(
-            msg.contains("gait.slithering_controller") && msg.contains("cpg"),
-            "{msg}"
+        let sel = cfg.controller_selection(GaitKind::Slithering);
+        assert_eq!(sel.controller, "a_ws_omega");
+        assert_eq!(
+            cfg.controller_selection(GaitKind::Rolling).controller,
+            "open_loop"
         );
+        for (text, needle) in [
+            (
+                "[gait.controllers.slithering]\ncontroller = \"fast\"\n",
+                "unknown controller `fast`",
+            ),
+            (
+                "[gait.controllers.rolling]\ncontroller = \"cpg\"\n",
+                "does not run rolling",
+            ),
+            (
+                "[gait.controllers.slithering]\ncontroller = \"a\"\nconfig = { amplitude = { gains = { bias_force = 1e308 } } }\n",
+                "config.amplitude.gains.bias_force",
+            ),
+            (
+                "[gait]\nslithering_controller = \"a\"\n",
+                "[gait.controllers.slithering]",
+            ),
+            (
+                "[gait.params.rolling]\namplitude_lat_rad = 9.0\n",
+                "gait.params.rolling",
+            ),
+        ] {
+            let msg = Config::parse(text, Path::new("x")).unwrap_err().to_string();
+            assert!(msg.contains(needle), "{text}: {msg}");
+        }
     }
 
     #[test]

@@ -14,9 +14,13 @@ use std::time::Duration;
 use anyhow::{Context, Result};
 
 use crate::control::{self, DaemonInfo, LoopHandle, ServerConfig};
-use crate::gait::{BodyLayout, GaitSelector, GaitTable};
-use crate::rt::compliance::{ComplianceSetting, ControllerChange};
+use crate::controller::BuildContext;
+use crate::controller::catalog::Catalog;
+use crate::controller::registry;
+use crate::controllers::REGISTRY;
+use crate::gait::{BodyLayout, GaitKind, GaitSelector, GaitTable};
 use crate::rt::control_loop::{ControlLoop, LoopParts};
+use crate::rt::controller_slots::Installed;
 use crate::rt::pacer::{LockstepPacer, Pacer, RealTimePacer};
 use crate::rt::telemetry::{self, Snapshot, TelemetryReader};
 use crate::rt::{messages, sys};
@@ -56,22 +60,45 @@ pub fn apply_overrides(cfg: &mut Config, o: &Overrides) {
     };
 }
 
-/// The default gait parameters with the configuration's overrides, validated for
-/// this body's module length.
+/// The configured gait parameters, validated as a whole for this body's module length.
 fn gait_table(cfg: &Config) -> Result<GaitTable> {
-    let l = cfg.body.module_length_m;
-    let mut table = GaitTable::default();
-    for (kind, patch) in &cfg.gait.params {
-        let p = table
-            .get(*kind)
-            .patched_for(*kind, patch, l)
-            .with_context(|| format!("bad configuration: [gait.params.{}]", kind.name()))?;
-        *table.get_mut(*kind) = p;
-    }
+    let path = std::path::Path::new("configuration");
+    let table = cfg.gait_table(path)?;
     table
-        .validate_for(l)
+        .validate_for(cfg.body.module_length_m)
         .map_err(|(kind, e)| anyhow::anyhow!("bad configuration: gait {}: {e}", kind.name()))?;
     Ok(table)
+}
+
+/// Every gait's configured controller, built for `layout` and recorded in `catalog`.
+pub fn build_controllers(
+    cfg: &Config,
+    layout: &BodyLayout,
+    table: &GaitTable,
+    catalog: &Catalog,
+) -> Result<Vec<(GaitKind, Installed)>> {
+    GaitKind::ALL
+        .into_iter()
+        .map(|gait| {
+            let ctx = BuildContext {
+                gait,
+                layout,
+                params: table.get(gait),
+            };
+            let built = registry::build(REGISTRY, &cfg.controller_selection(gait), &ctx)
+                .with_context(|| {
+                    format!("bad configuration: [gait.controllers.{}]", gait.name())
+                })?;
+            let info = catalog.insert(built.info);
+            Ok((
+                gait,
+                Installed {
+                    id: info.id,
+                    controller: built.controller,
+                },
+            ))
+        })
+        .collect()
 }
 
 /// Run the daemon until SIGINT/SIGTERM (or a `Shutdown` request) has brought the
@@ -86,7 +113,6 @@ pub fn run(cfg: Config, emulated: bool) -> Result<()> {
 
     // Everything that can be refused without the robot is checked before discovery.
     let table = gait_table(&cfg)?;
-    let slithering = slithering_setting(&cfg, &table)?;
     let period_ns = (1e9 / cfg.loop_.rate_hz).round() as u64;
     let built = bus_setup::build(&cfg, emulated, period_ns)?;
     let n = built.bus.module_count();
@@ -94,12 +120,8 @@ pub fn run(cfg: Config, emulated: bool) -> Result<()> {
     service::notify_status(&format!("group of {n} modules found"));
 
     let layout = BodyLayout::alternating(n, cfg.body.first_joint_plane, cfg.body.module_length_m);
-    let params = table.get(crate::gait::GaitKind::Slithering);
-    let slithering_controller = match slithering.build(&layout, params) {
-        Ok(ControllerChange::Install(c)) => Some(c),
-        Ok(ControllerChange::OpenLoop) => None,
-        Err(e) => anyhow::bail!("gait.slithering_controller: {e}"),
-    };
+    let catalog = Catalog::default();
+    let controllers = build_controllers(&cfg, &layout, &table, &catalog)?;
     let selector = GaitSelector::new(
         layout.clone(),
         table,
@@ -155,6 +177,7 @@ pub fn run(cfg: Config, emulated: bool) -> Result<()> {
             },
             layout,
             retired: retired_rx,
+            catalog: catalog.clone(),
         },
     )
     .context("starting the control socket")?;
@@ -172,7 +195,8 @@ pub fn run(cfg: Config, emulated: bool) -> Result<()> {
         velocity_feedforward: cfg.loop_.velocity_feedforward,
         hold_at_start: cfg.gait.start == StartMode::Hold,
         retired: retired_tx,
-        slithering_controller,
+        controllers,
+        estimators: Vec::new(),
     };
     let rt = cfg.loop_.clone();
     let loop_thread = std::thread::Builder::new()
@@ -198,20 +222,6 @@ pub fn run(cfg: Config, emulated: bool) -> Result<()> {
         "stopped safely"
     );
     Ok(())
-}
-
-/// The configured slithering controller, checked against the configured slithering
-/// parameters (it is built once the body is known).
-fn slithering_setting(cfg: &Config, table: &GaitTable) -> Result<ComplianceSetting> {
-    let name = &cfg.gait.slithering_controller;
-    let bad = |e: String| {
-        anyhow::anyhow!("bad configuration: gait.slithering_controller = {name:?}: {e}")
-    };
-    let setting = ComplianceSetting::named(name).map_err(bad)?;
-    setting
-        .check(table.get(crate::gait::GaitKind::Slithering))
-        .map_err(bad)?;
-    Ok(setting)
 }
 
 fn server_config(cfg: &Config) -> ServerConfig {

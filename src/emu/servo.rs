@@ -63,7 +63,7 @@ pub struct ServoParams {
 /// Module mass (SPEC §1), kg.
 pub const MODULE_MASS_KG: f64 = 0.205;
 /// Module length (SPEC §1), m.
-pub const MODULE_LENGTH_M: f64 = 0.064;
+pub use crate::gait::SEA_MODULE_LENGTH_M as MODULE_LENGTH_M;
 
 impl Default for ServoParams {
     fn default() -> Self {
@@ -72,7 +72,7 @@ impl Default for ServoParams {
             spring_damping_nm_s_per_rad: 0.01,
             output_inertia_kg_m2: MODULE_MASS_KG * MODULE_LENGTH_M * MODULE_LENGTH_M / 3.0,
             output_damping_nm_s_per_rad: 0.02,
-            max_motor_speed_rad_s: 3.46,
+            max_motor_speed_rad_s: crate::gait::SEA_MAX_JOINT_SPEED_RAD_S,
             max_torque_nm: 7.0,
             position_gain_per_s: 150.0,
             velocity_gain_nm_s_per_rad: 0.2,

@@ -8,6 +8,7 @@ pub mod layout;
 pub mod params;
 pub mod selector;
 pub mod serpenoid;
+pub mod slew;
 
 pub use layout::{BodyLayout, Plane};
 pub use params::{

@@ -12,6 +12,7 @@
 use super::layout::BodyLayout;
 use super::params::{GaitKind, GaitParams, GaitTable, ParamError, ParamPatch};
 use super::serpenoid::Serpenoid;
+use super::slew::SlewLimiter;
 
 /// Blend time the daemon uses unless configured, s: long enough that switching
 /// between any two default gaits stays well inside the joints' speed.
@@ -34,19 +35,32 @@ struct Layer {
 }
 
 impl Layer {
-    /// Blend weight and its time derivative at `t_s`: smoothstep `3u² − 2u³`, C1 at
-    /// both ends (zero slope where the blend starts and where it ends).
+    /// Blend weight and its time derivative at `t_s`.
     fn weight(&self, t_s: f64) -> (f64, f64) {
-        let u = ((t_s - self.start_s) / self.duration_s).clamp(0.0, 1.0);
-        (
-            u * u * (3.0 - 2.0 * u),
-            6.0 * u * (1.0 - u) / self.duration_s,
-        )
+        smoothstep(t_s, self.start_s, self.duration_s)
     }
 
     fn progress(&self, t_s: f64) -> f64 {
         ((t_s - self.start_s) / self.duration_s).clamp(0.0, 1.0)
     }
+}
+
+/// The blend weight from 0 at `start_s` to 1 at `start_s + duration_s` and its time
+/// derivative: smoothstep `3u² − 2u³`, C1 at both ends (zero slope where the blend
+/// starts and where it ends). The one definition of the daemon's blends.
+pub fn smoothstep(t_s: f64, start_s: f64, duration_s: f64) -> (f64, f64) {
+    let u = ((t_s - start_s) / duration_s).clamp(0.0, 1.0);
+    (u * u * (3.0 - 2.0 * u), 6.0 * u * (1.0 - u) / duration_s)
+}
+
+/// A deviation from the layers' output that fades out: what a controller's set-points
+/// differed from the selector's when it handed the joints back.
+#[derive(Debug, Clone)]
+struct FadingOffset {
+    offset: Vec<f64>,
+    start_s: f64,
+    duration_s: f64,
+    active: bool,
 }
 
 /// Blends between gaits and produces the joint set-points of every cycle.
@@ -56,7 +70,6 @@ pub struct GaitSelector {
     table: GaitTable,
     active: GaitKind,
     blend_time_s: f64,
-    max_joint_speed_rad_s: f64,
     /// `layers[..len]`; when `pose_base` every one of them blends over `pose`,
     /// otherwise `layers[0]` is the base (its blend is over).
     layers: [Layer; MAX_LAYERS],
@@ -67,9 +80,12 @@ pub struct GaitSelector {
     psi: [f64; KINDS],
     psi_rate: [f64; KINDS],
     last_t_s: Option<f64>,
-    /// Set-points of the last update (the slew limiter's reference), if any.
-    last_pos: Vec<f64>,
-    have_last: bool,
+    /// Limits the set-points against the last update's.
+    slew: SlewLimiter,
+    /// The layers' output of the last update, before the fading offset and the limit.
+    last_raw: Vec<f64>,
+    have_raw: bool,
+    fading: FadingOffset,
     scratch_pos: Vec<f64>,
     scratch_vel: Vec<f64>,
     limited_cycles: u64,
@@ -114,7 +130,6 @@ impl GaitSelector {
             table,
             active: initial,
             blend_time_s,
-            max_joint_speed_rad_s,
             layers: [base; MAX_LAYERS],
             len: 1,
             pose_base: false,
@@ -122,8 +137,15 @@ impl GaitSelector {
             psi: [0.0; KINDS],
             psi_rate,
             last_t_s: None,
-            last_pos: vec![0.0; n],
-            have_last: false,
+            slew: SlewLimiter::new(n, max_joint_speed_rad_s),
+            last_raw: vec![0.0; n],
+            have_raw: false,
+            fading: FadingOffset {
+                offset: vec![0.0; n],
+                start_s: 0.0,
+                duration_s: blend_time_s,
+                active: false,
+            },
             scratch_pos: vec![0.0; n],
             scratch_vel: vec![0.0; n],
             limited_cycles: 0,
@@ -135,12 +157,19 @@ impl GaitSelector {
         self.active
     }
 
-    /// Progress of the newest blend at the last update, 0..1 (1 when none is running).
+    /// Progress of the newest blend (or hand-back fade) at the last update, 0..1 (1 when
+    /// none is running).
     pub fn blend_progress(&self) -> f64 {
-        match (self.top_is_blend(), self.last_t_s) {
+        let layers = match (self.top_is_blend(), self.last_t_s) {
             (false, _) => 1.0,
             (true, None) => 0.0,
             (true, Some(t)) => self.layers[self.len - 1].progress(t),
+        };
+        let f = &self.fading;
+        match (f.active, self.last_t_s) {
+            (true, Some(t)) => layers.min(((t - f.start_s) / f.duration_s).clamp(0.0, 1.0)),
+            (true, None) => 0.0,
+            (false, _) => layers,
         }
     }
 
@@ -164,7 +193,7 @@ impl GaitSelector {
 
     /// The per-joint speed limit of the set-points, rad/s.
     pub fn max_joint_speed_rad_s(&self) -> f64 {
-        self.max_joint_speed_rad_s
+        self.slew.max_rad_s()
     }
 
     /// Update cycles in which the slew limiter had to clamp some joint.
@@ -244,8 +273,8 @@ impl GaitSelector {
         self.pose_base = true;
         self.len = 0;
         self.push(kind, params, t_s);
-        self.last_pos.copy_from_slice(&self.pose);
-        self.have_last = true;
+        self.fading.active = false;
+        self.slew.reset_to(&self.pose);
         self.last_t_s = Some(t_s);
     }
 
@@ -264,10 +293,52 @@ impl GaitSelector {
         self.prune(t_s);
         self.advance_phases(t_s, dt);
         self.compose(t_s, positions_out, velocities_out);
-        self.limit(dt, positions_out, velocities_out);
-        self.last_pos.copy_from_slice(positions_out);
-        self.have_last = true;
+        self.last_raw.copy_from_slice(positions_out);
+        self.have_raw = true;
+        self.fade(t_s, positions_out, velocities_out);
+        if self.slew.apply(dt, positions_out, velocities_out, false) {
+            self.limited_cycles += 1;
+        }
         self.last_t_s = Some(t_s);
+    }
+
+    /// Takes the joints back from a controller that sent `commanded` last cycle while
+    /// the layers ran underneath: the difference fades out over the blend time on top
+    /// of the layers, which keep moving (no frozen pose, no stall), so the next
+    /// set-points continue from `commanded`. Before any update it is a [`Self::resync`].
+    pub fn hand_back(&mut self, commanded: &[f64], t_s: f64) {
+        debug_assert_eq!(commanded.len(), self.last_raw.len(), "one angle per joint");
+        if !self.have_raw {
+            self.resync(commanded, t_s);
+            return;
+        }
+        let f = &mut self.fading;
+        for ((o, &c), &raw) in f.offset.iter_mut().zip(commanded).zip(&self.last_raw) {
+            *o = if c.is_finite() { c - raw } else { 0.0 };
+        }
+        f.start_s = t_s;
+        f.duration_s = self.blend_time_s;
+        f.active = true;
+        self.slew.reset_to(commanded);
+    }
+
+    /// Adds what is left of the fading offset (and its rate) to the set-points.
+    fn fade(&mut self, t_s: f64, pos: &mut [f64], vel: &mut [f64]) {
+        let f = &mut self.fading;
+        if !f.active {
+            return;
+        }
+        let (w, w_dot) = smoothstep(t_s, f.start_s, f.duration_s);
+        for ((p, v), &o) in pos.iter_mut().zip(vel.iter_mut()).zip(&f.offset) {
+            *p += (1.0 - w) * o;
+            *v -= w_dot * o;
+        }
+        f.active = w < 1.0;
+    }
+
+    /// Whether a hand-back's offset is still fading out.
+    pub fn handing_back(&self) -> bool {
+        self.fading.active
     }
 
     fn top_is_blend(&self) -> bool {
@@ -401,31 +472,6 @@ impl GaitSelector {
                 *v += w * (g_dot - *v) + w_dot * diff;
                 *p += w * diff;
             }
-        }
-    }
-
-    /// Per-joint slew limit against the last set-points; the velocity feed-forward is
-    /// clamped to the joint speed too.
-    fn limit(&mut self, dt: f64, pos: &mut [f64], vel: &mut [f64]) {
-        let vmax = self.max_joint_speed_rad_s;
-        let mut limited = false;
-        if self.have_last {
-            let step = vmax * dt;
-            for ((p, v), &last) in pos.iter_mut().zip(vel.iter_mut()).zip(&self.last_pos) {
-                let d = *p - last;
-                if d.abs() > step {
-                    let clamped = d.clamp(-step, step);
-                    *p = last + clamped;
-                    *v = if dt > 0.0 { clamped / dt } else { 0.0 };
-                    limited = true;
-                }
-            }
-        }
-        for v in vel.iter_mut() {
-            *v = v.clamp(-vmax, vmax);
-        }
-        if limited {
-            self.limited_cycles += 1;
         }
     }
 }

@@ -1,40 +1,45 @@
-//! The controllers a lab experiment compares: the named ones
-//! ([`crate::shape::SLITHERING_CONTROLLERS`]) and variants with their own gains,
-//! `LABEL=JSON` on the command line, where JSON is the `compliance` object of the
-//! daemon's `params.set` (docs/control-socket.md) over the full controller.
+//! The controllers a lab experiment compares: named ones (any name the registry
+//! resolves for the experiment's gait: a controller or a preset) and variants with
+//! their own configuration, `LABEL=JSON` on the command line.
+
+use serde_json::Value;
 
 use super::LabError;
-use crate::gait::GaitParams;
-use crate::gait::layout::BodyLayout;
-use crate::rt::compliance::ComplianceSetting;
-use crate::rt::compliance_json;
-use crate::shape::{JointController, SLITHERING_CONTROLLERS};
+use crate::controller::config::merge;
+use crate::controller::registry::{self, BuildContext, Built, Selection};
+use crate::controllers::REGISTRY;
+use crate::gait::{BodyLayout, GaitKind, GaitParams};
 
 /// The controller a variant's overrides apply to when it names none.
 pub const VARIANT_BASE: &str = "a_ws_omega";
 
-/// One compared controller: its label in the report and how to build it.
+/// One compared controller: its label in the report and what to build.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LabController {
     pub label: String,
-    pub setting: ComplianceSetting,
+    pub gait: GaitKind,
+    pub selection: Selection,
 }
 
 impl LabController {
-    /// A named controller, labelled by its name.
-    pub fn named(name: &str) -> Result<Self, LabError> {
-        let setting = ComplianceSetting::named(name).map_err(|_| LabError::UnknownController {
+    /// A named controller of `gait`, labelled by its name.
+    pub fn named(gait: GaitKind, name: &str) -> Result<Self, LabError> {
+        let selection = Selection::named(name);
+        registry::resolve(REGISTRY, gait, &selection).map_err(|_| LabError::UnknownController {
             name: name.to_owned(),
-            known: SLITHERING_CONTROLLERS.join(", "),
+            known: registry::known_names(REGISTRY, gait),
         })?;
         Ok(Self {
             label: name.to_owned(),
-            setting,
+            gait,
+            selection,
         })
     }
 
-    /// `LABEL=JSON`: a variant (e.g. `soft_a={"amplitude":{"gains":{"stiffness":2}}}`).
-    pub fn variant(spec: &str) -> Result<Self, LabError> {
+    /// `LABEL=JSON`: a variant. JSON is a selection (`{"controller": .., "preset": ..,
+    /// "config": {..}}`, the controller [`VARIANT_BASE`] when not named); any other key
+    /// overrides the configuration too, e.g. `soft={"amplitude":{"gains":{"stiffness":2}}}`.
+    pub fn variant(gait: GaitKind, spec: &str) -> Result<Self, LabError> {
         let bad = |msg: String| LabError::BadValue(format!("--variant {spec:?}: {msg}"));
         let (label, json) = spec
             .split_once('=')
@@ -49,27 +54,47 @@ impl LabController {
                 "the label must be non-empty letters, digits, `_` or `-` (it names files)".into(),
             ));
         }
-        if SLITHERING_CONTROLLERS.contains(&label) {
+        if registry::resolve(REGISTRY, gait, &Selection::named(label)).is_ok() {
             return Err(bad(format!("the label {label:?} is a named controller's")));
         }
-        let value: serde_json::Value =
-            serde_json::from_str(json).map_err(|e| bad(format!("not JSON: {e}")))?;
-        let base = ComplianceSetting::named(VARIANT_BASE).expect("the base is a named controller");
-        let setting = compliance_json::parse(&value, &base).map_err(bad)?;
+        let value: Value = serde_json::from_str(json).map_err(|e| bad(format!("not JSON: {e}")))?;
+        let Value::Object(mut map) = value else {
+            return Err(bad("the JSON must be an object".into()));
+        };
+        let text = |v: Option<Value>, key: &str| match v {
+            None => Ok(None),
+            Some(Value::String(s)) => Ok(Some(s)),
+            Some(_) => Err(bad(format!("`{key}` must be a string"))),
+        };
+        let controller =
+            text(map.remove("controller"), "controller")?.unwrap_or_else(|| VARIANT_BASE.into());
+        let preset = text(map.remove("preset"), "preset")?;
+        let mut config = map.remove("config");
+        if !map.is_empty() {
+            let c = config.get_or_insert_with(|| Value::Object(Default::default()));
+            merge(c, &Value::Object(map));
+        }
+        let selection = Selection {
+            controller,
+            preset,
+            config,
+        };
+        registry::resolve(REGISTRY, gait, &selection).map_err(|e| bad(e.to_string()))?;
         Ok(Self {
             label: label.to_owned(),
-            setting,
+            gait,
+            selection,
         })
     }
 
     /// Builds the controller (allocates; once per trial).
-    pub fn build(
-        &self,
-        layout: &BodyLayout,
-        params: &GaitParams,
-    ) -> Result<Box<dyn JointController>, LabError> {
-        self.setting
-            .controller(layout, params)
+    pub fn build(&self, layout: &BodyLayout, params: &GaitParams) -> Result<Built, LabError> {
+        let ctx = BuildContext {
+            gait: self.gait,
+            layout,
+            params,
+        };
+        registry::build(REGISTRY, &self.selection, &ctx)
             .map_err(|e| LabError::BadValue(format!("controller {}: {e}", self.label)))
     }
 }
@@ -79,44 +104,50 @@ mod tests {
     use super::*;
     use crate::lab::trial::slithering_setup;
 
+    const G: GaitKind = GaitKind::Slithering;
+
     #[test]
     fn a_variant_overrides_the_full_controller() {
-        let v = LabController::variant(r#"stiff={"amplitude":{"gains":{"stiffness":9}}}"#).unwrap();
+        let v =
+            LabController::variant(G, r#"stiff={"amplitude":{"gains":{"stiffness":9}}}"#).unwrap();
         assert_eq!(v.label, "stiff");
-        assert_eq!(v.setting.controller, VARIANT_BASE);
-        let config = v.setting.config.unwrap();
-        assert_eq!(config.amplitude.gains.stiffness, 9.0);
-        let full = ComplianceSetting::named(VARIANT_BASE)
-            .unwrap()
-            .config
-            .unwrap();
-        assert_eq!(config.spatial_freq, full.spatial_freq);
+        assert_eq!(v.selection.controller, VARIANT_BASE);
         let (layout, params) = slithering_setup(18);
-        assert!(v.build(&layout, &params).is_ok());
+        let built = v.build(&layout, &params).unwrap();
+        assert_eq!(built.info.config["amplitude"]["gains"]["stiffness"], 9.0);
+        assert_eq!(built.info.config["spatial_freq"]["gains"]["stiffness"], 0.3);
     }
 
     #[test]
     fn a_variant_can_start_from_another_preset() {
         let v =
-            LabController::variant(r#"a2={"controller":"a","torque_deadband_nm":0.5}"#).unwrap();
-        assert_eq!(v.setting.controller, "a");
-        assert!(!v.setting.config.unwrap().spatial_freq.enabled);
+            LabController::variant(G, r#"a2={"controller":"a","torque_deadband_nm":0.5}"#).unwrap();
+        let (layout, params) = slithering_setup(18);
+        let built = v.build(&layout, &params).unwrap();
+        assert_eq!(built.info.preset, "a");
+        assert_eq!(built.info.config["spatial_freq"]["enabled"], false);
+        assert_eq!(built.info.config["torque_deadband_nm"], 0.5);
     }
 
     #[test]
     fn bad_variants_say_what_is_wrong() {
-        let err = |s: &str| LabController::variant(s).unwrap_err().to_string();
+        let err = |s: &str| LabController::variant(G, s).unwrap_err().to_string();
         assert!(err("noequals").contains("LABEL=JSON"));
         assert!(err("={}").contains("label"));
         assert!(err("a b={}").contains("label"));
         assert!(err("a={}").contains("named controller"));
         assert!(err("x={").contains("not JSON"));
-        assert!(err(r#"x={"amplitude":{"gain":{}}}"#).contains("compliance.amplitude.gain"));
-        // Checked against the gait's nominal parameters when built.
-        let v = LabController::variant(r#"x={"amplitude":{"gains":{"min":2,"max":3}}}"#).unwrap();
+        assert!(err(r#"x={"controller":"fast"}"#).contains("unknown controller"));
+        // Checked against the configuration's type and the gait's parameters when built.
         let (layout, params) = slithering_setup(18);
+        let v = LabController::variant(G, r#"x={"amplitude":{"gain":{}}}"#).unwrap();
         let e = v.build(&layout, &params).err().unwrap().to_string();
-        assert!(e.contains("outside the compliance range"), "{e}");
-        assert!(LabController::named("nope").is_err());
+        assert!(e.contains("config.amplitude"), "{e}");
+        let v = LabController::variant(G, r#"x={"amplitude":{"gains":{"min":0.9,"max":1.0}}}"#)
+            .unwrap();
+        let e = v.build(&layout, &params).err().unwrap().to_string();
+        assert!(e.contains("outside the controller's range"), "{e}");
+        assert!(LabController::named(G, "nope").is_err());
+        assert!(LabController::named(G, "a_ws").is_ok());
     }
 }

@@ -1,12 +1,13 @@
 //! `snake-lab`: controller comparisons in simulation, in-process and in lockstep.
 //!
 //! The peg-board experiment of SPEC §5 (thesis §4.1, Fig. 4.6): slithering controllers
-//! from [`crate::shape::slithering_controller`] on seeded random peg boards and on
+//! from the registry ([`crate::controllers::REGISTRY`]) on seeded random peg boards and on
 //! explicit layouts, several starts each. One concern per file:
 //! - [`board`]: the layouts (seeded boards, explicit scenario files), the board's region,
 //!   when a trial has crossed it.
 //! - [`controllers`]: the compared controllers, named ones and `--variant`s.
-//! - [`trial`]: one trial, world + controller stepped at 1 ms, recorded at 20 Hz.
+//! - [`trial`]: one trial through the daemon's `ControlLoop` over a `SimBus`, in
+//!   lockstep at 1 ms, recorded at 20 Hz.
 //! - [`metrics`]: pure functions from a recorded path to the experiment's figures.
 //! - [`runner`]: the trial plan and its execution across threads, with a progress bar.
 //! - [`report`]: `results.csv` and `summary.md`.
@@ -21,6 +22,20 @@ pub mod plots;
 pub mod report;
 pub mod runner;
 pub mod trial;
+
+/// The controllers of the slithering peg-board experiment, in report order: open
+/// loop, the ablations (each adds a compliant parameter), the centralisation variants
+/// of the full controller, and the CPG baseline.
+pub const PEGBOARD_CONTROLLERS: &[&str] = &[
+    "open_loop",
+    "a",
+    "a_ws",
+    "a_ws_omega",
+    "a_ws_omega_central",
+    "a_ws_omega_per_joint",
+    "a_ws_omega_windowed_phase",
+    "cpg",
+];
 
 use std::path::{Path, PathBuf};
 

@@ -34,6 +34,7 @@ fn record(signals: usize) -> TrialRecord {
         seconds: 10.0,
         success: true,
         temporal_freq_rad_s: 1.0,
+        cycles_not_running: 0,
     }
 }
 

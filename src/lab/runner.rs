@@ -14,7 +14,6 @@ use super::controllers::LabController;
 use super::metrics::{MetricsConfig, TrialMetrics, trial_metrics};
 use super::trial::{TrialConfig, TrialRecord, run_trial, slithering_setup};
 use crate::emu::world::WorldSpec;
-use crate::shape::SLITHERING_CONTROLLERS;
 
 /// What to run.
 #[derive(Debug, Clone)]
@@ -60,9 +59,13 @@ pub struct RunOptions {
 
 /// Checks the experiment and generates every world of it (fails before any trial runs).
 pub fn plan(exp: &Experiment) -> Result<Vec<PlannedWorld>, LabError> {
-    let known = || SLITHERING_CONTROLLERS.join(", ");
     if exp.controllers.is_empty() {
-        return Err(LabError::NoControllers { known: known() });
+        return Err(LabError::NoControllers {
+            known: crate::controller::registry::known_names(
+                crate::controllers::REGISTRY,
+                crate::gait::GaitKind::Slithering,
+            ),
+        });
     }
     let (layout, params) = slithering_setup(exp.trial.modules);
     for (i, c) in exp.controllers.iter().enumerate() {
@@ -195,6 +198,7 @@ fn progress_bar(total: usize, show: bool) -> ProgressBar {
 mod tests {
     use super::*;
     use crate::emu::world::scenario::WorldScenario;
+    use crate::gait::GaitKind;
     use crate::lab::board::PEG_BOARD_TOML;
 
     fn experiment(controllers: &[&str], layouts: usize) -> Experiment {
@@ -202,7 +206,7 @@ mod tests {
         Experiment {
             controllers: controllers
                 .iter()
-                .map(|s| LabController::named(s).unwrap())
+                .map(|s| LabController::named(GaitKind::Slithering, s).unwrap())
                 .collect(),
             layouts: (0..layouts as u64)
                 .map(|k| Layout::seeded(&base, 1000 + k))
@@ -218,14 +222,17 @@ mod tests {
     #[test]
     fn plan_checks_its_input() {
         assert!(matches!(
-            LabController::named("bogus"),
+            LabController::named(GaitKind::Slithering, "bogus"),
             Err(LabError::UnknownController { name, known }) if name == "bogus" && known.contains("open_loop")
         ));
         // A variant whose amplitude range excludes the nominal amplitude.
         let mut e = experiment(&["open_loop"], 1);
         e.controllers.push(
-            LabController::variant(r#"narrow={"amplitude":{"gains":{"min":0.1,"max":0.2}}}"#)
-                .unwrap(),
+            LabController::variant(
+                GaitKind::Slithering,
+                r#"narrow={"amplitude":{"gains":{"min":0.1,"max":0.2}}}"#,
+            )
+            .unwrap(),
         );
         assert!(matches!(plan(&e), Err(LabError::BadValue(m)) if m.contains("narrow")));
         assert!(matches!(

@@ -91,6 +91,7 @@ impl CycleRecord {
 
 /// Something that happened, recorded as an event.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[allow(clippy::large_enum_variant)] // Copied into the ring inside a RecordItem anyway.
 pub enum RecordEvent {
     /// The failsafe's mode changed.
     Mode { mode: Mode, reason: Reason },

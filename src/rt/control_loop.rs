@@ -10,16 +10,16 @@ use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use crossbeam_channel::{Receiver, Sender};
 
 use crate::bus::{Bus, GroupFeedback};
+use crate::controller::{BodyEstimate, Estimator, Imu, Observation};
 use crate::gait::{GaitKind, GaitSelector, ParamPatch};
 use crate::protocol::Command;
-use crate::rt::compliance::{ControllerChange, InstalledController};
+use crate::rt::controller_slots::{ControllerSlots, Installed};
 use crate::rt::messages::{Ack, Envelope, LoopRequest, Rejection};
 use crate::rt::pacer::{Cycle, Pacer};
-use crate::rt::slithering_driver::SlitheringDriver;
+use crate::rt::setpoint_guard::SetpointGuard;
 use crate::rt::stats::{LoopStats, StatsReport};
 use crate::rt::telemetry::TelemetryWriter;
 use crate::safety::failsafe::{Event, Failsafe, Health, Mode, Output};
-use crate::shape::{JointController, Measured};
 
 /// Requests applied per cycle at most, so a flood cannot stretch a cycle.
 const MAX_REQUESTS_PER_CYCLE: usize = 8;
@@ -40,11 +40,14 @@ pub struct LoopParts {
     pub velocity_feedforward: bool,
     /// Hold the measured pose after start-up instead of running the gait.
     pub hold_at_start: bool,
-    /// Slithering controllers the loop replaced, for the control side to free (bounded;
-    /// the loop only `try_send`s).
-    pub retired: Sender<Box<dyn JointController>>,
-    /// The slithering controller to start with (`None`: open loop).
-    pub slithering_controller: Option<InstalledController>,
+    /// Controllers the loop replaced or refused, for the control side to free
+    /// (bounded; the loop only `try_send`s).
+    pub retired: Sender<Installed>,
+    /// The controllers to start with, per gait (a gait without one runs the
+    /// selector's serpenoid).
+    pub controllers: Vec<(GaitKind, Installed)>,
+    /// Fill the body estimate each cycle before the controllers run, in order.
+    pub estimators: Vec<Box<dyn Estimator>>,
 }
 
 /// Whether the loop goes on.
@@ -61,9 +64,13 @@ pub struct ControlLoop {
     positions: Vec<f64>,
     velocities: Vec<f64>,
     measured: Vec<f64>,
+    measured_velocity: Vec<f64>,
     /// Reported joint torques, N·m (what compliant controllers feel).
     torques: Vec<f64>,
-    slithering: SlitheringDriver,
+    imu: Vec<Imu>,
+    body: BodyEstimate,
+    slots: ControllerSlots,
+    guard: SetpointGuard,
     held: Vec<f64>,
     held_valid: bool,
     stats: LoopStats,
@@ -79,11 +86,12 @@ pub struct ControlLoop {
 impl ControlLoop {
     pub fn new(mut parts: LoopParts) -> Self {
         let n = parts.bus.module_count();
-        let mut slithering = SlitheringDriver::new(n, parts.retired.clone());
-        if let Some(c) = parts.slithering_controller.take() {
+        let mut slots = ControllerSlots::new(parts.retired.clone());
+        for (gait, c) in parts.controllers.drain(..) {
             // Not driving yet: no hand-back, the commanded pose is not used.
-            slithering.install(ControllerChange::Install(c), &mut parts.selector, &[], 0.0);
+            slots.install(gait, c, &mut parts.selector, &[], 0.0);
         }
+        let guard = SetpointGuard::new(n, parts.selector.max_joint_speed_rad_s());
         Self {
             p: parts,
             group: GroupFeedback::new(n),
@@ -91,8 +99,12 @@ impl ControlLoop {
             positions: vec![0.0; n],
             velocities: vec![0.0; n],
             measured: vec![0.0; n],
+            measured_velocity: vec![0.0; n],
             torques: vec![0.0; n],
-            slithering,
+            imu: vec![Imu::default(); n],
+            body: BodyEstimate::default(),
+            slots,
+            guard,
             held: vec![0.0; n],
             held_valid: false,
             stats: LoopStats::default(),
@@ -134,6 +146,21 @@ impl ControlLoop {
 
     pub fn stats(&self) -> &LoopStats {
         &self.stats
+    }
+
+    /// The failsafe's mode after the last cycle.
+    pub fn mode(&self) -> Mode {
+        self.p.failsafe.mode()
+    }
+
+    /// The bus (e.g. for a simulated plant's ground truth).
+    pub fn bus(&self) -> &dyn Bus {
+        self.p.bus.as_ref()
+    }
+
+    /// The controller slots (which one drives, its last report).
+    pub fn controllers(&self) -> &ControllerSlots {
+        &self.slots
     }
 
     /// One cycle: read feedback, apply requests, run the failsafe and the gait,
@@ -182,19 +209,20 @@ impl ControlLoop {
         let flow = match output {
             Output::Resync => {
                 self.p.selector.resync(&self.measured, t_s);
-                self.slithering.pause();
+                self.slots.pause();
+                self.guard.forget();
                 self.p.failsafe.resynced(now_s);
                 if self.p.hold_at_start && !self.started {
                     let _ = self.p.failsafe.request(now_s, Event::Hold);
                     self.hold_commands();
                 } else {
-                    self.run_commands(t_s);
+                    self.run_commands(t_s, now_s);
                 }
                 self.started = true;
                 Flow::Continue
             }
             Output::Run => {
-                self.run_commands(t_s);
+                self.run_commands(t_s, now_s);
                 Flow::Continue
             }
             Output::Hold => {
@@ -257,7 +285,12 @@ impl ControlLoop {
                 non_finite = true;
             }
             self.measured[i] = f.position_rad as f64;
+            self.measured_velocity[i] = f.velocity_rad_s as f64;
             self.torques[i] = f.torque_nm as f64;
+            self.imu[i] = Imu {
+                accel_m_s2: f.accel_m_s2.map(f64::from),
+                gyro_rad_s: f.gyro_rad_s.map(f64::from),
+            };
             min_module_time =
                 Some(min_module_time.map_or(f.module_time_us, |t| t.min(f.module_time_us)));
         }
@@ -281,19 +314,24 @@ impl ControlLoop {
     fn apply(
         &mut self,
         req: LoopRequest,
-        controller: Option<ControllerChange>,
+        controller: Option<Installed>,
         now_s: f64,
         t_s: f64,
         _health: &Health,
     ) -> Result<(), Rejection> {
         match req {
-            LoopRequest::SetParams(GaitKind::Slithering, patch) => {
-                return self.set_slithering(Some(patch), controller, t_s);
+            LoopRequest::SetParams(kind, patch) => {
+                return self.set_params(kind, &patch, controller, t_s);
             }
-            LoopRequest::SetCompliance => return self.set_slithering(None, controller, t_s),
+            LoopRequest::SetController(kind) => {
+                let c = controller.ok_or(Rejection::NoController)?;
+                let (selector, commanded) = (&mut self.p.selector, &self.positions);
+                self.slots.install(kind, c, selector, commanded, t_s);
+                return Ok(());
+            }
             _ => {
                 if let Some(c) = controller {
-                    self.slithering.refuse(c);
+                    self.slots.refuse(c);
                 }
             }
         }
@@ -308,17 +346,12 @@ impl ControlLoop {
                     Mode::Hold | Mode::Limp => fs.request(now_s, Event::Arm)?,
                 }
                 self.p.selector.set_gait(kind, t_s);
-                if kind != GaitKind::Slithering {
+                if self.slots.engaged().is_some_and(|g| g != kind) {
                     let (selector, commanded) = (&mut self.p.selector, &self.positions);
-                    self.slithering.hand_back(selector, commanded, t_s);
+                    self.slots.hand_back(selector, commanded, t_s);
                 }
                 Ok(())
             }
-            LoopRequest::SetParams(kind, patch) => self
-                .p
-                .selector
-                .set_params(kind, &patch, t_s)
-                .map_err(|_| Rejection::InvalidParams),
             LoopRequest::SetBlendTime(s) => self
                 .p
                 .selector
@@ -332,62 +365,84 @@ impl ControlLoop {
                 self.stop_seen = true;
                 fs.request(now_s, Event::Shutdown)
             }
-            LoopRequest::SetCompliance => Err(Rejection::NoController),
+            LoopRequest::SetParams(..) | LoopRequest::SetController(_) => {
+                unreachable!("handled above")
+            }
         }
     }
 
-    /// Slithering's parameters and / or its controller, changed together at this
-    /// cycle boundary. A controller set stays consistent with the parameters: new
-    /// parameters must come with a controller rebuilt for them.
-    fn set_slithering(
+    /// A gait's new parameters, and maybe a new controller for it, at this cycle
+    /// boundary. The controller that will run the gait must accept them; a driving
+    /// controller hands back so the selector blends into them, then takes over again.
+    fn set_params(
         &mut self,
-        patch: Option<ParamPatch>,
-        controller: Option<ControllerChange>,
+        kind: GaitKind,
+        patch: &ParamPatch,
+        controller: Option<Installed>,
         t_s: f64,
     ) -> Result<(), Rejection> {
-        let refused = match (&patch, &controller) {
-            (None, None) => Some(Rejection::NoController),
-            (Some(_), None) if self.slithering.has_controller() => Some(Rejection::StaleController),
-            (Some(patch), _) => self
-                .p
-                .selector
-                .set_params(GaitKind::Slithering, patch, t_s)
-                .err()
-                .map(|_| Rejection::InvalidParams),
-            (None, Some(_)) => None,
+        let selector = &self.p.selector;
+        let length = selector.layout().module_length_m;
+        let checked = match selector.table().get(kind).patched_for(kind, patch, length) {
+            Err(_) => Err(Rejection::InvalidParams),
+            Ok(next) => match &controller {
+                Some(c) => c.controller.accepts(&next),
+                None => self.slots.accepts(kind, &next),
+            }
+            .map_err(Rejection::ControllerRefuses),
         };
-        match (refused, controller) {
-            (Some(why), c) => {
-                if let Some(c) = c {
-                    self.slithering.refuse(c);
-                }
-                Err(why)
+        if let Err(why) = checked {
+            if let Some(c) = controller {
+                self.slots.refuse(c);
             }
-            (None, Some(c)) => {
-                let (selector, commanded) = (&mut self.p.selector, &self.positions);
-                self.slithering.install(c, selector, commanded, t_s);
-                Ok(())
-            }
-            (None, None) => Ok(()),
+            return Err(why);
         }
+        let (selector, commanded) = (&mut self.p.selector, &self.positions);
+        selector
+            .set_params(kind, patch, t_s)
+            .map_err(|_| Rejection::InvalidParams)?;
+        if self.slots.engaged() == Some(kind) {
+            self.slots.hand_back(selector, commanded, t_s);
+        }
+        if let Some(c) = controller {
+            self.slots.install(kind, c, selector, commanded, t_s);
+        }
+        Ok(())
     }
 
-    fn run_commands(&mut self, t_s: f64) {
+    fn run_commands(&mut self, t_s: f64, now_s: f64) {
         self.held_valid = false;
         self.p
             .selector
             .update(t_s, &mut self.positions, &mut self.velocities);
-        let measured = Measured {
+        let previous = self.body;
+        let mut obs = Observation {
             position_rad: &self.measured,
+            velocity_rad_s: &self.measured_velocity,
             torque_nm: &self.torques,
+            imu: &self.imu,
+            body: &previous,
         };
-        self.slithering.drive(
-            t_s,
-            &self.p.selector,
-            &measured,
-            &mut self.positions,
-            &mut self.velocities,
-        );
+        for e in &mut self.p.estimators {
+            e.update(t_s, &obs, &mut self.body);
+        }
+        obs.body = &self.body;
+        let drove = self
+            .slots
+            .drive(t_s, &self.p.selector, &obs, &mut self.positions);
+        if self
+            .guard
+            .check(t_s, &mut self.positions, &mut self.velocities, drove)
+            .is_err()
+        {
+            // Not sent: hold what was sent last cycle, say why, wait for the operator.
+            self.p.failsafe.setpoint_fault(now_s);
+            self.hold_commands();
+            for (p, c) in self.positions.iter_mut().zip(&self.commands) {
+                *p = f64::from(c.position_rad);
+            }
+            return;
+        }
         for i in 0..self.commands.len() {
             let velocity = if self.p.velocity_feedforward {
                 self.velocities[i] as f32
@@ -405,7 +460,8 @@ impl ControlLoop {
     /// Freeze the set-points: the last commanded ones when there are any, else the
     /// measured pose (coming out of limp).
     fn hold_commands(&mut self) {
-        self.slithering.pause();
+        self.slots.pause();
+        self.guard.forget();
         if !self.held_valid {
             for i in 0..self.commands.len() {
                 let last = self.commands[i].position_rad;
@@ -427,7 +483,8 @@ impl ControlLoop {
     }
 
     fn limp_commands(&mut self) {
-        self.slithering.pause();
+        self.slots.pause();
+        self.guard.forget();
         self.held_valid = false;
         self.commands.fill(Command::LIMP);
     }
@@ -446,7 +503,7 @@ impl ControlLoop {
     fn publish(&mut self, c: &Cycle) {
         let (group, commands, stats) = (&self.group, &self.commands, &self.stats);
         let (selector, failsafe, bus) = (&self.p.selector, &self.p.failsafe, &self.p.bus);
-        let slithering = &self.slithering;
+        let (slots, guard) = (&self.slots, self.guard.counters());
         let (applied, refused) = (self.applied, self.refused);
         self.p.telemetry.write(|snap| {
             snap.cycle = c.index;
@@ -475,7 +532,8 @@ impl ControlLoop {
             snap.bus = bus.counters();
             snap.requests_applied = applied;
             snap.requests_refused = refused;
-            slithering.publish(&mut snap.compliance);
+            slots.publish(selector.active(), &mut snap.controller);
+            snap.guard = guard;
         });
     }
 }

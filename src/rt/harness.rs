@@ -6,17 +6,20 @@ use std::sync::atomic::{AtomicBool, AtomicU64};
 use crossbeam_channel::{Receiver, Sender};
 
 use crate::bus::echo::{EchoBus, EchoFaults};
+use crate::controller::catalog::Catalog;
+use crate::controller::registry::{self, BuildContext, Selection};
+use crate::controllers::REGISTRY;
 use crate::gait::{BodyLayout, GaitKind, GaitSelector, GaitTable, Plane};
 use crate::rt::control_loop::{ControlLoop, LoopParts};
+use crate::rt::controller_slots::Installed;
 use crate::rt::messages::{Ack, Envelope};
 use crate::rt::pacer::LockstepPacer;
 use crate::rt::telemetry::{self, Snapshot, TelemetryReader};
 use crate::safety::failsafe::{Failsafe, FailsafeConfig};
-use crate::shape::JointController;
 
 pub const PERIOD_NS: u64 = 1_000_000;
 /// Module length of the harness's body, m.
-pub const MODULE_LENGTH_M: f64 = 0.064;
+pub use crate::gait::SEA_MODULE_LENGTH_M as MODULE_LENGTH_M;
 
 pub struct Harness {
     pub control: ControlLoop,
@@ -25,10 +28,37 @@ pub struct Harness {
     pub telemetry: TelemetryReader,
     pub stop: Arc<AtomicBool>,
     pub faults: Arc<EchoFaults>,
-    /// Slithering controllers the loop replaced (drain and drop them off the loop).
-    pub retired: Receiver<Box<dyn JointController>>,
+    /// Controllers the loop replaced (drain and drop them off the loop).
+    pub retired: Receiver<Installed>,
     /// The body the gaits (and controllers built for this loop) use.
     pub layout: BodyLayout,
+    /// Names of the controllers installed (every gait starts on `open_loop`, as the
+    /// daemon's default configuration does).
+    pub catalog: Catalog,
+}
+
+/// `sel` built for `gait` of `layout` with `table`'s parameters, recorded in `catalog`.
+///
+/// # Panics
+/// If the selection does not build (a test's mistake).
+pub fn build_installed(
+    catalog: &Catalog,
+    layout: &BodyLayout,
+    table: &GaitTable,
+    gait: GaitKind,
+    sel: &Selection,
+) -> Installed {
+    let ctx = BuildContext {
+        gait,
+        layout,
+        params: table.get(gait),
+    };
+    let built = registry::build(REGISTRY, sel, &ctx).expect("the test's controller builds");
+    let info = catalog.insert(built.info);
+    Installed {
+        id: info.id,
+        controller: built.controller,
+    }
 }
 
 /// `n` modules starting at `pose` (or straight), running `gait`.
@@ -63,10 +93,22 @@ pub fn echo_harness_on(
     let (retired_tx, retired_rx) = crossbeam_channel::bounded(18);
     let (writer, reader) = telemetry::channel(Snapshot::new(n, gait, table, 2.0));
     let stop = Arc::new(AtomicBool::new(false));
+    let catalog = Catalog::default();
+    let open_loop = Selection::named("open_loop");
+    let controllers = GaitKind::ALL
+        .into_iter()
+        .map(|g| (g, build_installed(&catalog, &layout, &table, g, &open_loop)))
+        .collect();
     let control = ControlLoop::new(LoopParts {
         bus: Box::new(bus),
         pacer: Box::new(LockstepPacer::new(PERIOD_NS, 1_000_000_000)),
-        selector: GaitSelector::new(layout.clone(), table, gait, 2.0, 3.46),
+        selector: GaitSelector::new(
+            layout.clone(),
+            table,
+            gait,
+            2.0,
+            crate::gait::SEA_MAX_JOINT_SPEED_RAD_S,
+        ),
         failsafe: Failsafe::new(failsafe),
         requests: req_rx,
         acks: ack_tx,
@@ -76,7 +118,8 @@ pub fn echo_harness_on(
         velocity_feedforward: true,
         hold_at_start,
         retired: retired_tx,
-        slithering_controller: None,
+        controllers,
+        estimators: Vec::new(),
     });
     Harness {
         control,
@@ -87,5 +130,6 @@ pub fn echo_harness_on(
         faults,
         retired: retired_rx,
         layout,
+        catalog,
     }
 }

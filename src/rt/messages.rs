@@ -1,21 +1,22 @@
 //! What crosses between the control socket and the loop. Requests and acks are
-//! `Copy`; the only heap object is a slithering controller attached to an envelope,
-//! built on the control side and moved (a pointer) through the bounded channel, so
-//! nothing allocates per message.
+//! `Copy`; the only heap object is a controller attached to an envelope, built on the
+//! control side and moved (a pointer) through the bounded channel, so nothing
+//! allocates per message.
+use crate::controller::NominalMismatch;
 use crate::gait::{GaitKind, ParamPatch};
-use crate::rt::compliance::ControllerChange;
+use crate::rt::controller_slots::Installed;
 
 /// An operator request, applied by the loop at a cycle boundary.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum LoopRequest {
     /// Blend into this gait (arms the loop if it was held or limp and feedback is healthy).
     SetGait(GaitKind),
-    /// Change a gait's parameters (validated again by the loop before use). For
-    /// slithering while a controller is set, the envelope carries the controller
-    /// rebuilt for the new parameters.
+    /// Change a gait's parameters (validated again by the loop before use, also
+    /// against the gait's controller). The envelope may carry a new controller for
+    /// the gait, installed with them.
     SetParams(GaitKind, ParamPatch),
-    /// Change the slithering controller to the one the envelope carries.
-    SetCompliance,
+    /// Install the controller the envelope carries for this gait.
+    SetController(GaitKind),
     /// Change the gait blend time, s.
     SetBlendTime(f64),
     /// Freeze the set-points where they are.
@@ -36,10 +37,10 @@ pub enum LoopRequest {
 pub struct Envelope {
     pub ticket: u64,
     pub request: LoopRequest,
-    /// A slithering controller change that goes with `request` (`SetCompliance`, or
-    /// `SetParams` of slithering). The loop never frees it: a refused or replaced
-    /// controller goes back through the retired channel.
-    pub controller: Option<ControllerChange>,
+    /// A controller that goes with `request` (`SetController`, or `SetParams`). The
+    /// loop never frees it: a refused or replaced controller goes back through the
+    /// retired channel.
+    pub controller: Option<Installed>,
 }
 
 impl Envelope {
@@ -54,7 +55,7 @@ impl Envelope {
 }
 
 /// Why the loop refused a request.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
 pub enum Rejection {
     #[error("e-stop is latched: send arm first")]
     EStopLatched,
@@ -64,11 +65,9 @@ pub enum Rejection {
     InvalidParams,
     #[error("shutting down")]
     ShuttingDown,
-    #[error(
-        "a slithering controller is set: its parameters must come with a controller rebuilt for them"
-    )]
-    StaleController,
-    #[error("no slithering controller attached")]
+    #[error("the gait's controller cannot follow these parameters: {0}")]
+    ControllerRefuses(NominalMismatch),
+    #[error("no controller attached")]
     NoController,
 }
 

@@ -7,7 +7,8 @@ use serde::Serialize;
 
 use crate::bus::BusCounters;
 use crate::gait::{GaitKind, GaitTable};
-use crate::rt::compliance::ComplianceTelemetry;
+use crate::rt::controller_slots::ControllerTelemetry;
+use crate::rt::setpoint_guard::GuardCounters;
 use crate::rt::stats::LoopStats;
 use crate::safety::failsafe::{Mode, Reason};
 
@@ -43,8 +44,12 @@ pub struct Snapshot {
     /// Requests the loop has applied or refused.
     pub requests_applied: u64,
     pub requests_refused: u64,
-    /// The slithering controller and, while it drives, its windows and shape forces.
-    pub compliance: ComplianceTelemetry,
+    /// Every gait's controller and, while the active one drives, its report.
+    pub controller: ControllerTelemetry,
+    /// What the set-point guard changed or refused.
+    pub guard: GuardCounters,
+    /// Recorder items dropped because its ring was full (0 without a recorder).
+    pub record_dropped: u64,
 }
 
 impl Snapshot {
@@ -63,7 +68,9 @@ impl Snapshot {
             bus: BusCounters::default(),
             requests_applied: 0,
             requests_refused: 0,
-            compliance: ComplianceTelemetry::default(),
+            controller: ControllerTelemetry::default(),
+            guard: GuardCounters::default(),
+            record_dropped: 0,
         }
     }
 }

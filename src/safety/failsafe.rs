@@ -36,6 +36,8 @@ pub enum Reason {
     Operator,
     FeedbackTimeout,
     NonFiniteFeedback,
+    /// A controller produced a non-finite set-point; it was not sent.
+    NonFiniteSetpoint,
     EStop,
     Shutdown,
     /// Running again by itself after a fault cleared (`auto_resume`).
@@ -338,6 +340,17 @@ impl Failsafe {
                 }
                 _ => self.start_resync(Then::Run(Reason::Operator)),
             },
+        }
+    }
+
+    /// The loop refused to send a non-finite set-point this cycle: hold the last
+    /// set-points sent, until the operator arms (never auto-resumed: the same
+    /// controller would do it again). Ignored unless the gait is being run.
+    pub fn setpoint_fault(&mut self, now_s: f64) {
+        if matches!(self.state, State::Running | State::Resync { .. }) {
+            let held = State::Hold { operator: true };
+            self.enter(held, Mode::Hold, Reason::NonFiniteSetpoint, now_s);
+            self.resync_asked = false;
         }
     }
 

@@ -4,20 +4,23 @@
 //! whose nominal moves (`Ω₀ = ωT·t`), it makes damping act on the deviation's rate, so
 //! an unforced wave runs at ωT instead of lagging by `B·ωT/K`.
 
+use crate::controller::config::{ConfigError, check_range};
+
 /// Compliant (`+1`: the shape gives way to the force) or anti-compliant (`−1`: it
 /// pushes back).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
-pub enum Compliance {
+pub enum AdmittanceSign {
     Compliant,
     AntiCompliant,
 }
 
-impl Compliance {
-    pub fn sign(self) -> f64 {
+impl AdmittanceSign {
+    /// `s` in the admittance: +1 or −1.
+    pub fn factor(self) -> f64 {
         match self {
-            Compliance::Compliant => 1.0,
-            Compliance::AntiCompliant => -1.0,
+            AdmittanceSign::Compliant => 1.0,
+            AdmittanceSign::AntiCompliant => -1.0,
         }
     }
 }
@@ -30,8 +33,17 @@ pub struct AdmittanceGains {
     pub mass: f64,
     pub damping: f64,
     pub stiffness: f64,
-    /// Range of σ (absolute, not of the deviation). Infinite bounds are allowed.
+    /// Range of σ (absolute, not of the deviation). Infinite bounds are allowed
+    /// (`null` in JSON).
+    #[serde(
+        serialize_with = "crate::controller::config::bound::serialize",
+        deserialize_with = "crate::controller::config::bound::lower"
+    )]
     pub min: f64,
+    #[serde(
+        serialize_with = "crate::controller::config::bound::serialize",
+        deserialize_with = "crate::controller::config::bound::upper"
+    )]
     pub max: f64,
     /// τ_D, added to the force.
     #[serde(default)]
@@ -39,19 +51,39 @@ pub struct AdmittanceGains {
 }
 
 impl AdmittanceGains {
-    /// Mass positive, damping and stiffness non-negative, all finite; `min ≤ max`.
-    pub fn validate(&self) -> Result<(), String> {
-        let finite = [self.mass, self.damping, self.stiffness, self.bias_force];
-        if finite.iter().any(|v| !v.is_finite()) {
-            return Err("mass, damping, stiffness and bias_force must be finite".into());
+    /// Every bound of the gains, for a parameter whose values must lie in
+    /// `[lo, hi]` (infinite for the temporal phase). Semi-implicit Euler at the loop's
+    /// 1 ms stays stable and well damped only for moderate `K/M` and `B/M`; the bias
+    /// force may shift the parameter at most across its range (or, for an unbounded
+    /// parameter, by `max_shift`) against the stiffness, so a typo cannot run a
+    /// parameter away.
+    pub fn check(&self, lo: f64, hi: f64, max_shift: f64) -> Result<(), ConfigError> {
+        check_range("mass", self.mass, 1e-3, 1e3)?;
+        check_range("damping", self.damping, 0.0, 1e3 * self.mass)?;
+        check_range("stiffness", self.stiffness, 0.0, 4e4 * self.mass)?;
+        let (min, max) = (self.min, self.max);
+        if lo.is_finite() || hi.is_finite() {
+            check_range("min", min, lo, hi)?;
+            check_range("max", max, lo, hi)?;
+        } else if min.is_finite() || max.is_finite() {
+            return Err(ConfigError::invalid(
+                "min",
+                "this parameter grows with time: its min and max must be unbounded (null)",
+            ));
         }
-        if self.mass <= 0.0 || self.damping < 0.0 || self.stiffness < 0.0 {
-            return Err("mass must be > 0, damping and stiffness >= 0".into());
+        if min > max {
+            return Err(ConfigError::invalid(
+                "min",
+                format!("min {min} is above max {max}"),
+            ));
         }
-        if self.min.is_nan() || self.max.is_nan() || self.min > self.max {
-            return Err(format!("range [{}, {}] is empty", self.min, self.max));
-        }
-        Ok(())
+        let shift = if lo.is_finite() && hi.is_finite() {
+            hi - lo
+        } else {
+            max_shift
+        };
+        let bias = self.stiffness * shift;
+        check_range("bias_force", self.bias_force, -bias, bias)
     }
 }
 
@@ -68,12 +100,12 @@ impl ParamState {
     pub fn step(
         &mut self,
         g: &AdmittanceGains,
-        compliance: Compliance,
+        sign: AdmittanceSign,
         force: f64,
         nominal: f64,
         dt_s: f64,
     ) {
-        let accel = (compliance.sign() * force + g.bias_force
+        let accel = (sign.factor() * force + g.bias_force
             - g.damping * self.rate
             - g.stiffness * self.deviation)
             / g.mass;
@@ -106,7 +138,7 @@ mod tests {
         }
     }
 
-    fn settle(force: f64, c: Compliance) -> f64 {
+    fn settle(force: f64, c: AdmittanceSign) -> f64 {
         let mut p = ParamState::default();
         for _ in 0..5000 {
             p.step(&gains(), c, force, 0.8, 1e-3);
@@ -116,9 +148,9 @@ mod tests {
 
     #[test]
     fn a_steady_force_moves_the_parameter_by_force_over_stiffness() {
-        assert!((settle(1.6, Compliance::Compliant) - 0.9).abs() < 1e-6);
-        assert!((settle(1.6, Compliance::AntiCompliant) - 0.7).abs() < 1e-6);
-        assert!((settle(0.0, Compliance::Compliant) - 0.8).abs() < 1e-9);
+        assert!((settle(1.6, AdmittanceSign::Compliant) - 0.9).abs() < 1e-6);
+        assert!((settle(1.6, AdmittanceSign::AntiCompliant) - 0.7).abs() < 1e-6);
+        assert!((settle(0.0, AdmittanceSign::Compliant) - 0.8).abs() < 1e-9);
     }
 
     #[test]
@@ -126,20 +158,39 @@ mod tests {
         let mut p = ParamState::default();
         for k in 0..6000 {
             let f = if k < 1000 { 100.0 } else { 0.0 };
-            p.step(&gains(), Compliance::Compliant, f, 0.8, 1e-3);
+            p.step(&gains(), AdmittanceSign::Compliant, f, 0.8, 1e-3);
             assert!((0.0..=1.5).contains(&p.value(0.8)));
         }
         assert!((p.value(0.8) - 0.8).abs() < 1e-4, "{p:?}");
     }
 
     #[test]
-    fn bad_gains_are_refused() {
+    fn bad_gains_are_refused_naming_the_field() {
+        let field = |g: AdmittanceGains| match g.check(0.0, 2.0, 1.0).unwrap_err() {
+            ConfigError::OutOfRange { field, .. } | ConfigError::Invalid { field, .. } => field,
+            e => panic!("{e}"),
+        };
         let mut g = gains();
         g.mass = 0.0;
-        assert!(g.validate().is_err());
+        assert_eq!(field(g), "mass");
         let mut g = gains();
-        g.min = 2.0;
-        assert!(g.validate().is_err());
-        assert!(gains().validate().is_ok());
+        g.min = 1.8;
+        assert_eq!(field(g), "min");
+        let mut g = gains();
+        g.bias_force = 1e308;
+        assert_eq!(field(g), "bias_force");
+        let mut g = gains();
+        g.max = f64::INFINITY;
+        assert_eq!(field(g), "max");
+        assert!(gains().check(0.0, 2.0, 1.0).is_ok());
+        // An unbounded parameter (the phase) must stay unbounded, its bias small.
+        let mut g = gains();
+        (g.min, g.max) = (f64::NEG_INFINITY, f64::INFINITY);
+        assert!(g.check(f64::NEG_INFINITY, f64::INFINITY, 1.0).is_ok());
+        g.bias_force = 1e3;
+        assert!(g.check(f64::NEG_INFINITY, f64::INFINITY, 1.0).is_err());
+        g.bias_force = 0.0;
+        g.max = 100.0;
+        assert!(g.check(f64::NEG_INFINITY, f64::INFINITY, 1.0).is_err());
     }
 }

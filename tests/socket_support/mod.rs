@@ -11,6 +11,7 @@ use std::time::Duration;
 use serde_json::Value;
 use snaked::control::client::{Client, Endpoint};
 use snaked::control::{BusKind, DaemonInfo, LoopHandle, Pacing, RunningServer, ServerConfig};
+use snaked::controller::catalog::Catalog;
 use snaked::gait::{BodyLayout, GaitKind, GaitParams, GaitTable, Plane};
 use snaked::rt::messages::{Ack, Envelope, LoopRequest, Rejection};
 use snaked::rt::telemetry::{self, Snapshot};
@@ -120,7 +121,7 @@ fn apply(s: &mut Snapshot, r: &LoopRequest) {
         LoopRequest::Limp | LoopRequest::Shutdown => s.mode = Mode::Limp,
         LoopRequest::EStop => s.mode = Mode::EStop,
         LoopRequest::Arm => s.mode = Mode::Running,
-        LoopRequest::SetCompliance => {}
+        LoopRequest::SetController(_) => {}
     }
     s.reason = Reason::Operator;
 }
@@ -134,8 +135,10 @@ pub fn fake_loop(spec: LoopSpec) -> (FakeLoop, LoopHandle) {
     let stop = Arc::new(AtomicBool::new(false));
     let seen = Arc::new(Mutex::new(Vec::new()));
     let controllers = Arc::new(Mutex::new(Vec::new()));
+    let catalog = Catalog::default();
     let thread = {
         let (stop, seen, controllers) = (stop.clone(), seen.clone(), controllers.clone());
+        let catalog = catalog.clone();
         std::thread::spawn(move || {
             let mut state = initial;
             // The receiver lives here even when not draining, so sends see "full".
@@ -144,16 +147,23 @@ pub fn fake_loop(spec: LoopSpec) -> (FakeLoop, LoopHandle) {
                     while let Ok(env) = req_rx.try_recv() {
                         seen.lock().unwrap().push(env.request);
                         if let Some(c) = &env.controller {
-                            controllers
-                                .lock()
-                                .unwrap()
-                                .push(c.setting().controller.to_owned());
+                            let info = catalog.get(c.id).expect("built controllers are named");
+                            let name = format!("{}/{}", info.controller, info.preset);
+                            controllers.lock().unwrap().push(name);
                         }
                         if let Some(result) = (spec.policy)(&env.request) {
                             if result.is_ok() {
                                 apply(&mut state, &env.request);
-                                if let Some(c) = &env.controller {
-                                    state.compliance.setting = c.setting();
+                                let gait = match env.request {
+                                    LoopRequest::SetController(g)
+                                    | LoopRequest::SetParams(g, _) => Some(g),
+                                    _ => None,
+                                };
+                                if let (Some(c), Some(g)) = (&env.controller, gait) {
+                                    state.controller.installed[g.index()] = c.id;
+                                    if g == state.gait {
+                                        state.controller.active_id = c.id;
+                                    }
                                 }
                                 state.requests_applied += 1;
                             } else {
@@ -202,6 +212,7 @@ pub fn fake_loop(spec: LoopSpec) -> (FakeLoop, LoopHandle) {
         info,
         layout: BodyLayout::alternating(spec.joints, Plane::Lateral, 0.064),
         retired: retired_rx,
+        catalog,
     };
     let fake = FakeLoop {
         stop,

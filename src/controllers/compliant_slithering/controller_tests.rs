@@ -1,9 +1,10 @@
 use std::f64::consts::PI;
 
 use super::*;
+use crate::controller::testing::ObservationBuf;
+use crate::controllers::open_loop::OpenLoop;
 use crate::emu::servo::MODULE_LENGTH_M;
 use crate::gait::{GaitKind, Plane};
-use crate::shape::controller::OpenLoopSlithering;
 
 const N: usize = 18;
 
@@ -16,18 +17,19 @@ fn params() -> GaitParams {
 }
 
 fn full() -> CompliantSlithering {
-    CompliantSlithering::new(
-        "a_ws_omega",
-        &layout(),
-        &params(),
-        SlitheringCompliance::full(),
-    )
-    .unwrap()
+    CompliantSlithering::new(&layout(), &params(), CompliantSlitheringConfig::full())
+}
+
+/// Signal `k` of the report (`SIGNALS` order: 2 is the phase lag).
+fn signal(c: &dyn Controller, k: usize) -> f64 {
+    let mut r = ControllerReport::EMPTY;
+    c.report(&mut r);
+    r.signals[k]
 }
 
 /// Runs `c` from `t0` for `seconds` with reported torques from `torque(t, set_points)`.
 fn run_from(
-    c: &mut dyn JointController,
+    c: &mut dyn Controller,
     t0: f64,
     seconds: f64,
     mut torque: impl FnMut(f64, &[f64]) -> [f64; N],
@@ -35,23 +37,17 @@ fn run_from(
     let mut out = vec![0.0; N];
     let pos = [0.0; N];
     let mut tau = [0.0; N];
+    let buf = ObservationBuf::new(N);
     for k in 0..(seconds * 1000.0) as usize {
         let t = t0 + k as f64 * 1e-3;
-        c.step(
-            t,
-            &Measured {
-                position_rad: &pos,
-                torque_nm: &tau,
-            },
-            &mut out,
-        );
+        c.step(t, &buf.observe(&pos, &tau), &mut out);
         tau = torque(t, &out);
     }
     out
 }
 
 fn run(
-    c: &mut dyn JointController,
+    c: &mut dyn Controller,
     seconds: f64,
     torque: impl FnMut(f64, &[f64]) -> [f64; N],
 ) -> Vec<f64> {
@@ -60,11 +56,11 @@ fn run(
 
 #[test]
 fn without_torque_every_variant_is_the_open_loop_gait() {
-    let mut open = OpenLoopSlithering::new(layout(), &params());
+    let mut open = OpenLoop::new(GaitKind::Slithering, &layout(), &params());
     let reference = run(&mut open, 7.3, |_, _| [0.0; N]);
-    for name in SlitheringCompliance::PRESETS {
-        let config = SlitheringCompliance::preset(name).unwrap();
-        let mut c = CompliantSlithering::new("x", &layout(), &params(), config).unwrap();
+    for (name, _) in CompliantSlitheringConfig::PRESETS {
+        let config = CompliantSlitheringConfig::preset(name).unwrap();
+        let mut c = CompliantSlithering::new(&layout(), &params(), config);
         let ours = run(&mut c, 7.3, |_, _| [0.0; N]);
         for (i, (a, b)) in ours.iter().zip(&reference).enumerate() {
             assert!((a - b).abs() < 1e-6, "{name} joint {i}: {a} vs {b}");
@@ -88,9 +84,9 @@ fn a_push_that_bends_the_body_further_increases_a_compliant_amplitude() {
     run(&mut c, 3.0, push);
     let a = c.value_at(Param::Amplitude, 0.5);
     assert!(a > params().amplitude_lat_rad + 0.1, "compliant: {a}");
-    let mut anti = SlitheringCompliance::full();
-    anti.compliance = crate::shape::admittance::Compliance::AntiCompliant;
-    let mut c = CompliantSlithering::new("anti", &layout(), &params(), anti).unwrap();
+    let mut anti = CompliantSlitheringConfig::full();
+    anti.sign = crate::shape::admittance::AdmittanceSign::AntiCompliant;
+    let mut c = CompliantSlithering::new(&layout(), &params(), anti);
     run(&mut c, 3.0, push);
     let a = c.value_at(Param::Amplitude, 0.5);
     assert!(a < params().amplitude_lat_rad - 0.1, "anti-compliant: {a}");
@@ -117,13 +113,7 @@ fn resisting_the_wave_delays_the_phase_and_releasing_it_recovers() {
             }
             tau
         });
-        let mut lag = 0.0;
-        c.for_each_signal(&mut |name, v| {
-            if name == "phase_lag_rad" {
-                lag = v;
-            }
-        });
-        lag
+        signal(c, 2)
     };
     let held = lag_at(&mut c, 0.0, 3.0, true);
     assert!(held < -0.2, "{held}");
@@ -166,17 +156,17 @@ fn windows_stay_half_waves_and_a_learnt_amplitude_travels_off_the_tail() {
 #[test]
 fn signals_and_fields_can_be_read_before_the_first_step() {
     let c = full();
-    let mut names = Vec::new();
-    c.for_each_signal(&mut |n, v| {
-        assert!(v.is_finite(), "{n} = {v}");
-        names.push(n.to_owned());
-    });
-    assert!(names.iter().any(|n| n == "amplitude_mean_rad"), "{names:?}");
+    let mut r = ControllerReport::EMPTY;
+    c.report(&mut r);
+    for (k, v) in r.signals[..SIGNALS].iter().enumerate() {
+        assert!(v.is_finite(), "signal {k} = {v}");
+    }
+    assert!((r.signals[0] - params().amplitude_lat_rad).abs() < 1e-9);
     assert!((c.value_at(Param::Amplitude, 0.5) - params().amplitude_lat_rad).abs() < 1e-9);
 }
 
 #[test]
-fn the_report_shows_each_field_and_reset_starts_afresh() {
+fn the_report_shows_each_field_and_engaging_starts_afresh() {
     let push = |_: f64, sp: &[f64]| {
         let mut tau = [0.0; N];
         for (t, &x) in tau.iter_mut().zip(sp).take(N / 2) {
@@ -185,63 +175,70 @@ fn the_report_shows_each_field_and_reset_starts_afresh() {
         tau
     };
     let mut c = full();
-    let mut report = crate::shape::ComplianceReport::default();
-    c.compliance_report(&mut report);
-    assert!(report.available, "the nominal shape before the first step");
+    let mut report = ControllerReport::EMPTY;
+    c.report(&mut report);
     let nominal = &report.fields[Param::Amplitude.index()];
+    assert!(nominal.count > 0, "the nominal shape before the first step");
     assert!(
-        nominal.value[..nominal.len()]
+        nominal.columns[0][..nominal.len()]
             .iter()
             .all(|&v| v == params().amplitude_lat_rad)
     );
     run(&mut c, 2.0, push);
-    c.compliance_report(&mut report);
-    assert!(report.available);
+    c.report(&mut report);
     let (windows, values, forces) = c.field(Param::Amplitude);
     let amp = &report.fields[Param::Amplitude.index()];
     assert_eq!(amp.count, windows.len());
-    assert_eq!(amp.centralization, Centralization::Windowed);
-    assert_eq!(&amp.value[..amp.len()], values);
-    assert_eq!(&amp.force[..amp.len()], forces);
-    assert_eq!(report.travelling_windows, windows.len());
+    assert_eq!(&amp.columns[0][..amp.len()], values);
+    assert_eq!(&amp.columns[1][..amp.len()], forces);
+    assert_eq!(report.signals[3], windows.len() as f64);
+    assert!(report.signals[4] > 0.0, "windows were born");
     let phase = &report.fields[Param::Phase.index()];
     assert_eq!(phase.count, 1, "central phase");
-    assert!((phase.value[0] - report.phase_lag_rad).abs() < 1e-9);
-    let mut lag = f64::NAN;
-    c.for_each_signal(&mut |name, v| {
-        if name == "phase_lag_rad" {
-            lag = v;
-        }
-    });
-    assert!((lag - report.phase_lag_rad).abs() < 1e-9);
+    assert!((phase.columns[0][0] - report.signals[2]).abs() < 1e-9);
 
-    c.reset();
-    c.compliance_report(&mut report);
+    // Engaged again at t = 5 s with the phase the open-loop gait has then: a new
+    // controller's behaviour from there, whatever it learnt before.
+    crate::controller::testing::engage_at(&mut c, &layout(), &params(), 5.0);
+    c.report(&mut report);
     let amp = &report.fields[Param::Amplitude.index()];
     assert!(
-        amp.value[..amp.len()]
+        amp.columns[0][..amp.len()]
             .iter()
             .all(|&v| v == params().amplitude_lat_rad)
     );
     let mut fresh = full();
+    crate::controller::testing::engage_at(&mut fresh, &layout(), &params(), 5.0);
     let ours = run_from(&mut c, 5.0, 1.0, push);
     let theirs = run_from(&mut fresh, 5.0, 1.0, push);
-    assert_eq!(ours, theirs, "a reset controller is a new one");
+    assert_eq!(ours, theirs, "an engaged controller is a new one");
+    let mut open = OpenLoop::new(GaitKind::Slithering, &layout(), &params());
+    let reference = run(&mut open, 5.5, |_, _| [0.0; N]);
+    let mut late = full();
+    crate::controller::testing::engage_at(&mut late, &layout(), &params(), 5.0);
+    let continued = run_from(&mut late, 5.0, 0.5, |_, _| [0.0; N]);
+    for (a, b) in continued.iter().zip(&reference) {
+        assert!((a - b).abs() < 1e-6, "engaged late, it continues the gait");
+    }
 }
 
 #[test]
-fn presets_are_the_compliant_controller_names() {
-    assert_eq!(SlitheringCompliance::PRESETS.first(), Some(&"a"));
-    assert_eq!(
-        SlitheringCompliance::PRESETS.last(),
-        Some(&"a_ws_omega_windowed_phase")
+fn nominal_parameters_outside_its_ranges_are_refused() {
+    let c = full();
+    assert!(c.accepts(&params()).is_ok());
+    let mut p = params();
+    p.spatial_freq_rad = 5.0 * PI;
+    assert_eq!(c.accepts(&p).unwrap_err().field, "spatial_freq_rad");
+    let mut p = params();
+    p.offset_lat_rad = 0.5;
+    assert_eq!(c.accepts(&p).unwrap_err().field, "offset_lat_rad");
+    // `a` leaves ωS alone, so any ωS is fine.
+    let a = CompliantSlithering::new(
+        &layout(),
+        &params(),
+        CompliantSlitheringConfig::preset("a").unwrap(),
     );
-    for name in crate::shape::SLITHERING_CONTROLLERS {
-        let is_preset = SlitheringCompliance::PRESETS.contains(name);
-        assert_eq!(
-            SlitheringCompliance::preset(name).is_some(),
-            is_preset,
-            "{name}"
-        );
-    }
+    let mut p = params();
+    p.spatial_freq_rad = 5.0 * PI;
+    assert!(a.accepts(&p).is_ok());
 }

@@ -2,28 +2,32 @@
 //! frequency and temporal phase follow shape-space admittance driven by the joints'
 //! torques, each central, windowed (travelling half-wave windows) or per joint.
 
-use super::admittance::ParamState;
-use super::controller::{JointController, Measured};
-use super::function::ShapeFunction;
-use super::report::ComplianceReport;
-use super::slithering_config::{Centralization, SlitheringCompliance};
-use super::slithering_shape::{Param, SlitheringShape};
-use super::torque::TorqueFilter;
-use super::window::{Window, steepness_for_width};
-use super::window_manager::{WindowEvents, WindowManager};
+use super::config::{Centralization, CompliantSlitheringConfig};
+use crate::controller::report::{ControllerReport, MAX_WINDOWS as REPORT_WINDOWS, WindowField};
+use crate::controller::nominal::{Nominal, lateral_room, within};
+use crate::controller::{Controller, Handover, NominalMismatch, Observation};
 use crate::gait::{BodyLayout, GaitParams};
+use crate::shape::ShapeFunction;
+use crate::shape::admittance::ParamState;
+use crate::shape::slithering_shape::{Param, SlitheringShape};
+use crate::shape::torque::TorqueFilter;
+use crate::shape::window::{Window, steepness_for_width};
+use crate::shape::window_manager::{WindowEvents, WindowManager};
 
 /// Most travelling windows on the body (ωS ≤ 4π gives at most 5).
 const MAX_WINDOWS: usize = 16;
 
-/// The controller. Construction allocates; [`JointController::step`] does not.
+/// Signals reported, in order (names and units in `super::report_spec`).
+pub(super) const SIGNALS: usize = 9;
+
+/// The controller. Construction allocates; nothing else does.
 pub struct CompliantSlithering {
-    name: &'static str,
-    config: SlitheringCompliance,
-    /// Nominal A, ωS, and ωT (the phase's nominal is `ωT·t`).
-    amplitude0: f64,
-    spatial_freq0: f64,
-    temporal_freq: f64,
+    config: CompliantSlitheringConfig,
+    layout: BodyLayout,
+    /// Nominal A, ωS, ωT, offsets; the phase's nominal is `ψ₀ + ωT·(t − t₀)`.
+    nominal: Nominal,
+    windows_born: u64,
+    windows_dropped: u64,
     shape: SlitheringShape,
     manager: WindowManager<[ParamState; 3]>,
     /// States of the fields that are not windowed (1 when central, one per lateral
@@ -41,13 +45,13 @@ pub struct CompliantSlithering {
 }
 
 impl CompliantSlithering {
+    /// For `layout`, following `params` from phase 0 at t = 0 until engaged. The
+    /// configuration has passed its checks.
     pub fn new(
-        name: &'static str,
         layout: &BodyLayout,
         params: &GaitParams,
-        config: SlitheringCompliance,
-    ) -> Result<Self, String> {
-        config.validate()?;
+        config: CompliantSlitheringConfig,
+    ) -> Self {
         let n = layout.len();
         let width = config.edge_width_modules / (n as f64 + 1.0);
         let cap = MAX_WINDOWS.max(n);
@@ -77,11 +81,11 @@ impl CompliantSlithering {
         });
         let m = 3 * cap;
         let mut c = Self {
-            name,
             config,
-            amplitude0: params.amplitude_lat_rad,
-            spatial_freq0: params.spatial_freq_rad,
-            temporal_freq: params.temporal_freq_rad_s,
+            layout: layout.clone(),
+            nominal: Nominal::new(params),
+            windows_born: 0,
+            windows_dropped: 0,
             manager: WindowManager::new(n + 9, MAX_WINDOWS),
             shape,
             fixed,
@@ -96,28 +100,34 @@ impl CompliantSlithering {
             last_events: WindowEvents::default(),
         };
         c.start_nominal();
-        Ok(c)
+        c
     }
 
     /// The nominal shape at t = 0, so everything can be read before the first step.
     /// Allocates nothing (capacities are set at construction).
     fn start_nominal(&mut self) {
-        let ws0 = self.spatial_freq0;
-        self.manager.update(|s| ws0 * s, [ParamState::default(); 3]);
+        let (ws0, omega0) = (self.nominal.params.spatial_freq_rad, self.nominal_phase(self.t));
+        self.manager
+            .update(|s| ws0 * s - omega0, [ParamState::default(); 3]);
         self.assemble();
     }
 
-    pub fn config(&self) -> &SlitheringCompliance {
+    pub fn config(&self) -> &CompliantSlitheringConfig {
         &self.config
     }
 
     /// Nominal value of `p` at the current time.
     fn nominal(&self, p: Param) -> f64 {
         match p {
-            Param::Amplitude => self.amplitude0,
-            Param::SpatialFreq => self.spatial_freq0,
-            Param::Phase => self.temporal_freq * self.t,
+            Param::Amplitude => self.nominal.params.amplitude_lat_rad,
+            Param::SpatialFreq => self.nominal.params.spatial_freq_rad,
+            Param::Phase => self.nominal_phase(self.t),
         }
+    }
+
+    /// The nominal temporal phase Ω₀ at `t_s`.
+    fn nominal_phase(&self, t_s: f64) -> f64 {
+        self.nominal.phase_at(t_s)
     }
 
     fn windowed(&self, p: Param) -> bool {
@@ -179,7 +189,7 @@ impl CompliantSlithering {
     }
 
     fn integrate(&mut self, dt: f64) {
-        let compliance = self.config.compliance;
+        let sign = self.config.sign;
         for p in Param::ALL {
             let pc = *self.config.param(p);
             if !pc.enabled {
@@ -189,11 +199,11 @@ impl CompliantSlithering {
             let forces = &self.forces[at..];
             if self.windowed(p) {
                 for (w, &f) in self.manager.payloads_mut().zip(forces) {
-                    w[p.index()].step(&pc.gains, compliance, f, nominal, dt);
+                    w[p.index()].step(&pc.gains, sign, f, nominal, dt);
                 }
             } else {
                 for (st, &f) in self.fixed[p.index()].iter_mut().zip(forces) {
-                    st.step(&pc.gains, compliance, f, nominal, dt);
+                    st.step(&pc.gains, sign, f, nominal, dt);
                 }
             }
         }
@@ -228,16 +238,30 @@ impl CompliantSlithering {
     }
 }
 
-impl JointController for CompliantSlithering {
-    fn name(&self) -> &'static str {
-        self.name
+impl CompliantSlithering {
+    /// Forgets everything learnt: the next step is a fresh controller's.
+    fn reset(&mut self) {
+        self.manager.clear();
+        for states in &mut self.fixed {
+            states.fill(ParamState::default());
+        }
+        self.filter.reset();
+        self.sigma.clear();
+        self.forces.clear();
+        self.last_t = None;
+        self.t = self.nominal.t0_s;
+        self.last_events = WindowEvents::default();
+        self.windows_born = 0;
+        self.windows_dropped = 0;
+        self.start_nominal();
     }
 
-    fn step(&mut self, t_s: f64, measured: &Measured<'_>, set_points_rad: &mut [f64]) {
+    /// One step of the shape (without the steering offsets).
+    fn step_shape(&mut self, t_s: f64, torque_nm: &[f64], set_points_rad: &mut [f64]) {
         let dt = self.last_t.map_or(0.0, |last| (t_s - last).max(0.0));
         self.last_t = Some(t_s);
         self.t = t_s;
-        for (r, &m) in self.reported.iter_mut().zip(measured.torque_nm) {
+        for (r, &m) in self.reported.iter_mut().zip(torque_nm) {
             *r = m;
         }
         self.filter.update(dt, &self.reported, &mut self.tau_ext);
@@ -246,7 +270,7 @@ impl JointController for CompliantSlithering {
             let shape = &self.shape;
             let sigma = &self.sigma;
             let ready = sigma.len() == shape.param_count();
-            let (ws0, omega0) = (self.spatial_freq0, self.temporal_freq * t_s);
+            let (ws0, omega0) = (self.nominal.params.spatial_freq_rad, self.nominal_phase(t_s));
             self.last_events = self.manager.update(
                 |s| {
                     if ready {
@@ -257,6 +281,9 @@ impl JointController for CompliantSlithering {
                 },
                 [ParamState::default(); 3],
             );
+            let ev = self.last_events;
+            self.windows_born += (ev.born_at_head + ev.born_at_tail) as u64;
+            self.windows_dropped += (ev.dropped_at_tail + ev.dropped_at_head) as u64;
         }
         self.assemble();
         self.compute_forces();
@@ -265,72 +292,81 @@ impl JointController for CompliantSlithering {
         self.shape.value(&self.sigma, set_points_rad);
     }
 
-    fn temporal_freq_rad_s(&self) -> f64 {
-        self.temporal_freq
-    }
-
-    fn for_each_signal(&self, f: &mut dyn FnMut(&str, f64)) {
-        let mean = |p: Param| self.lateral_mean(p);
-        f("amplitude_mean_rad", mean(Param::Amplitude));
-        f("spatial_freq_mean_rad", mean(Param::SpatialFreq));
-        f(
-            "phase_lag_rad",
-            mean(Param::Phase) - self.temporal_freq * self.t,
-        );
-        f("windows", self.manager.len() as f64);
-        let peak = |p: Param| self.field(p).2.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
-        f("force_amplitude_peak", peak(Param::Amplitude));
-        f("force_spatial_freq_peak", peak(Param::SpatialFreq));
-        f("force_phase_peak", peak(Param::Phase));
-    }
-
-    fn reset(&mut self) {
-        self.manager.clear();
-        for states in &mut self.fixed {
-            states.fill(ParamState::default());
+    fn fill_field(&self, p: Param, out: &mut WindowField) {
+        let (windows, values, forces) = self.field(p);
+        let offset = if p == Param::Phase {
+            self.nominal_phase(self.t)
+        } else {
+            0.0
+        };
+        out.count = windows.len();
+        for (k, w) in windows.iter().take(REPORT_WINDOWS).enumerate() {
+            out.a[k] = w.a;
+            out.b[k] = w.b;
+            out.columns[0][k] = values.get(k).map_or(f64::NAN, |v| v - offset);
+            out.columns[1][k] = forces.get(k).copied().unwrap_or(0.0);
         }
-        self.filter.reset();
-        self.sigma.clear();
-        self.forces.clear();
-        self.last_t = None;
-        self.t = 0.0;
-        self.last_events = WindowEvents::default();
-        self.start_nominal();
+    }
+}
+
+impl Controller for CompliantSlithering {
+    /// Each compliant parameter's nominal value lies in its range (else the first
+    /// step would clamp it and the wave would jump), and the amplitude's range with
+    /// the lateral offset stays within the joints' range.
+    fn accepts(&self, params: &GaitParams) -> Result<(), NominalMismatch> {
+        for (p, value, field) in [
+            (Param::Amplitude, params.amplitude_lat_rad, "amplitude_lat_rad"),
+            (Param::SpatialFreq, params.spatial_freq_rad, "spatial_freq_rad"),
+        ] {
+            let pc = self.config.param(p);
+            if pc.enabled {
+                within(field, value, pc.gains.min, pc.gains.max)?;
+            }
+        }
+        let a = &self.config.amplitude;
+        let reach = if a.enabled {
+            a.gains.max
+        } else {
+            params.amplitude_lat_rad
+        };
+        lateral_room(params, reach)
     }
 
-    fn compliance_report(&self, out: &mut ComplianceReport) {
+    fn engage(&mut self, h: &Handover<'_>) {
+        self.nominal = Nominal::engaged(h);
+        self.reset();
+    }
+
+    fn step(&mut self, t_s: f64, obs: &Observation<'_>, set_points_rad: &mut [f64]) {
+        self.step_shape(t_s, obs.torque_nm, set_points_rad);
+        self.nominal.add_offsets(&self.layout, set_points_rad);
+    }
+
+    fn report(&self, out: &mut ControllerReport) {
         out.clear();
+        let mean = |p: Param| self.lateral_mean(p);
+        let peak = |p: Param| self.field(p).2.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+        let signals: [f64; SIGNALS] = [
+            mean(Param::Amplitude),
+            mean(Param::SpatialFreq),
+            mean(Param::Phase) - self.nominal_phase(self.t),
+            self.manager.len() as f64,
+            self.windows_born as f64,
+            self.windows_dropped as f64,
+            peak(Param::Amplitude),
+            peak(Param::SpatialFreq),
+            peak(Param::Phase),
+        ];
+        out.signals[..SIGNALS].copy_from_slice(&signals);
         if self.sigma.len() != self.shape.param_count() {
             return; // Not stepped since construction or reset.
         }
-        let nominal_phase = self.temporal_freq * self.t;
         for p in Param::ALL {
-            let (windows, values, forces) = self.field(p);
-            let pc = self.config.param(p);
-            let offset = if p == Param::Phase {
-                nominal_phase
-            } else {
-                0.0
-            };
-            out.fields[p.index()].fill(
-                pc.enabled,
-                pc.centralization,
-                windows,
-                values,
-                forces,
-                offset,
-            );
+            self.fill_field(p, &mut out.fields[p.index()]);
         }
-        let mean = |p: Param| self.lateral_mean(p);
-        out.amplitude_mean_rad = mean(Param::Amplitude);
-        out.spatial_freq_mean_rad = mean(Param::SpatialFreq);
-        out.phase_lag_rad = mean(Param::Phase) - nominal_phase;
-        out.travelling_windows = self.manager.len();
-        out.events = self.last_events;
-        out.available = true;
     }
 }
 
 #[cfg(test)]
-#[path = "compliant_slithering_tests.rs"]
+#[path = "controller_tests.rs"]
 mod tests;

@@ -4,10 +4,42 @@
 //! and frequency. Output `θ_i = r_i·sin(ωS·s_i − ϑ_i)`; with no torque it is the
 //! open-loop serpenoid.
 
-use super::controller::{JointController, Measured};
-use super::report::ComplianceReport;
-use super::torque::TorqueFilter;
-use crate::gait::{BodyLayout, GaitParams, Plane};
+use crate::controller::config::{ConfigError, check_range};
+use crate::controller::report::ControllerReport;
+use crate::controller::nominal::{Nominal, lateral_room, within};
+use crate::controller::{Controller, Handover, NominalMismatch, Observation};
+use crate::gait::{BodyLayout, GaitParams, JOINT_LIMIT_RAD, Plane};
+use crate::shape::torque::TorqueFilter;
+
+impl CpgGains {
+    /// Every bound (field names as in the configuration).
+    pub fn check(&self) -> Result<(), ConfigError> {
+        check_range("coupling_per_s", self.coupling_per_s, 0.0, 100.0)?;
+        check_range("frequency_feedback", self.frequency_feedback, 0.0, 10.0)?;
+        check_range("amplitude_feedback", self.amplitude_feedback, 0.0, 10.0)?;
+        check_range(
+            "amplitude_time_constant_s",
+            self.amplitude_time_constant_s,
+            0.01,
+            100.0,
+        )?;
+        check_range(
+            "amplitude_min_rad",
+            self.amplitude_min_rad,
+            0.0,
+            JOINT_LIMIT_RAD,
+        )?;
+        check_range(
+            "amplitude_max_rad",
+            self.amplitude_max_rad,
+            self.amplitude_min_rad,
+            JOINT_LIMIT_RAD,
+        )?;
+        check_range("torque_cutoff_hz", self.torque_cutoff_hz, 0.01, 200.0)?;
+        check_range("torque_deadband_nm", self.torque_deadband_nm, 0.0, 7.0)?;
+        Ok(())
+    }
+}
 
 /// Gains of the CPG.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -52,11 +84,11 @@ struct Oscillator {
 /// The CPG controller. Allocates at construction only.
 pub struct Cpg {
     gains: CpgGains,
-    amplitude0: f64,
-    spatial_freq: f64,
-    temporal_freq: f64,
+    /// Nominal A, ωS, ωT, offsets, and the takeover's phase.
+    nominal: Nominal,
     osc: Vec<Oscillator>,
     rates: Vec<f64>,
+    layout: BodyLayout,
     filter: TorqueFilter,
     tau_ext: Vec<f64>,
     last_t: Option<f64>,
@@ -81,36 +113,52 @@ impl Cpg {
         let n = layout.len();
         Self {
             gains,
-            amplitude0: params.amplitude_lat_rad,
-            spatial_freq: params.spatial_freq_rad,
-            temporal_freq: params.temporal_freq_rad_s,
+            nominal: Nominal::new(params),
             rates: vec![0.0; osc.len()],
             osc,
+            layout: layout.clone(),
             filter: TorqueFilter::new(n, gains.torque_cutoff_hz, gains.torque_deadband_nm),
             tau_ext: vec![0.0; n],
             last_t: None,
             t: 0.0,
         }
     }
+
+    fn reset(&mut self) {
+        for o in &mut self.osc {
+            o.phase = self.nominal.phase0_rad;
+            o.amplitude = self.nominal.params.amplitude_lat_rad;
+        }
+        self.rates.fill(0.0);
+        self.filter.reset();
+        self.last_t = None;
+        self.t = self.nominal.t0_s;
+    }
 }
 
-impl JointController for Cpg {
-    fn name(&self) -> &'static str {
-        "cpg"
+impl Controller for Cpg {
+    fn accepts(&self, params: &GaitParams) -> Result<(), NominalMismatch> {
+        let (min, max) = (self.gains.amplitude_min_rad, self.gains.amplitude_max_rad);
+        within("amplitude_lat_rad", params.amplitude_lat_rad, min, max)?;
+        lateral_room(params, max)
     }
 
-    fn step(&mut self, t_s: f64, measured: &Measured<'_>, set_points_rad: &mut [f64]) {
+    fn engage(&mut self, h: &Handover<'_>) {
+        self.nominal = Nominal::engaged(h);
+        self.reset();
+    }
+
+    fn step(&mut self, t_s: f64, obs: &Observation<'_>, set_points_rad: &mut [f64]) {
         let dt = self.last_t.map_or(0.0, |last| (t_s - last).max(0.0));
-        if self.last_t.is_none() {
-            for o in &mut self.osc {
-                o.phase = self.temporal_freq * t_s;
-            }
-        }
         self.last_t = Some(t_s);
         self.t = t_s;
-        self.filter
-            .update(dt, measured.torque_nm, &mut self.tau_ext);
+        self.filter.update(dt, obs.torque_nm, &mut self.tau_ext);
         let g = self.gains;
+        let (spatial_freq, temporal_freq, amplitude0) = (
+            self.nominal.params.spatial_freq_rad,
+            self.nominal.params.temporal_freq_rad_s,
+            self.nominal.params.amplitude_lat_rad,
+        );
         let count = self.osc.len();
         for k in 0..count {
             let o = &self.osc[k];
@@ -121,13 +169,13 @@ impl JointController for Cpg {
                 }
             }
             let tau = self.tau_ext[o.joint];
-            let (sin, cos) = (self.spatial_freq * o.s - o.phase).sin_cos();
+            let (sin, cos) = (spatial_freq * o.s - o.phase).sin_cos();
             // Local shape forces: ∂θ/∂ϑ = −r·cos, ∂θ/∂r = sin.
             let phase_force = -o.amplitude * cos * tau;
-            self.rates[k] = self.temporal_freq
+            self.rates[k] = temporal_freq
                 + g.coupling_per_s * coupling
                 + g.frequency_feedback * phase_force;
-            let amp_rate = (self.amplitude0 - o.amplitude) / g.amplitude_time_constant_s
+            let amp_rate = (amplitude0 - o.amplitude) / g.amplitude_time_constant_s
                 + g.amplitude_feedback * sin * tau;
             let o = &mut self.osc[k];
             o.amplitude =
@@ -136,87 +184,49 @@ impl JointController for Cpg {
         set_points_rad.fill(0.0);
         for (o, &rate) in self.osc.iter_mut().zip(&self.rates) {
             o.phase += rate * dt;
-            set_points_rad[o.joint] = o.amplitude * (self.spatial_freq * o.s - o.phase).sin();
+            set_points_rad[o.joint] = o.amplitude * (spatial_freq * o.s - o.phase).sin();
         }
-    }
-
-    fn temporal_freq_rad_s(&self) -> f64 {
-        self.temporal_freq
-    }
-
-    fn for_each_signal(&self, f: &mut dyn FnMut(&str, f64)) {
-        let n = self.osc.len().max(1) as f64;
-        f(
-            "amplitude_mean_rad",
-            self.osc.iter().map(|o| o.amplitude).sum::<f64>() / n,
-        );
-        let nominal = self.temporal_freq * self.t;
-        f(
-            "phase_lag_rad",
-            self.osc.iter().map(|o| nominal - o.phase).sum::<f64>() / -n,
-        );
-        let spread = self
-            .osc
-            .iter()
-            .map(|o| o.phase)
-            .fold(f64::NEG_INFINITY, f64::max)
-            - self
-                .osc
-                .iter()
-                .map(|o| o.phase)
-                .fold(f64::INFINITY, f64::min);
-        f("phase_spread_rad", spread);
-    }
-
-    fn reset(&mut self) {
-        for o in &mut self.osc {
-            o.phase = 0.0;
-            o.amplitude = self.amplitude0;
-        }
-        self.rates.fill(0.0);
-        self.filter.reset();
-        self.last_t = None;
-        self.t = 0.0;
+        self.nominal.add_offsets(&self.layout, set_points_rad);
     }
 
     /// Means only: the CPG has no windows.
-    fn compliance_report(&self, out: &mut ComplianceReport) {
+    fn report(&self, out: &mut ControllerReport) {
         out.clear();
-        if self.last_t.is_none() {
-            return;
-        }
         let n = self.osc.len().max(1) as f64;
-        let nominal = self.temporal_freq * self.t;
-        out.amplitude_mean_rad = self.osc.iter().map(|o| o.amplitude).sum::<f64>() / n;
-        out.spatial_freq_mean_rad = self.spatial_freq;
-        out.phase_lag_rad = self.osc.iter().map(|o| o.phase - nominal).sum::<f64>() / n;
-        out.available = true;
+        let nominal = self.nominal.phase_at(self.t);
+        let (lo, hi) = self
+            .osc
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), o| {
+                (lo.min(o.phase), hi.max(o.phase))
+            });
+        out.signals[0] = self.osc.iter().map(|o| o.amplitude).sum::<f64>() / n;
+        out.signals[1] = self.osc.iter().map(|o| o.phase - nominal).sum::<f64>() / n;
+        out.signals[2] = hi - lo;
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::controller::testing::{ObservationBuf, engage_at};
+    use crate::controllers::open_loop::OpenLoop;
     use crate::emu::servo::MODULE_LENGTH_M;
     use crate::gait::GaitKind;
-    use crate::shape::controller::OpenLoopSlithering;
 
     #[test]
     fn without_torque_it_is_the_open_loop_gait_and_a_local_push_stays_local() {
         let layout = BodyLayout::alternating(18, Plane::Lateral, MODULE_LENGTH_M);
         let params = GaitParams::default_for(GaitKind::Slithering);
         let mut cpg = Cpg::new(&layout, &params, CpgGains::default());
-        let mut open = OpenLoopSlithering::new(layout.clone(), &params);
+        let mut open = OpenLoop::new(GaitKind::Slithering, &layout, &params);
         let (mut a, mut b) = (vec![0.0; 18], vec![0.0; 18]);
         let zero = [0.0; 18];
-        let m = Measured {
-            position_rad: &zero,
-            torque_nm: &zero,
-        };
+        let buf = ObservationBuf::new(18);
         for k in 0..3000 {
             let t = k as f64 * 1e-3;
-            cpg.step(t, &m, &mut a);
-            open.step(t, &m, &mut b);
+            cpg.step(t, &buf.observe(&zero, &zero), &mut a);
+            open.step(t, &buf.observe(&zero, &zero), &mut b);
         }
         for (x, y) in a.iter().zip(&b) {
             assert!((x - y).abs() < 1e-9, "{a:?} vs {b:?}");
@@ -226,14 +236,7 @@ mod tests {
         for k in 3000..4000 {
             let t = k as f64 * 1e-3;
             tau[0] = -3.0 * a[0].signum();
-            cpg.step(
-                t,
-                &Measured {
-                    position_rad: &zero,
-                    torque_nm: &tau,
-                },
-                &mut a,
-            );
+            cpg.step(t, &buf.observe(&zero, &tau), &mut a);
         }
         assert!(
             cpg.osc[0].amplitude > params.amplitude_lat_rad + 0.05,
@@ -241,17 +244,43 @@ mod tests {
             cpg.osc[0].amplitude
         );
         assert!((cpg.osc[8].amplitude - params.amplitude_lat_rad).abs() < 0.01);
-        let mut report = ComplianceReport::default();
-        cpg.compliance_report(&mut report);
-        assert!(report.available && report.amplitude_mean_rad > params.amplitude_lat_rad);
-        // Reset: the next steps are a new CPG's.
-        cpg.reset();
+        let mut report = ControllerReport::EMPTY;
+        cpg.report(&mut report);
+        assert!(report.signals[0] > params.amplitude_lat_rad);
+        // Engaged again: the next steps are a new CPG's, engaged at the same time.
+        engage_at(&mut cpg, &layout, &params, 10.0);
         let mut fresh = Cpg::new(&layout, &params, CpgGains::default());
+        engage_at(&mut fresh, &layout, &params, 10.0);
         for k in 0..500 {
             let t = 10.0 + k as f64 * 1e-3;
-            cpg.step(t, &m, &mut a);
-            fresh.step(t, &m, &mut b);
+            cpg.step(t, &buf.observe(&zero, &zero), &mut a);
+            fresh.step(t, &buf.observe(&zero, &zero), &mut b);
         }
         assert_eq!(a, b);
+    }
+
+    #[test]
+    fn gains_out_of_range_are_named() {
+        let g = CpgGains {
+            coupling_per_s: 1e9,
+            ..CpgGains::default()
+        };
+        assert!(
+            g.check()
+                .unwrap_err()
+                .to_string()
+                .contains("coupling_per_s")
+        );
+        let g = CpgGains {
+            amplitude_max_rad: 0.05,
+            ..CpgGains::default()
+        };
+        assert!(
+            g.check()
+                .unwrap_err()
+                .to_string()
+                .contains("amplitude_max_rad")
+        );
+        assert!(CpgGains::default().check().is_ok());
     }
 }

@@ -1,0 +1,183 @@
+//! snakectl's view of controllers, with no per-gait code: `controller list|get|set`
+//! and the `controller` part of `status`, printed from the names and units the daemon
+//! reports.
+use serde_json::{Map, Value, json};
+
+use super::{num, text};
+
+/// `KEY.PATH=VALUE` assignments as a nested JSON object: the value is read as JSON
+/// (number, boolean, null, quoted string), else taken as a string.
+pub fn config_overrides(base: Option<&str>, assignments: &[String]) -> Result<Value, String> {
+    let mut config = match base {
+        Some(text) => serde_json::from_str::<Value>(text)
+            .map_err(|e| format!("--config is not valid JSON: {e}"))?,
+        None => Value::Object(Map::new()),
+    };
+    if !config.is_object() {
+        return Err("--config must be a JSON object".into());
+    }
+    for a in assignments {
+        let (path, value) = a
+            .split_once('=')
+            .ok_or_else(|| format!("`{a}` is not KEY=VALUE (e.g. amplitude.gains.stiffness=6)"))?;
+        let value = value.trim();
+        let v = serde_json::from_str::<Value>(value).unwrap_or_else(|_| json!(value));
+        let keys: Vec<&str> = path.trim().split('.').collect();
+        if keys.iter().any(|k| k.is_empty()) {
+            return Err(format!("`{path}`: empty key"));
+        }
+        let mut slot = &mut config;
+        for (i, k) in keys.iter().enumerate() {
+            let map = slot
+                .as_object_mut()
+                .ok_or_else(|| format!("`{path}`: {} is not an object", keys[..i].join(".")))?;
+            slot = map.entry(k.to_string()).or_insert_with(|| json!({}));
+        }
+        *slot = v;
+    }
+    Ok(config)
+}
+
+/// `controller list`: every gait's controllers, presets and report names.
+pub fn print_list(r: &Value) {
+    for (gait, g) in r["gaits"].as_object().into_iter().flatten() {
+        println!("{gait}  (runs {})", label(&g["installed"]));
+        for c in g["controllers"].as_array().into_iter().flatten() {
+            println!("  {:<22} {}", text(&c["name"]), text(&c["summary"]));
+            for p in c["presets"].as_array().into_iter().flatten() {
+                let mark = if p["name"] == c["default_preset"] {
+                    "*"
+                } else {
+                    " "
+                };
+                println!(
+                    "    {mark} {:<28} {}",
+                    text(&p["name"]),
+                    text(&p["summary"])
+                );
+            }
+            let signals: Vec<String> = c["report"]["signals"]
+                .as_array()
+                .into_iter()
+                .flatten()
+                .map(|s| format!("{} [{}]", text(&s["name"]), text(&s["unit"])))
+                .collect();
+            if !signals.is_empty() {
+                println!("      signals: {}", signals.join(", "));
+            }
+        }
+    }
+}
+
+/// "name/preset (id N)", or the selector's serpenoid when nothing is installed.
+fn label(info: &Value) -> String {
+    if info.is_null() {
+        return "the selector's serpenoid".into();
+    }
+    format!(
+        "{}/{} (id {})",
+        text(&info["controller"]),
+        text(&info["preset"]),
+        info["id"]
+    )
+}
+
+/// `controller get` / `controller set`: the installed controller(s) and their
+/// configuration.
+pub fn print_installed(r: &Value) {
+    let print_one = |gait: &str, info: &Value| {
+        println!("{gait:<20} {}", label(info));
+        if let Some(cfg) = info.get("config").filter(|c| !c.is_null()) {
+            let flat = flatten(cfg);
+            if !flat.is_empty() {
+                println!("  {}", flat.join("  "));
+            }
+        }
+    };
+    if let Some(all) = r["gaits"].as_object() {
+        for (gait, info) in all {
+            print_one(gait, info);
+        }
+    } else {
+        print_one(&text(&r["gait"]), &r["controller"]);
+    }
+}
+
+/// `a.b.c=v` for every leaf of a configuration.
+fn flatten(v: &Value) -> Vec<String> {
+    fn walk(prefix: &str, v: &Value, out: &mut Vec<String>) {
+        match v {
+            Value::Object(m) => {
+                for (k, x) in m {
+                    let p = if prefix.is_empty() {
+                        k.clone()
+                    } else {
+                        format!("{prefix}.{k}")
+                    };
+                    walk(&p, x, out);
+                }
+            }
+            other => out.push(format!("{prefix}={other}")),
+        }
+    }
+    let mut out = Vec::new();
+    walk("", v, &mut out);
+    out
+}
+
+/// `status`: the active gait's controller, its state and, while it drives, its
+/// signals and one table per window field.
+pub fn print_status(c: &Value) {
+    if c.is_null() || c["controller"].is_null() {
+        println!("control   the selector's serpenoid");
+        return;
+    }
+    println!(
+        "control   {}/{} ({})  takeovers {}",
+        text(&c["controller"]),
+        text(&c["preset"]),
+        text(&c["state"]),
+        c["takeovers"]
+    );
+    if let Some(signals) = c["signals"].as_object() {
+        let line: Vec<String> = signals
+            .iter()
+            .map(|(k, v)| format!("{k} {}", num(v, 3)))
+            .collect();
+        println!("  {}", line.join("  "));
+    }
+    for f in c["fields"].as_array().into_iter().flatten() {
+        let state = if f["enabled"] == true {
+            "compliant"
+        } else {
+            "fixed"
+        };
+        println!(
+            "  {} ({}, {state}, {} windows)",
+            text(&f["name"]),
+            text(&f["centralization"]),
+            f["count"]
+        );
+        let windows = f["windows"].as_array().cloned().unwrap_or_default();
+        let Some(first) = windows.first().and_then(Value::as_object) else {
+            continue;
+        };
+        let cols: Vec<&String> = first.keys().filter(|k| *k != "a" && *k != "b").collect();
+        let mut head = format!("    {:>7} {:>7}", "a", "b");
+        for c in &cols {
+            head += &format!(" {c:>9}");
+        }
+        println!("{head}");
+        for w in &windows {
+            let mut row = format!("    {:>7} {:>7}", num(&w["a"], 3), num(&w["b"], 3));
+            for c in &cols {
+                row += &format!(" {:>9}", num(&w[c.as_str()], 4));
+            }
+            println!("{row}");
+        }
+        let count = f["count"].as_u64().unwrap_or(0);
+        if count > windows.len() as u64 {
+            println!("    ({} more not reported)", count - windows.len() as u64);
+        }
+    }
+}

@@ -1,0 +1,252 @@
+//! The controller methods on the socket, read from the registry with no per-gait code:
+//! `controller.list` (what each gait can run), `controller.get` (what it runs),
+//! `controller.set` (build off the loop, then install), and the `controller` part of
+//! `status` and telemetry. Also the old `params.set` `compliance` object of
+//! slithering, translated into a selection.
+use serde_json::{Map, Value, json};
+
+use super::api::RpcError;
+use super::shared::Shared;
+use crate::controller::catalog::{Catalog, ControllerInfo, NO_CONTROLLER};
+use crate::controller::config::merge;
+use crate::controller::registry::{self, BuildContext, Selection};
+use crate::controllers::REGISTRY;
+use crate::gait::{BodyLayout, GaitKind, GaitParams, ParamPatch};
+use crate::rt::controller_slots::{ControllerTelemetry, Installed};
+use crate::rt::messages::LoopRequest;
+
+/// `controller.list`: per gait, every controller that runs it with its presets,
+/// default configuration and report names, and which one is installed.
+pub(crate) fn list(shared: &Shared, gait: Option<GaitKind>) -> Value {
+    let snap = shared.telemetry.latest();
+    let gaits: Map<String, Value> = GaitKind::ALL
+        .into_iter()
+        .filter(|g| gait.is_none_or(|only| only == *g))
+        .map(|g| {
+            let ctx = BuildContext {
+                gait: g,
+                layout: &shared.layout,
+                params: snap.params.get(g),
+            };
+            let controllers: Vec<Value> = registry::for_gait(REGISTRY, g)
+                .map(|f| {
+                    let default = f.presets()[0].0;
+                    json!({
+                        "name": f.name(),
+                        "summary": f.summary(),
+                        "default_preset": default,
+                        "presets": f.presets().iter()
+                            .map(|(name, summary)| json!({"name": name, "summary": summary}))
+                            .collect::<Vec<_>>(),
+                        "default_config": f.preset_config(default),
+                        "report": f.preset_report(default, &ctx),
+                    })
+                })
+                .collect();
+            let installed = installed(&shared.catalog, snap.controller.installed[g.index()]);
+            (
+                g.name().to_owned(),
+                json!({"installed": installed, "controllers": controllers}),
+            )
+        })
+        .collect();
+    json!({ "gaits": gaits })
+}
+
+/// `controller.get`: what each gait (or one) runs.
+pub(crate) fn get(shared: &Shared, gait: Option<GaitKind>) -> Value {
+    let snap = shared.telemetry.latest();
+    let one = |g: GaitKind| installed(&shared.catalog, snap.controller.installed[g.index()]);
+    match gait {
+        Some(g) => json!({ "gait": g, "controller": one(g) }),
+        None => {
+            let all: Map<String, Value> = GaitKind::ALL
+                .into_iter()
+                .map(|g| (g.name().to_owned(), one(g)))
+                .collect();
+            json!({ "gaits": all })
+        }
+    }
+}
+
+fn installed(catalog: &Catalog, id: u64) -> Value {
+    match (id, catalog.get(id)) {
+        (NO_CONTROLLER, _) => Value::Null,
+        (_, Some(info)) => info_view(&info),
+        (_, None) => json!({ "id": id }),
+    }
+}
+
+/// A controller's name, preset, configuration and report names.
+pub(crate) fn info_view(info: &ControllerInfo) -> Value {
+    json!({
+        "id": info.id,
+        "gait": info.gait,
+        "controller": info.controller,
+        "preset": info.preset,
+        "config": info.config,
+        "report": info.report,
+    })
+}
+
+/// Builds `sel` for `gait` with the gait's nominal parameters after `patch` (off the
+/// loop) and records it in the catalog.
+fn build(
+    shared: &Shared,
+    gait: GaitKind,
+    params: &GaitParams,
+    sel: &Selection,
+) -> Result<(Installed, ControllerInfo), RpcError> {
+    let ctx = BuildContext {
+        gait,
+        layout: &shared.layout,
+        params,
+    };
+    let built = registry::build(REGISTRY, sel, &ctx)
+        .map_err(|e| RpcError::invalid_params(format!("{}: {e}", gait.name())))?;
+    let info = shared.catalog.insert(built.info);
+    let installed = Installed {
+        id: info.id,
+        controller: built.controller,
+    };
+    Ok((installed, (*info).clone()))
+}
+
+/// `controller.set`: build the selection and install it for `gait`.
+pub(crate) async fn set(
+    shared: &Shared,
+    gait: GaitKind,
+    sel: Selection,
+) -> Result<Value, RpcError> {
+    let _one_at_a_time = shared.controller_change.lock().await;
+    shared.free_retired();
+    let params = *shared.telemetry.latest().params.get(gait);
+    let (installed, info) = build(shared, gait, &params, &sel)?;
+    let result = shared
+        .router
+        .call_with(LoopRequest::SetController(gait), Some(installed))
+        .await;
+    shared.free_retired();
+    result?;
+    Ok(json!({ "gait": gait, "controller": info_view(&info) }))
+}
+
+/// `params.set` of slithering with the old `compliance` object (docs/control-socket.md,
+/// "Changes"): `controller` names a preset (or `open_loop`, `cpg`); the other keys
+/// override its configuration; without `controller` they override what is installed.
+/// New parameters in `patch` go with the controller, checked against it.
+pub(crate) async fn set_compliance(
+    shared: &Shared,
+    gait: GaitKind,
+    patch: ParamPatch,
+    compliance: Value,
+    layout: &BodyLayout,
+) -> Result<Value, RpcError> {
+    let bad = |m: String| RpcError::invalid_params(format!("`compliance`: {m}"));
+    let Value::Object(mut map) = compliance else {
+        return Err(bad("must be an object".into()));
+    };
+    let _one_at_a_time = shared.controller_change.lock().await;
+    shared.free_retired();
+    let snap = shared.telemetry.latest();
+    let current = shared.catalog.get(snap.controller.installed[gait.index()]);
+    let sel = match map.remove("controller") {
+        Some(Value::String(name)) => Selection {
+            controller: name,
+            preset: None,
+            config: None,
+        },
+        Some(_) => return Err(bad("`controller` must be a string".into())),
+        None => match &current {
+            Some(info) => Selection {
+                controller: info.controller.to_owned(),
+                preset: Some(info.preset.to_owned()),
+                config: Some(info.config.clone()),
+            },
+            None => return Err(bad("give `controller`".into())),
+        },
+    };
+    // The admittance's sign was called `compliance`; it is `sign` now.
+    if let Some(sign) = map.remove("compliance") {
+        map.insert("sign".into(), sign);
+    }
+    let mut sel = sel;
+    if !map.is_empty() {
+        let mut config = sel.config.take().unwrap_or_else(|| json!({}));
+        merge(&mut config, &Value::Object(map));
+        sel.config = Some(config);
+    }
+    let params = if patch == ParamPatch::default() {
+        *snap.params.get(gait)
+    } else {
+        snap.params
+            .get(gait)
+            .patched_for(gait, &patch, layout.module_length_m)
+            .map_err(|e| RpcError::invalid_params(format!("{}: {e}", gait.name())))?
+    };
+    let (installed, info) = build(shared, gait, &params, &sel)?;
+    let request = if patch == ParamPatch::default() {
+        LoopRequest::SetController(gait)
+    } else {
+        LoopRequest::SetParams(gait, patch)
+    };
+    let result = shared.router.call_with(request, Some(installed)).await;
+    shared.free_retired();
+    result?;
+    Ok(json!({ "gait": gait, "params": params, "controller": info_view(&info) }))
+}
+
+/// The `controller` part of `status` and telemetry: the active gait's controller,
+/// whether it drives, and its report by name.
+pub(crate) fn telemetry_view(c: &ControllerTelemetry, catalog: &Catalog) -> Value {
+    let info = catalog.get(c.active_id);
+    let mut v = json!({
+        "id": c.active_id,
+        "controller": info.as_ref().map(|i| i.controller),
+        "preset": info.as_ref().map(|i| i.preset),
+        "state": c.engagement,
+        "takeovers": c.takeovers,
+        "freed_in_loop": c.freed_in_loop,
+    });
+    let Some(info) = info else {
+        return v;
+    };
+    if c.engagement != crate::rt::controller_slots::Engagement::Engaged {
+        return v;
+    }
+    let r = &c.report;
+    let signals: Map<String, Value> = info
+        .report
+        .signals
+        .iter()
+        .zip(&r.signals)
+        .map(|(spec, &x)| (spec.name.clone(), json!(x)))
+        .collect();
+    v["signals"] = Value::Object(signals);
+    let fields: Vec<Value> = info
+        .report
+        .fields
+        .iter()
+        .zip(&r.fields)
+        .map(|(spec, f)| {
+            let windows: Vec<Value> = (0..f.len())
+                .map(|k| {
+                    let mut w = json!({ "a": f.a[k], "b": f.b[k] });
+                    for (col, values) in spec.columns.iter().zip(&f.columns) {
+                        w[&col.name] = json!(values[k]);
+                    }
+                    w
+                })
+                .collect();
+            json!({
+                "name": spec.name,
+                "centralization": spec.centralization,
+                "enabled": spec.enabled,
+                "count": f.count,
+                "windows": windows,
+            })
+        })
+        .collect();
+    v["fields"] = Value::Array(fields);
+    v
+}

@@ -1,0 +1,97 @@
+//! Per-connection state the methods can change: the telemetry stream.
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::Duration;
+
+use tokio::sync::mpsc;
+use tokio::task::JoinHandle;
+use tokio::time::MissedTickBehavior;
+
+use super::api;
+use super::views;
+use crate::controller::catalog::Catalog;
+use crate::rt::telemetry::TelemetryReader;
+
+/// Per-connection state the methods can change.
+pub(crate) struct Session {
+    out: mpsc::Sender<String>,
+    stream: Option<JoinHandle<()>>,
+    /// Set by `telemetry.subscribe`; started after its answer is queued.
+    pending_rate_hz: Option<f64>,
+    /// Telemetry messages dropped because this client read too slowly.
+    dropped: Arc<AtomicU64>,
+}
+
+impl Session {
+    pub(crate) fn new(out: mpsc::Sender<String>) -> Self {
+        Self {
+            out,
+            stream: None,
+            pending_rate_hz: None,
+            dropped: Arc::default(),
+        }
+    }
+
+    /// Queue a line for the writer (waits for room); `Err` once the writer is gone.
+    pub(crate) async fn send(&self, line: String) -> Result<(), ()> {
+        self.out.send(line).await.map_err(|_| ())
+    }
+
+    /// The running stream, if any (the connection waits for it on a half-close).
+    pub(crate) fn take_stream(&mut self) -> Option<JoinHandle<()>> {
+        self.stream.take()
+    }
+
+    pub(crate) fn subscribe_after_answer(&mut self, rate_hz: f64) {
+        self.pending_rate_hz = Some(rate_hz);
+    }
+
+    /// Stop the stream (if any); returns the messages dropped so far.
+    pub(crate) async fn unsubscribe(&mut self) -> u64 {
+        if let Some(task) = self.stream.take() {
+            task.abort();
+            // Wait until it has really stopped: nothing of it may follow our answer.
+            let _ = task.await;
+        }
+        self.dropped.load(Ordering::Relaxed)
+    }
+
+    pub(crate) async fn start_pending(&mut self, telemetry: &TelemetryReader, catalog: &Catalog) {
+        if let Some(rate_hz) = self.pending_rate_hz.take() {
+            self.unsubscribe().await;
+            self.dropped.store(0, Ordering::Relaxed);
+            self.stream = Some(tokio::spawn(stream_telemetry(
+                telemetry.clone(),
+                catalog.clone(),
+                Duration::from_secs_f64(1.0 / rate_hz),
+                self.out.clone(),
+                self.dropped.clone(),
+            )));
+        }
+    }
+}
+
+async fn stream_telemetry(
+    telemetry: TelemetryReader,
+    catalog: Catalog,
+    period: Duration,
+    out: mpsc::Sender<String>,
+    dropped: Arc<AtomicU64>,
+) {
+    let mut ticks = tokio::time::interval(period);
+    ticks.set_missed_tick_behavior(MissedTickBehavior::Skip);
+    loop {
+        ticks.tick().await;
+        let line = api::stream_line(
+            "telemetry",
+            &views::telemetry(&telemetry.latest(), &catalog),
+        );
+        match out.try_send(line) {
+            Ok(()) => {}
+            Err(mpsc::error::TrySendError::Full(_)) => {
+                dropped.fetch_add(1, Ordering::Relaxed);
+            }
+            Err(mpsc::error::TrySendError::Closed(_)) => return,
+        }
+    }
+}

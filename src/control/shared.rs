@@ -1,0 +1,34 @@
+//! What every connection shares.
+use crossbeam_channel::Receiver;
+
+use super::DaemonInfo;
+use super::router::AckRouter;
+use crate::controller::catalog::Catalog;
+use crate::gait::BodyLayout;
+use crate::rt::controller_slots::Installed;
+use crate::rt::telemetry::TelemetryReader;
+
+pub(crate) struct Shared {
+    pub(crate) router: AckRouter,
+    pub(crate) telemetry: TelemetryReader,
+    pub(crate) info: DaemonInfo,
+    pub(crate) max_line_bytes: usize,
+    /// The loop's body: controllers are built for it here, off the loop.
+    pub(crate) layout: BodyLayout,
+    /// Controllers the loop replaced or refused; freed here.
+    pub(crate) retired: Receiver<Installed>,
+    /// Names and configurations of every controller built.
+    pub(crate) catalog: Catalog,
+    /// Held by a controller change from reading what is installed to the loop's ack,
+    /// so each change builds on what the previous one left.
+    pub(crate) controller_change: tokio::sync::Mutex<()>,
+}
+
+impl Shared {
+    /// Drops the controllers the loop replaced (freeing is off the loop's thread).
+    pub(crate) fn free_retired(&self) {
+        while let Ok(old) = self.retired.try_recv() {
+            drop(old);
+        }
+    }
+}

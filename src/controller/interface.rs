@@ -1,0 +1,102 @@
+//! The interface every controller offers the loop. A controller is built off the loop
+//! (building allocates), then, in the loop thread and without allocating:
+//! - checked against the gait's nominal parameters ([`Controller::accepts`]) before
+//!   the loop takes new ones,
+//! - engaged from a [`Handover`]: the set-points and wave phase the selector's blend
+//!   reached, so nothing jumps, and the nominal parameters it is to follow,
+//! - stepped each cycle as a pure function of time and an [`Observation`],
+//! - asked for its [`ControllerReport`] (signal values, window fields).
+
+use super::report::ControllerReport;
+use crate::gait::{BodyLayout, GaitParams};
+
+/// One module's inertial sensors, in the module's frame.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Imu {
+    pub accel_m_s2: [f64; 3],
+    pub gyro_rad_s: [f64; 3],
+}
+
+/// The body's pose as estimators see it. Estimators fill it each cycle before any
+/// controller runs; without an estimator it stays `valid: false`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BodyEstimate {
+    pub valid: bool,
+    /// Body frame origin in the estimator's world frame, m.
+    pub position_m: [f64; 3],
+    /// Body frame orientation (w, x, y, z).
+    pub orientation_wxyz: [f64; 4],
+    /// Heading of the body frame's forward axis in the ground plane, rad.
+    pub heading_rad: f64,
+}
+
+impl Default for BodyEstimate {
+    fn default() -> Self {
+        Self {
+            valid: false,
+            position_m: [0.0; 3],
+            orientation_wxyz: [1.0, 0.0, 0.0, 0.0],
+            heading_rad: 0.0,
+        }
+    }
+}
+
+/// What a controller sees each cycle; one entry per joint (head first).
+#[derive(Debug, Clone, Copy)]
+pub struct Observation<'a> {
+    pub position_rad: &'a [f64],
+    pub velocity_rad_s: &'a [f64],
+    /// Reported spring torques, N·m, in the protocol's sign (docs/protocol.md): the
+    /// torque the motor side applies to the output. The environment's torque on the
+    /// joint is about the opposite (see `shape::torque`).
+    pub torque_nm: &'a [f64],
+    pub imu: &'a [Imu],
+    pub body: &'a BodyEstimate,
+}
+
+/// Where the selector's blend left the joints when a controller takes over.
+#[derive(Debug, Clone, Copy)]
+pub struct Handover<'a> {
+    /// Loop time of the takeover, s.
+    pub t_s: f64,
+    /// The gait's temporal phase ψ reached by the selector, rad: a controller whose
+    /// nominal phase is `ψ + ωT·(t − t_s)` continues the selector's wave exactly.
+    pub phase_rad: f64,
+    /// The set-points the selector sent this cycle, rad.
+    pub set_points_rad: &'a [f64],
+    /// The gait's nominal parameters (the operator's), which the controller follows.
+    pub params: &'a GaitParams,
+    pub layout: &'a BodyLayout,
+}
+
+/// A nominal parameter a controller cannot follow (built without allocating, so the
+/// loop can refuse a request with it).
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+#[error("the nominal {field} = {value} is outside the controller's range [{min}, {max}]")]
+pub struct NominalMismatch {
+    pub field: &'static str,
+    pub value: f64,
+    pub min: f64,
+    pub max: f64,
+}
+
+/// A controller the loop can run. Every method but construction runs in the loop
+/// thread: none may allocate, lock, block or read a clock.
+pub trait Controller: Send {
+    /// Whether the controller can follow these nominal parameters of its gait.
+    fn accepts(&self, params: &GaitParams) -> Result<(), NominalMismatch>;
+    /// Forgets everything learnt and starts from `handover` (called at every takeover;
+    /// the parameters have passed [`Controller::accepts`]).
+    fn engage(&mut self, handover: &Handover<'_>);
+    /// Joint set-points at `t_s` (non-decreasing between engagements) from `obs`.
+    /// Deterministic. Dorsal and lateral joints alike: write every entry.
+    fn step(&mut self, t_s: f64, obs: &Observation<'_>, set_points_rad: &mut [f64]);
+    /// The report after the last step, in the order of the controller's
+    /// [`super::report::ReportSpec`].
+    fn report(&self, out: &mut ControllerReport);
+}
+
+/// Fills the body estimate before the controllers run (e.g. the virtual chassis).
+pub trait Estimator: Send {
+    fn update(&mut self, t_s: f64, obs: &Observation<'_>, out: &mut BodyEstimate);
+}

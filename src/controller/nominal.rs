@@ -1,0 +1,70 @@
+//! What a wave controller follows: the gait's nominal parameters and the phase it took
+//! over at. Shared by the controllers so each continues the selector's wave the same way.
+
+use super::interface::{Handover, NominalMismatch};
+use crate::gait::{BodyLayout, GaitParams, JOINT_LIMIT_RAD, Plane};
+
+/// Nominal parameters and the takeover's phase and time.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Nominal {
+    pub params: GaitParams,
+    /// The selector's phase ψ at the takeover, rad, and its time, s.
+    pub phase0_rad: f64,
+    pub t0_s: f64,
+}
+
+impl Nominal {
+    /// `params` from phase 0 at t = 0 (before any takeover).
+    pub fn new(params: &GaitParams) -> Self {
+        Self {
+            params: *params,
+            phase0_rad: 0.0,
+            t0_s: 0.0,
+        }
+    }
+
+    /// What a takeover hands over.
+    pub fn engaged(h: &Handover<'_>) -> Self {
+        Self {
+            params: *h.params,
+            phase0_rad: h.phase_rad,
+            t0_s: h.t_s,
+        }
+    }
+
+    /// The nominal temporal phase at `t_s`: `ψ₀ + ωT·(t − t₀)`.
+    pub fn phase_at(&self, t_s: f64) -> f64 {
+        self.phase0_rad + self.params.temporal_freq_rad_s * (t_s - self.t0_s)
+    }
+
+    /// Adds the steering offsets of each joint's plane to `set_points_rad`.
+    pub fn add_offsets(&self, layout: &BodyLayout, set_points_rad: &mut [f64]) {
+        for (x, plane) in set_points_rad.iter_mut().zip(&layout.planes) {
+            *x += match plane {
+                Plane::Lateral => self.params.offset_lat_rad,
+                Plane::Dorsal => self.params.offset_dor_rad,
+            };
+        }
+    }
+}
+
+/// `value` of `field` must lie in `[min, max]`.
+pub fn within(field: &'static str, value: f64, min: f64, max: f64) -> Result<(), NominalMismatch> {
+    if (min..=max).contains(&value) {
+        Ok(())
+    } else {
+        Err(NominalMismatch {
+            field,
+            value,
+            min,
+            max,
+        })
+    }
+}
+
+/// The lateral offset of `params` must leave room in the joints' range for a lateral
+/// amplitude of up to `reach_rad`.
+pub fn lateral_room(params: &GaitParams, reach_rad: f64) -> Result<(), NominalMismatch> {
+    let room = JOINT_LIMIT_RAD - reach_rad + 1e-12;
+    within("offset_lat_rad", params.offset_lat_rad, -room, room)
+}

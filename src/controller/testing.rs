@@ -1,0 +1,51 @@
+//! Helpers for testing controllers outside the loop (unit tests, benches, the
+//! allocation tests): observations of scripted torques, and engaging a controller as
+//! if the selector had run its gait from t = 0.
+
+use super::interface::{BodyEstimate, Controller, Handover, Imu, Observation};
+use crate::gait::{BodyLayout, GaitParams};
+
+/// Storage for the parts of an observation a test does not script.
+pub struct ObservationBuf {
+    velocity: Vec<f64>,
+    imu: Vec<Imu>,
+    body: BodyEstimate,
+}
+
+impl ObservationBuf {
+    pub fn new(joints: usize) -> Self {
+        Self {
+            velocity: vec![0.0; joints],
+            imu: vec![Imu::default(); joints],
+            body: BodyEstimate::default(),
+        }
+    }
+
+    /// Positions and reported torques as given; zero velocities, resting IMUs, no
+    /// body estimate.
+    pub fn observe<'a>(&'a self, position_rad: &'a [f64], torque_nm: &'a [f64]) -> Observation<'a> {
+        Observation {
+            position_rad,
+            velocity_rad_s: &self.velocity,
+            torque_nm,
+            imu: &self.imu,
+            body: &self.body,
+        }
+    }
+}
+
+/// Handed-over set-points of a straight body (up to this many joints).
+static STRAIGHT: [f64; 1024] = [0.0; 1024];
+
+/// Engages `c` at `t_s` with the phase the selector would have reached by then running
+/// `params` from phase 0 (`ωT·t_s`), so its output continues the open-loop gait.
+/// Allocates nothing (bodies of up to 1024 joints).
+pub fn engage_at(c: &mut dyn Controller, layout: &BodyLayout, params: &GaitParams, t_s: f64) {
+    c.engage(&Handover {
+        t_s,
+        phase_rad: params.temporal_freq_rad_s * t_s,
+        set_points_rad: &STRAIGHT[..layout.len()],
+        params,
+        layout,
+    });
+}

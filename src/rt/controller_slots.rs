@@ -1,0 +1,245 @@
+//! The loop's side of the controller seam: one slot per gait. The selector is the
+//! open-loop base and the blender; the active gait's controller takes over once the
+//! selector has finished blending into that gait, and hands the joints back when the
+//! gait changes, its parameters change, the loop holds, or the controller is replaced.
+//!
+//! - **Takeover without a jump.** The controller is engaged with the selector's phase
+//!   and set-points of this cycle (a [`Handover`]) and the gait's nominal parameters.
+//! - **Hand back.** The selector's output continues from the set-points sent last
+//!   cycle: their difference from the selector's own fades out over the blend time
+//!   while the gait keeps moving; the controller takes over again after that.
+//! - **Nothing allocates or frees.** Controllers are built on the control side; the one
+//!   replaced is sent back through a bounded channel to be dropped there.
+//! - This module knows no concrete controller: only `dyn Controller` and its id.
+use crossbeam_channel::{Sender, TrySendError};
+use serde::Serialize;
+
+use crate::controller::catalog::NO_CONTROLLER;
+use crate::controller::report::ControllerReport;
+use crate::controller::{Controller, Handover, NominalMismatch, Observation};
+use crate::gait::{GaitKind, GaitParams, GaitSelector};
+
+const KINDS: usize = GaitKind::ALL.len();
+
+/// A built controller on its way to (or back from) the loop.
+pub struct Installed {
+    /// Its [`crate::controller::catalog`] id.
+    pub id: u64,
+    pub controller: Box<dyn Controller>,
+}
+
+impl std::fmt::Debug for Installed {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "Installed({})", self.id)
+    }
+}
+
+/// Whether the active gait's controller drives the joints.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Engagement {
+    /// The gait has no controller: the selector's serpenoid runs it.
+    Off,
+    /// The selector drives: a blend into the gait is running, or the loop holds.
+    Waiting,
+    /// The controller drives.
+    Engaged,
+}
+
+/// What the loop publishes about the controllers every cycle.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ControllerTelemetry {
+    /// Each gait's controller id (0: none), by `GaitKind::index`.
+    pub installed: [u64; KINDS],
+    /// The active gait's controller and whether it drives.
+    pub active_id: u64,
+    pub engagement: Engagement,
+    /// Its report after its last step (cleared unless engaged).
+    pub report: ControllerReport,
+    /// Times the active gait's controller took over since it was installed.
+    pub takeovers: u64,
+    /// Replaced controllers the loop had to free itself because the retired channel was
+    /// full (an allocator call in the loop; stays 0 while the control side drains it).
+    pub freed_in_loop: u64,
+}
+
+impl Default for ControllerTelemetry {
+    fn default() -> Self {
+        Self {
+            installed: [NO_CONTROLLER; KINDS],
+            active_id: NO_CONTROLLER,
+            engagement: Engagement::Off,
+            report: ControllerReport::EMPTY,
+            takeovers: 0,
+            freed_in_loop: 0,
+        }
+    }
+}
+
+/// The slots (see the module docs).
+pub struct ControllerSlots {
+    slots: [Option<Installed>; KINDS],
+    takeovers: [u64; KINDS],
+    /// The gait whose controller drives, if one does.
+    engaged: Option<GaitKind>,
+    retired: Sender<Installed>,
+    report: ControllerReport,
+    freed_in_loop: u64,
+}
+
+impl ControllerSlots {
+    /// No controllers yet; replaced ones go to `retired`.
+    pub fn new(retired: Sender<Installed>) -> Self {
+        Self {
+            slots: std::array::from_fn(|_| None),
+            takeovers: [0; KINDS],
+            engaged: None,
+            retired,
+            report: ControllerReport::EMPTY,
+            freed_in_loop: 0,
+        }
+    }
+
+    /// Whether `gait`'s controller (if any) can follow `params`.
+    pub fn accepts(&self, gait: GaitKind, params: &GaitParams) -> Result<(), NominalMismatch> {
+        match &self.slots[gait.index()] {
+            Some(c) => c.controller.accepts(params),
+            None => Ok(()),
+        }
+    }
+
+    /// Installs `new` for `gait` at a cycle boundary. If `gait`'s old controller was
+    /// driving, the joints go back to the selector first (from `commanded`, the
+    /// set-points sent last cycle); the new one takes over when the selector's blend
+    /// ends. The old controller is retired.
+    pub fn install(
+        &mut self,
+        gait: GaitKind,
+        new: Installed,
+        selector: &mut GaitSelector,
+        commanded: &[f64],
+        t_s: f64,
+    ) {
+        if self.engaged == Some(gait) {
+            self.hand_back(selector, commanded, t_s);
+        }
+        self.takeovers[gait.index()] = 0;
+        if let Some(old) = self.slots[gait.index()].replace(new) {
+            self.retire(old);
+        }
+    }
+
+    /// Sends a controller that was not installed back unused.
+    pub fn refuse(&mut self, c: Installed) {
+        self.retire(c);
+    }
+
+    fn retire(&mut self, c: Installed) {
+        match self.retired.try_send(c) {
+            Ok(()) => {}
+            // Only when the control side stopped draining: freeing here is an
+            // allocator call in the loop, counted so it shows.
+            Err(TrySendError::Full(c) | TrySendError::Disconnected(c)) => {
+                self.freed_in_loop += 1;
+                drop(c);
+            }
+        }
+    }
+
+    /// If a controller drives, gives the joints back to the selector: its output
+    /// continues from `commanded` and the controller's deviation fades out over the
+    /// blend time (`GaitSelector::hand_back`). Call after changing the selector's gait
+    /// or parameters.
+    pub fn hand_back(&mut self, selector: &mut GaitSelector, commanded: &[f64], t_s: f64) {
+        if self.engaged.take().is_some() {
+            selector.hand_back(commanded, t_s);
+        }
+    }
+
+    /// The loop does not run the gait this cycle (hold, limp) or restarts it from the
+    /// measured pose: the controller stops driving and takes over again (engaged
+    /// afresh) once the selector has blended back.
+    pub fn pause(&mut self) {
+        self.engaged = None;
+    }
+
+    /// Called after the selector's update with its set-points in `pos`: replaces them
+    /// with the controller's when the active gait's controller drives, taking over
+    /// first when the selector has just finished blending into the gait. Returns
+    /// whether the controller drove.
+    pub fn drive(
+        &mut self,
+        t_s: f64,
+        selector: &GaitSelector,
+        obs: &Observation<'_>,
+        pos: &mut [f64],
+    ) -> bool {
+        let gait = selector.active();
+        debug_assert!(
+            self.engaged.is_none_or(|g| g == gait),
+            "a gait change hands back first"
+        );
+        let Some(slot) = self.slots[gait.index()].as_mut() else {
+            return false;
+        };
+        if self.engaged.is_none() && selector.blend_progress() >= 1.0 {
+            slot.controller.engage(&Handover {
+                t_s,
+                phase_rad: selector.phase(),
+                set_points_rad: pos,
+                params: selector.table().get(gait),
+                layout: selector.layout(),
+            });
+            self.engaged = Some(gait);
+            self.takeovers[gait.index()] += 1;
+        }
+        if self.engaged.is_none() {
+            return false;
+        }
+        slot.controller.step(t_s, obs, pos);
+        slot.controller.report(&mut self.report);
+        true
+    }
+
+    /// The driving controller's id and report after its last step, if one drives.
+    pub fn report(&self) -> Option<(u64, &ControllerReport)> {
+        let g = self.engaged?;
+        Some((self.id(g), &self.report))
+    }
+
+    /// The gait whose controller drives, if any.
+    pub fn engaged(&self) -> Option<GaitKind> {
+        self.engaged
+    }
+
+    /// The id of `gait`'s controller (0: none).
+    pub fn id(&self, gait: GaitKind) -> u64 {
+        self.slots[gait.index()]
+            .as_ref()
+            .map_or(NO_CONTROLLER, |c| c.id)
+    }
+
+    /// Fills the telemetry's controller part for the active gait `active`.
+    pub fn publish(&self, active: GaitKind, out: &mut ControllerTelemetry) {
+        for g in GaitKind::ALL {
+            out.installed[g.index()] = self.id(g);
+        }
+        out.active_id = self.id(active);
+        out.engagement = match (self.engaged, out.active_id) {
+            (Some(_), _) => Engagement::Engaged,
+            (None, NO_CONTROLLER) => Engagement::Off,
+            (None, _) => Engagement::Waiting,
+        };
+        if self.engaged.is_some() {
+            out.report = self.report;
+        } else {
+            out.report.clear();
+        }
+        out.takeovers = self.takeovers[active.index()];
+        out.freed_in_loop = self.freed_in_loop;
+    }
+}
+
+#[cfg(test)]
+#[path = "controller_slots_tests.rs"]
+mod tests;

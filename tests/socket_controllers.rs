@@ -1,0 +1,434 @@
+//! Controllers over the socket, for any gait: `controller.list/get/set` validated
+//! against a fake loop, then `status`, telemetry and `snakectl` against the real loop
+//! (over the echo bus, with scripted torques) behind the real server.
+mod socket_support;
+
+use std::process::Command;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+use serde_json::{Value, json};
+use snaked::bus::echo::EchoBus;
+use snaked::control::api::code;
+use snaked::control::client::{Client, Endpoint};
+use snaked::control::{BusKind, DaemonInfo, LoopHandle, Pacing, RunningServer, ServerConfig};
+use snaked::gait::{GaitKind, GaitTable};
+use snaked::rt::harness::{PERIOD_NS, echo_harness_on};
+use snaked::rt::messages::LoopRequest;
+use snaked::safety::failsafe::FailsafeConfig;
+use socket_support::{Harness, error_code, error_message, raw};
+
+fn call(c: &mut Client, method: &str, params: Value) -> Value {
+    let line = json!({"id": 1, "method": method, "params": params}).to_string();
+    raw(c, &line)
+}
+
+#[test]
+fn controller_list_shows_every_gait_s_controllers_from_the_registry() {
+    let h = Harness::default_server();
+    let mut c = h.client();
+    let all = call(&mut c, "controller.list", json!({}));
+    let gaits = all["result"]["gaits"].as_object().expect("per gait");
+    assert_eq!(gaits.len(), GaitKind::ALL.len(), "{all}");
+    for (name, g) in gaits {
+        let names: Vec<&str> = g["controllers"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|c| c["name"].as_str().unwrap())
+            .collect();
+        assert!(names.contains(&"open_loop"), "{name}: {names:?}");
+    }
+    let slithering = &gaits["slithering"]["controllers"];
+    let compliant = slithering
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|c| c["name"] == "compliant_slithering")
+        .expect("listed for slithering");
+    assert_eq!(compliant["default_preset"], "a_ws_omega");
+    let presets: Vec<&str> = compliant["presets"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| p["name"].as_str().unwrap())
+        .collect();
+    assert!(presets.contains(&"a") && presets.contains(&"a_ws_omega_per_joint"));
+    let cfg = &compliant["default_config"];
+    assert_eq!(
+        cfg["phase"]["gains"]["max"],
+        Value::Null,
+        "unbounded shows null"
+    );
+    let signals = compliant["report"]["signals"].as_array().unwrap();
+    let lag = signals
+        .iter()
+        .find(|s| s["name"] == "phase_lag_rad")
+        .unwrap();
+    assert_eq!(lag["unit"], "rad");
+    let fields = compliant["report"]["fields"].as_array().unwrap();
+    assert_eq!(fields[0]["name"], "amplitude");
+    // One gait only.
+    let one = call(&mut c, "controller.list", json!({"gait": "rolling"}));
+    assert_eq!(
+        one["result"]["gaits"].as_object().unwrap().len(),
+        1,
+        "{one}"
+    );
+}
+
+#[test]
+fn controller_set_is_validated_built_off_the_loop_and_sent() {
+    let h = Harness::default_server();
+    let mut c = h.client();
+    let ok = call(
+        &mut c,
+        "controller.set",
+        json!({"gait": "slithering", "controller": "a_ws_omega",
+            "config": {"amplitude": {"gains": {"stiffness": 6.0}}}}),
+    );
+    let r = &ok["result"]["controller"];
+    assert_eq!(
+        (r["controller"].as_str(), r["preset"].as_str()),
+        (Some("compliant_slithering"), Some("a_ws_omega")),
+        "{ok}"
+    );
+    assert_eq!(r["config"]["amplitude"]["gains"]["stiffness"], 6.0);
+    assert_eq!(
+        r["config"]["amplitude"]["gains"]["damping"], 6.0,
+        "the preset's"
+    );
+    // Any gait: open loop for rolling, by controller name.
+    let ok = call(
+        &mut c,
+        "controller.set",
+        json!({"gait": "rolling", "controller": "open_loop"}),
+    );
+    assert_eq!(ok["result"]["controller"]["gait"], "rolling", "{ok}");
+    assert_eq!(
+        h.fake.seen(),
+        [
+            LoopRequest::SetController(GaitKind::Slithering),
+            LoopRequest::SetController(GaitKind::Rolling)
+        ]
+    );
+    assert_eq!(
+        h.fake.controllers(),
+        ["compliant_slithering/a_ws_omega", "open_loop/default"]
+    );
+
+    for (params, needle) in [
+        (
+            json!({"gait": "slithering", "controller": "fast"}),
+            "unknown controller `fast` for slithering",
+        ),
+        (
+            json!({"gait": "rolling", "controller": "cpg"}),
+            "controller cpg does not run rolling",
+        ),
+        (
+            json!({"gait": "slithering", "controller": "compliant_slithering", "preset": "b"}),
+            "no preset `b`",
+        ),
+        (
+            json!({"gait": "slithering", "controller": "a", "config": {"stiff": 1}}),
+            "`config.stiff`: unknown field `stiff`",
+        ),
+        (
+            json!({"gait": "slithering", "controller": "a",
+                "config": {"amplitude": {"gains": {"damping": "x"}}}}),
+            "`config.amplitude.gains.damping`",
+        ),
+        // Bounds are part of the check: a huge bias force would run a parameter away.
+        (
+            json!({"gait": "slithering", "controller": "a_ws_omega",
+                "config": {"spatial_freq": {"gains": {"bias_force": 1e308}}}}),
+            "`config.spatial_freq.gains.bias_force` = 1e308 is out of range",
+        ),
+        (
+            json!({"gait": "slithering", "controller": "a_ws_omega",
+                "config": {"phase": {"gains": {"bias_force": 1000.0}}}}),
+            "`config.phase.gains.bias_force`",
+        ),
+        // The gait's nominal amplitude must lie within the compliant amplitude's range.
+        (
+            json!({"gait": "slithering", "controller": "a",
+                "config": {"amplitude": {"gains": {"min": 0.9, "max": 1.2}}}}),
+            "the nominal amplitude_lat_rad",
+        ),
+        (json!({"gait": "slithering"}), "missing `controller`"),
+        (
+            json!({"gait": "slithering", "controller": "a", "extra": 1}),
+            "unknown field `extra`",
+        ),
+    ] {
+        let a = call(&mut c, "controller.set", params.clone());
+        assert_eq!(error_code(&a), code::INVALID_PARAMS, "{params}: {a}");
+        let m = error_message(&a);
+        assert!(m.contains(needle), "{params}: {m}");
+    }
+    assert_eq!(h.fake.seen().len(), 2, "nothing invalid reaches the loop");
+
+    // What replaced slithering's `compliance` object still works, and says so on
+    // other gaits.
+    let old = call(
+        &mut c,
+        "params.set",
+        json!({"gait": "slithering", "compliance": {"controller": "a",
+            "amplitude": {"gains": {"stiffness": 9.0}}, "compliance": "anti_compliant"}}),
+    );
+    let r = &old["result"]["controller"];
+    assert_eq!(r["preset"], "a", "{old}");
+    assert_eq!(r["config"]["sign"], "anti_compliant");
+    assert_eq!(r["config"]["amplitude"]["gains"]["stiffness"], 9.0);
+    let bad = call(
+        &mut c,
+        "params.set",
+        json!({"gait": "rolling", "compliance": {"controller": "a"}}),
+    );
+    assert!(error_message(&bad).contains("controller.set"), "{bad}");
+
+    // controller.get names what each gait runs (from the loop's telemetry).
+    let deadline = Instant::now() + Duration::from_secs(10);
+    let got = loop {
+        let g = call(&mut c, "controller.get", json!({"gait": "slithering"}));
+        if g["result"]["controller"]["preset"] == "a" || Instant::now() > deadline {
+            break g;
+        }
+        std::thread::sleep(Duration::from_millis(5));
+    };
+    assert_eq!(got["result"]["controller"]["preset"], "a", "{got}");
+}
+
+/// The real loop over an echo bus (torques against the bend at every other lateral
+/// joint), stepped about ten times faster than real time on its own thread.
+struct RealLoop {
+    stop: Arc<AtomicBool>,
+    thread: Option<JoinHandle<()>>,
+    server: Option<RunningServer>,
+    path: std::path::PathBuf,
+    _dir: tempfile::TempDir,
+}
+
+impl Drop for RealLoop {
+    fn drop(&mut self) {
+        if let Some(s) = self.server.take() {
+            s.shutdown();
+        }
+        self.stop.store(true, Ordering::Relaxed);
+        if let Some(t) = self.thread.take() {
+            t.join().unwrap();
+        }
+    }
+}
+
+fn pegs(i: usize, position_rad: f32) -> f32 {
+    if i.is_multiple_of(4) && position_rad.abs() > 0.05 {
+        2.0 * position_rad.signum()
+    } else {
+        0.0
+    }
+}
+
+fn real_loop() -> RealLoop {
+    let mut table = GaitTable::default();
+    table.get_mut(GaitKind::Slithering).temporal_freq_rad_s = 3.0;
+    let bus = EchoBus::new(18, PERIOD_NS).with_torque(pegs);
+    let h = echo_harness_on(
+        bus,
+        table,
+        GaitKind::Slithering,
+        false,
+        FailsafeConfig::default(),
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("snaked.sock");
+    let handle = LoopHandle {
+        requests: h.requests.clone(),
+        acks: h.acks.clone(),
+        telemetry: h.telemetry.clone(),
+        info: DaemonInfo {
+            version: "test".into(),
+            module_count: 18,
+            module_names: vec![],
+            loop_rate_hz: 1000.0,
+            bus: BusKind::Emulated,
+            pacing: Pacing::Lockstep,
+        },
+        layout: h.layout.clone(),
+        retired: h.retired.clone(),
+        catalog: h.catalog.clone(),
+    };
+    let cfg = ServerConfig {
+        unix_path: Some(path.clone()),
+        ..ServerConfig::default()
+    };
+    let server = snaked::control::start(cfg, handle).unwrap();
+    let stop = Arc::new(AtomicBool::new(false));
+    let mut control = h.control;
+    let thread = {
+        let stop = stop.clone();
+        std::thread::spawn(move || {
+            while !stop.load(Ordering::Relaxed) {
+                for _ in 0..10 {
+                    control.step();
+                }
+                std::thread::sleep(Duration::from_millis(1));
+            }
+        })
+    };
+    RealLoop {
+        stop,
+        thread: Some(thread),
+        server: Some(server),
+        path,
+        _dir: dir,
+    }
+}
+
+/// `status` once `ok` holds for it (or the last one after 30 s).
+fn status_when(c: &mut Client, ok: impl Fn(&Value) -> bool) -> Value {
+    let deadline = Instant::now() + Duration::from_secs(30);
+    loop {
+        let s = c.call("status", None).unwrap();
+        if ok(&s) || Instant::now() > deadline {
+            return s;
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    }
+}
+
+fn snakectl(l: &RealLoop, args: &[&str]) -> String {
+    let out = Command::new(env!("CARGO_BIN_EXE_snakectl"))
+        .arg("--socket")
+        .arg(&l.path)
+        .args(args)
+        .output()
+        .unwrap();
+    let text = String::from_utf8(out.stdout).unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{args:?}: {text}{err}");
+    text
+}
+
+#[test]
+fn status_telemetry_and_snakectl_show_any_controller_s_report() {
+    let l = real_loop();
+    let mut c = Client::connect(
+        &Endpoint::Unix(l.path.clone()),
+        Some(Duration::from_secs(10)),
+    )
+    .unwrap();
+    // Every gait starts on its open-loop controller, which takes over after the
+    // start-up blend.
+    let s = status_when(&mut c, |s| s["controller"]["state"] == "engaged");
+    assert_eq!(s["controller"]["controller"], "open_loop", "{s}");
+    assert!(s["controller"]["signals"]["phase_rad"].is_number(), "{s}");
+
+    c.call(
+        "controller.set",
+        Some(json!({"gait": "slithering", "controller": "a_ws_omega"})),
+    )
+    .unwrap();
+    let s = status_when(&mut c, |s| {
+        s["controller"]["preset"] == "a_ws_omega"
+            && s["controller"]["state"] == "engaged"
+            && s["controller"]["signals"]["windows_dropped"].as_f64() > Some(0.0)
+    });
+    let ctl = &s["controller"];
+    assert_eq!(ctl["state"], "engaged", "{ctl}");
+    assert!(
+        ctl["signals"]["windows_born"].as_f64().unwrap() > 0.0,
+        "{ctl}"
+    );
+    assert!(ctl["signals"]["phase_lag_rad"].is_number(), "{ctl}");
+    let fields = ctl["fields"].as_array().unwrap();
+    let amp = &fields[0];
+    assert_eq!(
+        (amp["name"].as_str(), amp["centralization"].as_str()),
+        (Some("amplitude"), Some("windowed"))
+    );
+    let windows = amp["windows"].as_array().unwrap();
+    assert_eq!(
+        windows.len() as f64,
+        ctl["signals"]["windows"].as_f64().unwrap()
+    );
+    assert_eq!(windows[0]["a"], Value::Null, "the head window is open");
+    assert_eq!(
+        windows.last().unwrap()["b"],
+        Value::Null,
+        "so is the tail's"
+    );
+    assert!(
+        windows
+            .iter()
+            .any(|w| w["force"].as_f64().unwrap().abs() > 0.0)
+    );
+    assert!(windows.iter().all(|w| w["value"].is_number()));
+    let phase = &fields[2];
+    assert_eq!(phase["centralization"], "central");
+    assert!(phase["windows"][0]["lag"].is_number(), "{phase}");
+
+    c.call("telemetry.subscribe", Some(json!({"rate_hz": 50})))
+        .unwrap();
+    let msg = loop {
+        let m = c.next_message().unwrap();
+        if m["method"] == "telemetry" {
+            break m;
+        }
+    };
+    let t = &msg["params"]["controller"];
+    assert_eq!(
+        (t["preset"].as_str(), t["state"].as_str()),
+        (Some("a_ws_omega"), Some("engaged"))
+    );
+    assert!(t["fields"][0]["windows"].is_array(), "{t}");
+    c.call("telemetry.unsubscribe", None).unwrap();
+
+    let text = snakectl(&l, &["status"]);
+    assert!(
+        text.contains("control   compliant_slithering/a_ws_omega (engaged)"),
+        "{text}"
+    );
+    assert!(text.contains("amplitude (windowed, compliant"), "{text}");
+    assert!(text.contains("phase (central, compliant"), "{text}");
+
+    // snakectl lists and sets too, with overrides by path; another gait takes the
+    // joints back, and its own controller drives it.
+    let text = snakectl(&l, &["controller", "list", "slithering"]);
+    assert!(
+        text.contains("compliant_slithering") && text.contains("* a_ws_omega"),
+        "{text}"
+    );
+    let text = snakectl(
+        &l,
+        &[
+            "controller",
+            "set",
+            "slithering",
+            "a",
+            "amplitude.gains.stiffness=5",
+        ],
+    );
+    assert!(text.contains("compliant_slithering/a"), "{text}");
+    assert!(text.contains("amplitude.gains.stiffness=5"), "{text}");
+    c.call("gait.set", Some(json!({"gait": "rolling"})))
+        .unwrap();
+    let s = status_when(&mut c, |s| {
+        s["gait"] == "rolling" && s["controller"]["state"] == "engaged"
+    });
+    assert_eq!(s["controller"]["controller"], "open_loop", "{s}");
+    let got = c.call("controller.get", None).unwrap();
+    assert_eq!(got["gaits"]["slithering"]["preset"], "a", "{got}");
+    assert_eq!(
+        got["gaits"]["slithering"]["config"]["amplitude"]["gains"]["stiffness"],
+        5.0
+    );
+    let text = snakectl(&l, &["controller", "get"]);
+    assert!(
+        text.contains("rolling") && text.contains("open_loop/default"),
+        "{text}"
+    );
+}
