@@ -5,6 +5,7 @@
 pub mod compliant_slithering;
 pub mod cpg;
 pub mod open_loop;
+pub mod serpenoid_admittance;
 
 use crate::controller::registry::{Entry, Family};
 
@@ -13,4 +14,5 @@ pub static REGISTRY: &[&dyn Family] = &[
     &Entry::<open_loop::OpenLoopKind>::NEW,
     &Entry::<compliant_slithering::CompliantSlitheringKind>::NEW,
     &Entry::<cpg::CpgKind>::NEW,
+    &Entry::<serpenoid_admittance::SerpenoidAdmittanceKind>::NEW,
 ];
