@@ -432,3 +432,65 @@ fn status_telemetry_and_snakectl_show_any_controller_s_report() {
         "{text}"
     );
 }
+
+#[test]
+fn a_controller_of_another_gait_through_the_socket_and_snakectl() {
+    let l = real_loop();
+    let mut c = Client::connect(
+        &Endpoint::Unix(l.path.clone()),
+        Some(Duration::from_secs(10)),
+    )
+    .unwrap();
+    let text = snakectl(&l, &["controller", "list", "sidewinding"]);
+    assert!(text.contains("serpenoid_admittance"), "{text}");
+    assert!(text.contains("scale_lateral []"), "{text}");
+    // A preset's name is enough when only one controller of the gait has it.
+    let text = snakectl(
+        &l,
+        &[
+            "controller",
+            "set",
+            "sidewinding",
+            "anti_compliant",
+            "dorsal.enabled=false",
+            "lateral.gains.stiffness=12",
+        ],
+    );
+    assert!(
+        text.contains("serpenoid_admittance/anti_compliant"),
+        "{text}"
+    );
+    assert!(text.contains("dorsal.enabled=false"), "{text}");
+    c.call("gait.set", Some(json!({"gait": "sidewinding"})))
+        .unwrap();
+    let s = status_when(&mut c, |s| {
+        s["gait"] == "sidewinding"
+            && s["controller"]["state"] == "engaged"
+            && s["controller"]["signals"]["scale_lateral"]
+                .as_f64()
+                .is_some_and(|k| (k - 1.0).abs() > 1e-3)
+    });
+    let ctl = &s["controller"];
+    assert_eq!(ctl["controller"], "serpenoid_admittance", "{s}");
+    let k = ctl["signals"]["scale_lateral"].as_f64().unwrap();
+    // The echo bus pushes every fourth joint against its bend: anti-compliance
+    // pushes back, opening the lateral wave; the dorsal one is off and stays nominal.
+    assert!(k > 1.0, "anti-compliant lateral scale {k}");
+    assert_eq!(ctl["signals"]["scale_dorsal"], 1.0, "{ctl}");
+    let text = snakectl(&l, &["status"]);
+    assert!(
+        text.contains("control   serpenoid_admittance/anti_compliant (engaged)"),
+        "{text}"
+    );
+    assert!(text.contains("scale_lateral"), "{text}");
+    // The helix's amplitude is tied to its radius: not a gait this controller runs.
+    let err = call(
+        &mut c,
+        "controller.set",
+        json!({"gait": "rolling_helix", "controller": "serpenoid_admittance"}),
+    );
+    assert!(
+        error_message(&err).contains("does not run rolling_helix"),
+        "{err}"
+    );
+}

@@ -3,8 +3,8 @@
 //! torques, each central, windowed (travelling half-wave windows) or per joint.
 
 use super::config::{Centralization, CompliantSlitheringConfig};
-use crate::controller::report::{ControllerReport, MAX_WINDOWS as REPORT_WINDOWS, WindowField};
 use crate::controller::nominal::{Nominal, lateral_room, within};
+use crate::controller::report::{ControllerReport, MAX_WINDOWS as REPORT_WINDOWS, WindowField};
 use crate::controller::{Controller, Handover, NominalMismatch, Observation};
 use crate::gait::{BodyLayout, GaitParams};
 use crate::shape::ShapeFunction;
@@ -106,7 +106,10 @@ impl CompliantSlithering {
     /// The nominal shape at t = 0, so everything can be read before the first step.
     /// Allocates nothing (capacities are set at construction).
     fn start_nominal(&mut self) {
-        let (ws0, omega0) = (self.nominal.params.spatial_freq_rad, self.nominal_phase(self.t));
+        let (ws0, omega0) = (
+            self.nominal.params.spatial_freq_rad,
+            self.nominal_phase(self.t),
+        );
         self.manager
             .update(|s| ws0 * s - omega0, [ParamState::default(); 3]);
         self.assemble();
@@ -270,7 +273,10 @@ impl CompliantSlithering {
             let shape = &self.shape;
             let sigma = &self.sigma;
             let ready = sigma.len() == shape.param_count();
-            let (ws0, omega0) = (self.nominal.params.spatial_freq_rad, self.nominal_phase(t_s));
+            let (ws0, omega0) = (
+                self.nominal.params.spatial_freq_rad,
+                self.nominal_phase(t_s),
+            );
             self.last_events = self.manager.update(
                 |s| {
                     if ready {
@@ -315,8 +321,16 @@ impl Controller for CompliantSlithering {
     /// the lateral offset stays within the joints' range.
     fn accepts(&self, params: &GaitParams) -> Result<(), NominalMismatch> {
         for (p, value, field) in [
-            (Param::Amplitude, params.amplitude_lat_rad, "amplitude_lat_rad"),
-            (Param::SpatialFreq, params.spatial_freq_rad, "spatial_freq_rad"),
+            (
+                Param::Amplitude,
+                params.amplitude_lat_rad,
+                "amplitude_lat_rad",
+            ),
+            (
+                Param::SpatialFreq,
+                params.spatial_freq_rad,
+                "spatial_freq_rad",
+            ),
         ] {
             let pc = self.config.param(p);
             if pc.enabled {

@@ -5,8 +5,8 @@
 //! open-loop serpenoid.
 
 use crate::controller::config::{ConfigError, check_range};
-use crate::controller::report::ControllerReport;
 use crate::controller::nominal::{Nominal, lateral_room, within};
+use crate::controller::report::ControllerReport;
 use crate::controller::{Controller, Handover, NominalMismatch, Observation};
 use crate::gait::{BodyLayout, GaitParams, JOINT_LIMIT_RAD, Plane};
 use crate::shape::torque::TorqueFilter;
@@ -172,9 +172,8 @@ impl Controller for Cpg {
             let (sin, cos) = (spatial_freq * o.s - o.phase).sin_cos();
             // Local shape forces: ∂θ/∂ϑ = −r·cos, ∂θ/∂r = sin.
             let phase_force = -o.amplitude * cos * tau;
-            self.rates[k] = temporal_freq
-                + g.coupling_per_s * coupling
-                + g.frequency_feedback * phase_force;
+            self.rates[k] =
+                temporal_freq + g.coupling_per_s * coupling + g.frequency_feedback * phase_force;
             let amp_rate = (amplitude0 - o.amplitude) / g.amplitude_time_constant_s
                 + g.amplitude_feedback * sin * tau;
             let o = &mut self.osc[k];
