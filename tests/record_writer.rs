@@ -192,6 +192,7 @@ fn a_size_cap_finishes_a_valid_file_and_keeps_draining() {
     let summary = rec.finish().expect("finish");
     assert_eq!(summary.capped, Some(CapReason::MaxBytes));
     assert_eq!(summary.items, items.len() as u64, "drained to the end");
+    assert_eq!(summary.dropped, 0, "push_wait waits instead");
     let file = read_mcap(&path);
     let joints = file.counts["/joints"];
     assert!(joints > 0 && joints < 3000, "{joints} /joints messages");
@@ -379,4 +380,23 @@ fn without_a_file_or_clients_nothing_is_written() {
     let items: Vec<_> = (0..20).map(|k| cycle(k, id, false)).collect();
     let s = record(&items, options(items.len()), false);
     assert_eq!((s.items, s.messages_written, s.path), (20, 0, None));
+}
+
+#[test]
+fn push_wait_loses_nothing_through_a_tiny_ring_and_stops_after_finish() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = dir.path().join("wait.mcap");
+    let (catalog, id) = catalog();
+    let items: Vec<_> = (0..500).map(|k| cycle(k, id, false)).collect();
+    let opts = RecordOptions {
+        mcap: Some(McapOptions::new(&path)),
+        ring_capacity: 2,
+        ..RecordOptions::default()
+    };
+    let (tx, rec) = start(opts, info(catalog, false)).expect("start");
+    push_all_waiting(&tx, &items);
+    let summary = rec.finish().expect("finish");
+    assert_eq!((summary.items, summary.dropped), (500, 0));
+    assert_eq!(read_mcap(&path).counts["/joints"], 500);
+    assert!(!tx.push_wait(&items[0]), "returns at once after finish");
 }

@@ -8,7 +8,7 @@ use std::thread::JoinHandle;
 use super::error::RecordError;
 use super::live::Latch;
 use super::options::{RecordOptions, RecordSummary, RecorderStatus, RecordingInfo};
-use super::ring::{RecordTx, Ring};
+use super::ring::{CloseOnDrop, RecordTx, Ring};
 use super::writer::{Shared, Writer};
 
 /// Starts recording: allocates the ring, creates the file (if asked), starts the live
@@ -26,6 +26,7 @@ pub fn start(
     let thread = std::thread::Builder::new()
         .name("snaked-record".into())
         .spawn(move || {
+            let _close = CloseOnDrop(thread_shared.ring.clone());
             // Set up on this thread: the live view's runtime then never meets the
             // caller's (a runtime cannot be started or dropped inside another).
             let (writer, setup) = Writer::open(&opts, info, thread_shared)?;
@@ -123,5 +124,20 @@ impl Drop for Recorder {
         {
             tracing::warn!("recorder: {e}");
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_handles_cross_threads() {
+        fn send<T: Send>() {}
+        fn sync<T: Sync>() {}
+        send::<RecordTx>();
+        sync::<RecordTx>();
+        send::<Recorder>();
+        send::<RecordError>();
     }
 }

@@ -10,6 +10,9 @@ use crossbeam_queue::ArrayQueue;
 
 use super::cycle::RecordItem;
 
+/// How long [`RecordTx::push_wait`] sleeps while the ring is full.
+const WAIT: std::time::Duration = std::time::Duration::from_micros(200);
+
 /// The shared ring and its counters.
 pub(crate) struct Ring {
     queue: ArrayQueue<RecordItem>,
@@ -46,6 +49,16 @@ impl Ring {
     }
 }
 
+/// Closes the ring when dropped: the writer thread holds one, so a writer that ends
+/// for any reason (a panic included) lets waiting pushers go.
+pub(crate) struct CloseOnDrop(pub Arc<Ring>);
+
+impl Drop for CloseOnDrop {
+    fn drop(&mut self) {
+        self.0.close();
+    }
+}
+
 /// The loop's end of the ring: `Send`, cheap to clone, never blocks, never allocates.
 ///
 /// Dropping the last handle after the [`super::Recorder`] is gone frees the ring: do
@@ -72,6 +85,26 @@ impl RecordTx {
             Err(_) => {
                 self.ring.dropped.fetch_add(1, Ordering::Relaxed);
                 false
+            }
+        }
+    }
+
+    /// For offline runs (the lab's lockstep loop) that would rather wait than lose an
+    /// item: retries until the ring takes `item` (nothing is counted as dropped);
+    /// `false` only once the recorder has finished or its thread has died. It sleeps,
+    /// so never call it from the real-time loop.
+    pub fn push_wait(&self, item: &RecordItem) -> bool {
+        let mut item = *item;
+        loop {
+            if self.ring.closed.load(Ordering::Acquire) {
+                return false;
+            }
+            match self.ring.queue.push(item) {
+                Ok(()) => return true,
+                Err(back) => {
+                    item = back;
+                    std::thread::sleep(WAIT);
+                }
             }
         }
     }

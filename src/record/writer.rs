@@ -117,15 +117,16 @@ impl Writer {
     ) -> Result<(Self, Setup), RecordError> {
         let ctx = Context::new();
         let mut channels = Channels::new(&ctx).map_err(RecordError::Setup)?;
-        let file = opts
-            .mcap
-            .as_ref()
-            .map(|m| McapFile::create(m, &ctx, shared.bytes.clone()))
-            .transpose()?;
+        // The server first: if it cannot start, no empty file is left behind.
         let live = opts
             .live
             .as_ref()
             .map(|l| Live::start(l, &ctx, &info.source))
+            .transpose()?;
+        let file = opts
+            .mcap
+            .as_ref()
+            .map(|m| McapFile::create(m, &ctx, shared.bytes.clone()))
             .transpose()?;
         channels.file_open = file.is_some();
         channels.latch = live.as_ref().map(|l| l.latch.clone());

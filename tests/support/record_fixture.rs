@@ -225,12 +225,13 @@ pub fn push_all(tx: &RecordTx, items: &[RecordItem]) {
     }
 }
 
-/// Pushes every item, retrying (yielding) while the ring is full.
+/// Pushes every item, waiting while the ring is full (nothing is dropped).
 pub fn push_all_waiting(tx: &RecordTx, items: &[RecordItem]) {
-    for item in items {
-        while !tx.push(item) {
-            std::thread::yield_now();
-        }
+    for (n, item) in items.iter().enumerate() {
+        assert!(
+            tx.push_wait(item),
+            "item {n} refused: the recorder finished"
+        );
     }
 }
 
