@@ -6,6 +6,7 @@
 mod fixture;
 
 use fixture::*;
+use foxglove::schemas::{FrameTransforms, SceneUpdate};
 use snaked::record::{
     CapReason, LiveOptions, McapOptions, RecordError, RecordOptions, RecordSummary, start,
 };
@@ -81,6 +82,20 @@ fn a_scripted_run_has_every_channel_with_its_schema_and_count() {
     let commands: serde_json::Value =
         serde_json::from_slice(&file.first["/commands"]).expect("JSON");
     assert_eq!(commands["velocity_rad_s"][0], serde_json::Value::Null);
+
+    // The 3-D channels decode as Foxglove's well-known protobuf messages.
+    use prost::Message as _;
+    let tf = FrameTransforms::decode(&file.first["/tf"][..]).expect("FrameTransforms");
+    let frames: Vec<_> = tf.transforms.iter().map(|t| t.child_frame_id.as_str()).collect();
+    assert_eq!(frames.len(), 1 + MODULES + 1, "world → body and every link");
+    assert_eq!((frames[0], frames[1]), ("body", "link_0"));
+    assert!(tf.transforms.iter().all(|t| t.parent_frame_id == "world"));
+    let world = SceneUpdate::decode(&file.first["/scene/world"][..]).expect("SceneUpdate");
+    assert_eq!(world.entities[0].frame_id, "world");
+    assert_eq!(world.entities[0].cylinders.len(), 1, "the peg");
+    let body = SceneUpdate::decode(&file.first["/scene/body"][..]).expect("SceneUpdate");
+    assert_eq!(body.entities[0].frame_id, "body");
+    assert_eq!(body.entities[0].cylinders.len(), MODULES + 1, "head and modules");
 
     // Metadata: what the recording is of, the caller's pairs, the final status.
     let rec = &file.metadata["snaked.recording"];
