@@ -109,7 +109,7 @@ fn timestamp(unix_ns: u64) -> Timestamp {
 }
 
 impl Writer {
-    /// Creates the file, starts the live view, writes the metadata and the world.
+    /// Starts the live view, creates the file, writes the metadata and the world.
     pub fn open(
         opts: &RecordOptions,
         info: RecordingInfo,
@@ -128,6 +128,9 @@ impl Writer {
             .as_ref()
             .map(|m| McapFile::create(m, &ctx, shared.bytes.clone()))
             .transpose()?;
+        if let Some(f) = &file {
+            tracing::info!(path = %f.path().display(), "recorder: writing MCAP");
+        }
         channels.file_open = file.is_some();
         channels.latch = live.as_ref().map(|l| l.latch.clone());
         let setup = Setup {
@@ -339,6 +342,13 @@ impl Writer {
             .map(|t| (t.name().to_owned(), self.channels.written(*t)))
             .filter(|(_, n)| *n > 0)
             .collect();
+        tracing::info!(
+            items = self.items,
+            messages = self.channels.written_total(),
+            dropped = self.shared.ring.dropped(),
+            capped = ?self.shared.capped(),
+            "recorder: finished"
+        );
         Ok(RecordSummary {
             path: self.file.as_ref().map(|f| f.path().to_path_buf()),
             items: self.items,
