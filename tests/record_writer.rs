@@ -86,7 +86,11 @@ fn a_scripted_run_has_every_channel_with_its_schema_and_count() {
     // The 3-D channels decode as Foxglove's well-known protobuf messages.
     use prost::Message as _;
     let tf = FrameTransforms::decode(&file.first["/tf"][..]).expect("FrameTransforms");
-    let frames: Vec<_> = tf.transforms.iter().map(|t| t.child_frame_id.as_str()).collect();
+    let frames: Vec<_> = tf
+        .transforms
+        .iter()
+        .map(|t| t.child_frame_id.as_str())
+        .collect();
     assert_eq!(frames.len(), 1 + MODULES + 1, "world → body and every link");
     assert_eq!((frames[0], frames[1]), ("body", "link_0"));
     assert!(tf.transforms.iter().all(|t| t.parent_frame_id == "world"));
@@ -95,7 +99,11 @@ fn a_scripted_run_has_every_channel_with_its_schema_and_count() {
     assert_eq!(world.entities[0].cylinders.len(), 1, "the peg");
     let body = SceneUpdate::decode(&file.first["/scene/body"][..]).expect("SceneUpdate");
     assert_eq!(body.entities[0].frame_id, "body");
-    assert_eq!(body.entities[0].cylinders.len(), MODULES + 1, "head and modules");
+    assert_eq!(
+        body.entities[0].cylinders.len(),
+        MODULES + 1,
+        "head and modules"
+    );
 
     // Metadata: what the recording is of, the caller's pairs, the final status.
     let rec = &file.metadata["snaked.recording"];
