@@ -1,9 +1,67 @@
-//! Recording every run: the loop pushes `Copy` items ([`cycle::RecordItem`]) into a
-//! bounded lock-free ring; a writer thread encodes them as MCAP (and serves them live
-//! over the Foxglove WebSocket protocol). See `docs/recording.md`.
+//! Recording every run: the loop pushes `Copy` items ([`RecordItem`]) into a bounded
+//! lock-free ring; a writer thread encodes them as MCAP and serves them live over the
+//! Foxglove WebSocket protocol. Channels, rates, caps and how to read a file:
+//! `docs/recording.md`.
+//!
+//! # API
+//! ```text
+//! pub fn start(opts: RecordOptions, info: RecordingInfo) -> Result<(RecordTx, Recorder), RecordError>;
+//!
+//! RecordOptions { mcap: Option<McapOptions>, live: Option<LiveOptions>,
+//!                 ring_capacity: usize /* 1024 */, scene_rate_hz: f64 /* 50 */ }   // Default
+//! McapOptions   { path: PathBuf, max_bytes: Option<u64>, max_duration_s: Option<f64> } // ::new(path)
+//! LiveOptions   { addr: SocketAddr /* 127.0.0.1:8765; port 0 = any */ }            // Default
+//! RecordingInfo { source: String /* "snaked" | "snake-lab" */, module_names: Vec<String>,
+//!                 layout: BodyLayout, world: Option<WorldSpec>, catalog: Catalog,
+//!                 metadata: Vec<(String, String)> }
+//!
+//! impl RecordTx {            // Send + Clone; the 1 kHz loop's end
+//!     fn push(&self, item: &RecordItem) -> bool;  // never blocks, never allocates;
+//!                                                 // false (and counted) when full
+//!     fn dropped(&self) -> u64;  fn len(&self) -> usize;  fn capacity(&self) -> usize;
+//! }
+//! impl Recorder {            // Drop finishes the file too
+//!     fn finish(self) -> Result<RecordSummary, RecordError>;  // drain, summary + index, join
+//!     fn live_addr(&self) -> Option<SocketAddr>;
+//!     fn status(&self) -> RecorderStatus;  // items, messages_written, dropped, bytes,
+//!                                          // capped: Option<CapReason>, live_clients
+//! }
+//! RecordSummary { path, items, messages_written, per_topic, dropped, bytes, capped }
+//! ```
+//!
+//! # What the loop pushes
+//! One [`RecordItem::Cycle`] per cycle, a [`RecordItem::Event`] for every mode change,
+//! applied or refused request, engage/release and set-point fault, and a
+//! [`RecordItem::Stats`] once a second. Times are the loop's `t_ns`.
+//!
+//! # Files
+//! `ring` (loop ↔ writer), `recorder` (start, finish, status), `writer` (the thread,
+//! caps), `channels` (topics), `encode` + `schemas` (JSON bodies and their schemas),
+//! `scene` + `kinematics` (3-D), `file` (MCAP), `live` (WebSocket server).
 
+mod channels;
 pub mod cycle;
+mod encode;
+mod error;
+mod file;
+pub mod kinematics;
+mod live;
+mod options;
+mod recorder;
+mod ring;
+mod scene;
+mod schemas;
+mod writer;
 
+pub use channels::Topic;
 pub use cycle::{
     CycleRecord, JointSample, RECORD_MAX_LINKS, RECORD_MAX_MODULES, RecordEvent, RecordItem,
 };
+pub use error::RecordError;
+pub use options::{
+    CapReason, DEFAULT_LIVE_PORT, LiveOptions, McapOptions, RecordOptions, RecordSummary,
+    RecorderStatus, RecordingInfo,
+};
+pub use recorder::{Recorder, start};
+pub use ring::RecordTx;
+pub use scene::{BODY_FRAME, WORLD_FRAME, link_frame};

@@ -1,0 +1,564 @@
+//! JSON bodies of the JSON channels, serialised straight from the records through
+//! borrowing views (no intermediate `serde_json::Value`). Non-finite numbers become
+//! `null` (serde_json's rule): an uncommanded set-point, an open window edge, an unused
+//! signal.
+
+use serde::Serialize;
+use serde::ser::{SerializeMap, SerializeSeq, Serializer};
+
+use super::cycle::{CycleRecord, JointSample, RecordEvent};
+use crate::controller::catalog::ControllerInfo;
+use crate::controller::report::{MAX_COLUMNS, MAX_FIELDS, MAX_SIGNALS, WindowField};
+use crate::rt::messages::LoopRequest;
+use crate::rt::stats::LoopStats;
+
+/// One f32 per joint, picked by `pick`.
+struct Column<'a> {
+    joints: &'a [JointSample],
+    pick: fn(&JointSample) -> f32,
+}
+
+impl Serialize for Column<'_> {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.collect_seq(self.joints.iter().map(self.pick))
+    }
+}
+
+fn column<'a>(rec: &'a CycleRecord, pick: fn(&JointSample) -> f32) -> Column<'a> {
+    Column {
+        joints: rec.joints(),
+        pick,
+    }
+}
+
+/// `/joints`: feedback.
+#[derive(Serialize)]
+pub struct Joints<'a> {
+    cycle: u64,
+    t_ns: u64,
+    position_rad: Column<'a>,
+    velocity_rad_s: Column<'a>,
+    torque_nm: Column<'a>,
+}
+
+impl<'a> Joints<'a> {
+    pub fn new(rec: &'a CycleRecord) -> Self {
+        Self {
+            cycle: rec.cycle,
+            t_ns: rec.t_ns,
+            position_rad: column(rec, |j| j.position_rad),
+            velocity_rad_s: column(rec, |j| j.velocity_rad_s),
+            torque_nm: column(rec, |j| j.torque_nm),
+        }
+    }
+}
+
+/// `/commands`: set-points sent (null: not commanded).
+#[derive(Serialize)]
+pub struct Commands<'a> {
+    cycle: u64,
+    t_ns: u64,
+    position_rad: Column<'a>,
+    velocity_rad_s: Column<'a>,
+}
+
+impl<'a> Commands<'a> {
+    pub fn new(rec: &'a CycleRecord) -> Self {
+        Self {
+            cycle: rec.cycle,
+            t_ns: rec.t_ns,
+            position_rad: column(rec, |j| j.cmd_position_rad),
+            velocity_rad_s: column(rec, |j| j.cmd_velocity_rad_s),
+        }
+    }
+}
+
+#[derive(Serialize)]
+struct Xyz {
+    x: f32,
+    y: f32,
+    z: f32,
+}
+
+impl From<[f32; 3]> for Xyz {
+    fn from([x, y, z]: [f32; 3]) -> Self {
+        Self { x, y, z }
+    }
+}
+
+struct ImuModules<'a>(&'a [JointSample]);
+
+impl Serialize for ImuModules<'_> {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        #[derive(Serialize)]
+        struct Module {
+            accel_m_s2: Xyz,
+            gyro_rad_s: Xyz,
+        }
+        s.collect_seq(self.0.iter().map(|j| Module {
+            accel_m_s2: j.accel_m_s2.into(),
+            gyro_rad_s: j.gyro_rad_s.into(),
+        }))
+    }
+}
+
+/// `/imu`: each module's accelerometer and gyro, in its own frame.
+#[derive(Serialize)]
+pub struct Imu<'a> {
+    cycle: u64,
+    t_ns: u64,
+    modules: ImuModules<'a>,
+}
+
+impl<'a> Imu<'a> {
+    pub fn new(rec: &'a CycleRecord) -> Self {
+        Self {
+            cycle: rec.cycle,
+            t_ns: rec.t_ns,
+            modules: ImuModules(rec.joints()),
+        }
+    }
+}
+
+/// The report's signals as `{name: value}`, names from the catalog.
+struct Signals<'a> {
+    info: Option<&'a ControllerInfo>,
+    values: &'a [f64; MAX_SIGNALS],
+}
+
+impl Serialize for Signals<'_> {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let specs = self.info.map_or(&[][..], |i| &i.report.signals[..]);
+        let mut m = s.serialize_map(Some(specs.len().min(MAX_SIGNALS)))?;
+        for (spec, v) in specs.iter().zip(self.values) {
+            m.serialize_entry(&spec.name, v)?;
+        }
+        m.end()
+    }
+}
+
+/// `/controller/signals`: who drives the joints and, while a controller is engaged,
+/// its signals (`{}` otherwise: the report only means something while engaged).
+#[derive(Serialize)]
+pub struct ControllerSignals<'a> {
+    cycle: u64,
+    t_ns: u64,
+    mode: crate::safety::failsafe::Mode,
+    reason: crate::safety::failsafe::Reason,
+    gait: crate::gait::GaitKind,
+    controller_id: u64,
+    controller: Option<&'static str>,
+    preset: Option<&'static str>,
+    engaged: bool,
+    signals: Signals<'a>,
+}
+
+impl<'a> ControllerSignals<'a> {
+    pub fn new(rec: &'a CycleRecord, info: Option<&'a ControllerInfo>) -> Self {
+        let values = &rec.report.signals;
+        Self {
+            cycle: rec.cycle,
+            t_ns: rec.t_ns,
+            mode: rec.mode,
+            reason: rec.reason,
+            gait: rec.gait,
+            controller_id: rec.controller_id,
+            controller: info.map(|i| i.controller),
+            preset: info.map(|i| i.preset),
+            engaged: rec.engaged,
+            signals: Signals {
+                info: info.filter(|_| rec.engaged),
+                values,
+            },
+        }
+    }
+}
+
+/// One window: edges and the field's named columns.
+struct Window<'a> {
+    field: &'a WindowField,
+    names: &'a [crate::controller::report::SignalSpec],
+    k: usize,
+}
+
+impl Serialize for Window<'_> {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let names = &self.names[..self.names.len().min(MAX_COLUMNS)];
+        let mut m = s.serialize_map(Some(2 + names.len()))?;
+        m.serialize_entry("a", &self.field.a[self.k])?;
+        m.serialize_entry("b", &self.field.b[self.k])?;
+        for (c, name) in names.iter().enumerate() {
+            m.serialize_entry(&name.name, &self.field.columns[c][self.k])?;
+        }
+        m.end()
+    }
+}
+
+struct Windows<'a> {
+    field: &'a WindowField,
+    names: &'a [crate::controller::report::SignalSpec],
+}
+
+impl Serialize for Windows<'_> {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let mut seq = s.serialize_seq(Some(self.field.len()))?;
+        for k in 0..self.field.len() {
+            seq.serialize_element(&Window {
+                field: self.field,
+                names: self.names,
+                k,
+            })?;
+        }
+        seq.end()
+    }
+}
+
+#[derive(Serialize)]
+struct Field<'a> {
+    name: &'a str,
+    centralization: &'a str,
+    enabled: bool,
+    /// Windows on the body (only the first `MAX_WINDOWS` are kept).
+    count: usize,
+    windows: Windows<'a>,
+}
+
+struct Fields<'a> {
+    info: &'a ControllerInfo,
+    fields: &'a [WindowField; MAX_FIELDS],
+}
+
+impl Serialize for Fields<'_> {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.collect_seq(
+            self.info
+                .report
+                .fields
+                .iter()
+                .zip(self.fields)
+                .map(|(spec, field)| Field {
+                    name: &spec.name,
+                    centralization: &spec.centralization,
+                    enabled: spec.enabled,
+                    count: field.count,
+                    windows: Windows {
+                        field,
+                        names: &spec.columns,
+                    },
+                }),
+        )
+    }
+}
+
+/// `/controller/windows`: each window field's used windows (`a`, `b` in normalised arc
+/// length, null = open side) and named columns.
+#[derive(Serialize)]
+pub struct ControllerWindows<'a> {
+    cycle: u64,
+    t_ns: u64,
+    controller_id: u64,
+    fields: Fields<'a>,
+}
+
+impl<'a> ControllerWindows<'a> {
+    /// `None` unless a known controller with window fields is engaged.
+    pub fn new(rec: &'a CycleRecord, info: Option<&'a ControllerInfo>) -> Option<Self> {
+        let info = info.filter(|i| rec.engaged && !i.report.fields.is_empty())?;
+        Some(Self {
+            cycle: rec.cycle,
+            t_ns: rec.t_ns,
+            controller_id: rec.controller_id,
+            fields: Fields {
+                info,
+                fields: &rec.report.fields,
+            },
+        })
+    }
+}
+
+/// The request's name as the socket spells it.
+pub fn request_name(r: &LoopRequest) -> &'static str {
+    match r {
+        LoopRequest::SetGait(_) => "set_gait",
+        LoopRequest::SetParams(..) => "set_params",
+        LoopRequest::SetController(_) => "set_controller",
+        LoopRequest::SetBlendTime(_) => "set_blend_time",
+        LoopRequest::Hold => "hold",
+        LoopRequest::Limp => "limp",
+        LoopRequest::EStop => "estop",
+        LoopRequest::Arm => "arm",
+        LoopRequest::Shutdown => "shutdown",
+    }
+}
+
+/// A request's arguments.
+#[derive(Serialize)]
+#[serde(untagged)]
+enum RequestArgs<'a> {
+    None {},
+    Gait {
+        gait: crate::gait::GaitKind,
+    },
+    Params {
+        gait: crate::gait::GaitKind,
+        patch: &'a crate::gait::ParamPatch,
+    },
+    BlendTime {
+        blend_time_s: f64,
+    },
+}
+
+fn request_args(r: &LoopRequest) -> RequestArgs<'_> {
+    match r {
+        LoopRequest::SetGait(gait) | LoopRequest::SetController(gait) => {
+            RequestArgs::Gait { gait: *gait }
+        }
+        LoopRequest::SetParams(gait, patch) => RequestArgs::Params { gait: *gait, patch },
+        LoopRequest::SetBlendTime(s) => RequestArgs::BlendTime { blend_time_s: *s },
+        _ => RequestArgs::None {},
+    }
+}
+
+/// `/events`: one JSON object per event, `kind` says which.
+#[derive(Serialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+enum EventBody<'a> {
+    Mode {
+        t_ns: u64,
+        mode: crate::safety::failsafe::Mode,
+        reason: crate::safety::failsafe::Reason,
+    },
+    Request {
+        t_ns: u64,
+        ticket: u64,
+        request: &'static str,
+        args: RequestArgs<'a>,
+        applied: bool,
+        /// Why it was refused.
+        error: Option<String>,
+    },
+    Engaged {
+        t_ns: u64,
+        gait: crate::gait::GaitKind,
+        controller_id: u64,
+        controller: Option<&'static str>,
+    },
+    Released {
+        t_ns: u64,
+        gait: crate::gait::GaitKind,
+        controller_id: u64,
+        controller: Option<&'static str>,
+    },
+    SetpointFault {
+        t_ns: u64,
+        joint: usize,
+        controller_id: u64,
+        controller: Option<&'static str>,
+    },
+}
+
+/// Serialises an event; `name` names a controller id.
+pub fn write_event(
+    out: &mut Vec<u8>,
+    t_ns: u64,
+    event: &RecordEvent,
+    name: impl Fn(u64) -> Option<&'static str>,
+) -> serde_json::Result<()> {
+    let body = match event {
+        RecordEvent::Mode { mode, reason } => EventBody::Mode {
+            t_ns,
+            mode: *mode,
+            reason: *reason,
+        },
+        RecordEvent::Request {
+            ticket,
+            request,
+            result,
+        } => EventBody::Request {
+            t_ns,
+            ticket: *ticket,
+            request: request_name(request),
+            args: request_args(request),
+            applied: result.is_ok(),
+            error: result.err().map(|e| e.to_string()),
+        },
+        RecordEvent::Engaged {
+            gait,
+            controller_id,
+        } => EventBody::Engaged {
+            t_ns,
+            gait: *gait,
+            controller_id: *controller_id,
+            controller: name(*controller_id),
+        },
+        RecordEvent::Released {
+            gait,
+            controller_id,
+        } => EventBody::Released {
+            t_ns,
+            gait: *gait,
+            controller_id: *controller_id,
+            controller: name(*controller_id),
+        },
+        RecordEvent::SetpointFault {
+            joint,
+            controller_id,
+        } => EventBody::SetpointFault {
+            t_ns,
+            joint: *joint,
+            controller_id: *controller_id,
+            controller: name(*controller_id),
+        },
+    };
+    serde_json::to_writer(out, &body)
+}
+
+/// `/stats`: the loop's statistics summary.
+#[derive(Serialize)]
+pub struct Stats {
+    t_ns: u64,
+    #[serde(flatten)]
+    report: crate::rt::stats::StatsReport,
+}
+
+impl Stats {
+    pub fn new(t_ns: u64, stats: &LoopStats) -> Self {
+        Self {
+            t_ns,
+            report: stats.report(),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::controller::report::{FieldSpec, ReportSpec, SignalSpec};
+    use crate::gait::GaitKind;
+    use serde_json::{Value, json};
+
+    fn to_value(v: &impl Serialize) -> Value {
+        serde_json::from_slice(&serde_json::to_vec(v).expect("encodes")).expect("valid JSON")
+    }
+
+    fn info() -> ControllerInfo {
+        ControllerInfo {
+            id: 7,
+            gait: GaitKind::Slithering,
+            controller: "compliant",
+            preset: "test",
+            config: json!({"k": 1}),
+            report: ReportSpec {
+                signals: vec![
+                    SignalSpec::new("amplitude_mean_rad", "rad"),
+                    SignalSpec::new("windows", "count"),
+                ],
+                fields: vec![FieldSpec {
+                    name: "amplitude".into(),
+                    centralization: "windowed".into(),
+                    enabled: true,
+                    columns: vec![
+                        SignalSpec::new("value", "rad"),
+                        SignalSpec::new("force", "N"),
+                    ],
+                }],
+            },
+        }
+    }
+
+    fn record() -> CycleRecord {
+        let mut r = CycleRecord::EMPTY;
+        r.cycle = 3;
+        r.t_ns = 3_000_000;
+        r.modules = 2;
+        r.joints[0].position_rad = 0.5;
+        r.joints[1].cmd_position_rad = 0.25;
+        r.joints[1].accel_m_s2 = [0.0, 0.0, 9.81];
+        r.controller_id = 7;
+        r.engaged = true;
+        r.report.signals[0] = 0.4;
+        r.report.fields[0].count = 2;
+        r.report.fields[0].a[..2].copy_from_slice(&[f64::NEG_INFINITY, 0.5]);
+        r.report.fields[0].b[..2].copy_from_slice(&[0.5, f64::INFINITY]);
+        r.report.fields[0].columns[1][1] = 2.0;
+        r
+    }
+
+    #[test]
+    fn joints_commands_and_imu_are_per_module_with_nan_as_null() {
+        let r = record();
+        let j = to_value(&Joints::new(&r));
+        assert_eq!(j["position_rad"], json!([0.5, 0.0]));
+        let c = to_value(&Commands::new(&r));
+        assert_eq!(c["position_rad"], json!([null, 0.25]));
+        let i = to_value(&Imu::new(&r));
+        assert_eq!(
+            i["modules"][1]["accel_m_s2"]["z"]
+                .as_f64()
+                .map(|z| z as f32),
+            Some(9.81)
+        );
+    }
+
+    #[test]
+    fn signals_are_named_and_only_while_engaged() {
+        let mut r = record();
+        let info = info();
+        let s = to_value(&ControllerSignals::new(&r, Some(&info)));
+        assert_eq!(
+            s["signals"],
+            json!({"amplitude_mean_rad": 0.4, "windows": null})
+        );
+        assert_eq!(s["controller"], "compliant");
+        assert_eq!(s["gait"], "slithering");
+        r.engaged = false;
+        let s = to_value(&ControllerSignals::new(&r, Some(&info)));
+        assert_eq!(s["signals"], json!({}));
+        assert_eq!(s["controller_id"], 7);
+    }
+
+    #[test]
+    fn windows_carry_edges_and_named_columns_of_the_used_windows() {
+        let r = record();
+        let info = info();
+        let w = to_value(&ControllerWindows::new(&r, Some(&info)).expect("engaged"));
+        let f = &w["fields"][0];
+        assert_eq!(f["name"], "amplitude");
+        assert_eq!(f["count"], 2);
+        assert_eq!(
+            f["windows"],
+            json!([
+                {"a": null, "b": 0.5, "value": 0.0, "force": 0.0},
+                {"a": 0.5, "b": null, "value": 0.0, "force": 2.0},
+            ])
+        );
+        assert!(ControllerWindows::new(&r, None).is_none());
+    }
+
+    #[test]
+    fn events_say_their_kind() {
+        use crate::rt::messages::Rejection;
+        let mut out = Vec::new();
+        let e = RecordEvent::Request {
+            ticket: 9,
+            request: LoopRequest::SetGait(GaitKind::Sidewinding),
+            result: Err(Rejection::EStopLatched),
+        };
+        write_event(&mut out, 5, &e, |_| None).expect("encodes");
+        let v: Value = serde_json::from_slice(&out).expect("json");
+        assert_eq!(v["kind"], "request");
+        assert_eq!(v["request"], "set_gait");
+        assert_eq!(v["args"]["gait"], "sidewinding");
+        assert_eq!(v["applied"], false);
+        assert!(v["error"].as_str().is_some_and(|s| s.contains("e-stop")));
+        out.clear();
+        let e = RecordEvent::Engaged {
+            gait: GaitKind::Slithering,
+            controller_id: 7,
+        };
+        write_event(&mut out, 6, &e, |_| Some("compliant")).expect("encodes");
+        let v: Value = serde_json::from_slice(&out).expect("json");
+        assert_eq!(v["kind"], "engaged");
+        assert_eq!(v["controller"], "compliant");
+    }
+}

@@ -1,0 +1,156 @@
+//! The live view: foxglove's WebSocket server (subprotocol `foxglove.sdk.v1`) on the
+//! recorder's context, so live clients get the same channels as the file. It runs on a
+//! one-worker tokio runtime of its own, owned by the writer thread (so the recorder
+//! works the same whether or not its caller is inside a runtime). Messages that are
+//! published once (the world, controller infos) are latched: re-sent to each client
+//! that subscribes later.
+
+use std::collections::HashMap;
+use std::net::{IpAddr, SocketAddr};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
+use std::time::Duration;
+
+use foxglove::websocket::{ChannelView, Client, ServerListener};
+use foxglove::{ChannelId, Context, PartialMetadata, RawChannel, WebSocketServerHandle};
+
+use super::error::RecordError;
+use super::options::LiveOptions;
+
+/// A latched message: its channel, a key (a newer message of the same key replaces
+/// it), the payload and its log time.
+struct Latched {
+    channel: Arc<RawChannel>,
+    key: u64,
+    payload: Vec<u8>,
+    log_time: u64,
+}
+
+/// The server's listener: counts clients and re-sends latched messages on subscribe.
+#[derive(Default)]
+pub struct Latch {
+    clients: AtomicUsize,
+    latched: Mutex<HashMap<ChannelId, Vec<Latched>>>,
+}
+
+impl Latch {
+    /// Poisoning is shrugged off: a latched message is still worth showing.
+    fn latched(&self) -> MutexGuard<'_, HashMap<ChannelId, Vec<Latched>>> {
+        self.latched.lock().unwrap_or_else(PoisonError::into_inner)
+    }
+
+    /// Keeps `payload` for clients that subscribe to `channel` later.
+    pub fn keep(&self, channel: &Arc<RawChannel>, key: u64, payload: &[u8], log_time: u64) {
+        let mut map = self.latched();
+        let list = map.entry(channel.id()).or_default();
+        let entry = Latched {
+            channel: channel.clone(),
+            key,
+            payload: payload.to_vec(),
+            log_time,
+        };
+        match list.iter_mut().find(|l| l.key == key) {
+            Some(l) => *l = entry,
+            None => list.push(entry),
+        }
+    }
+
+    pub fn clients(&self) -> usize {
+        self.clients.load(Ordering::Relaxed)
+    }
+}
+
+impl ServerListener for Latch {
+    fn on_subscribe(&self, client: Client, channel: ChannelView) {
+        // The subscription is registered before this callback, so the client's sink
+        // receives what is logged to it here.
+        let map = self.latched();
+        for l in map.get(&channel.id()).into_iter().flatten() {
+            let meta = PartialMetadata {
+                log_time: Some(l.log_time),
+            };
+            l.channel
+                .log_with_meta_to_sink(&l.payload, meta, client.sink_id());
+        }
+    }
+
+    fn on_client_connect(&self) {
+        self.clients.fetch_add(1, Ordering::Relaxed);
+    }
+
+    fn on_client_disconnect(&self) {
+        // Saturating: never wraps even if the server reported an unmatched disconnect.
+        let _ = self
+            .clients
+            .fetch_update(Ordering::Relaxed, Ordering::Relaxed, |n| n.checked_sub(1));
+    }
+}
+
+/// A running live server.
+pub struct Live {
+    runtime: Option<tokio::runtime::Runtime>,
+    handle: Option<WebSocketServerHandle>,
+    addr: SocketAddr,
+    pub latch: Arc<Latch>,
+}
+
+impl Live {
+    /// Binds and starts the server on `opts.addr` (port 0: any free port).
+    pub fn start(
+        opts: &LiveOptions,
+        ctx: &Arc<Context>,
+        source: &str,
+    ) -> Result<Self, RecordError> {
+        let runtime = tokio::runtime::Builder::new_multi_thread()
+            .worker_threads(1)
+            .thread_name("snaked-live")
+            .enable_all()
+            .build()
+            .map_err(RecordError::Runtime)?;
+        let latch = Arc::new(Latch::default());
+        let host = match opts.addr.ip() {
+            IpAddr::V4(ip) => ip.to_string(),
+            IpAddr::V6(ip) => format!("[{ip}]"),
+        };
+        let server = ctx
+            .websocket_server()
+            .name(source)
+            .bind(host, opts.addr.port())
+            .listener(latch.clone());
+        // Inside `block_on` the server finds this runtime as the current one.
+        let handle = runtime
+            .block_on(server.start())
+            .map_err(|source| RecordError::Live {
+                addr: opts.addr,
+                source,
+            })?;
+        let addr = SocketAddr::new(opts.addr.ip(), handle.port());
+        tracing::info!(%addr, "recorder: live view (Foxglove WebSocket) listening");
+        Ok(Self {
+            runtime: Some(runtime),
+            handle: Some(handle),
+            addr,
+            latch,
+        })
+    }
+
+    pub fn addr(&self) -> SocketAddr {
+        self.addr
+    }
+
+    /// Closes the connections and stops the runtime. Idempotent.
+    pub fn stop(&mut self) {
+        if let Some(h) = self.handle.take() {
+            h.stop().wait_blocking();
+        }
+        if let Some(rt) = self.runtime.take() {
+            rt.shutdown_timeout(Duration::from_secs(1));
+        }
+    }
+}
+
+impl Drop for Live {
+    fn drop(&mut self) {
+        self.stop();
+    }
+}

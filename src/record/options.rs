@@ -1,0 +1,138 @@
+//! What a recording is asked to do ([`RecordOptions`]) and what it describes
+//! ([`RecordingInfo`]), and what it reports back ([`RecorderStatus`], [`RecordSummary`]).
+
+use std::collections::BTreeMap;
+use std::net::{Ipv4Addr, SocketAddr};
+use std::path::PathBuf;
+
+use crate::controller::catalog::Catalog;
+use crate::emu::world::WorldSpec;
+use crate::gait::BodyLayout;
+
+/// Port the Foxglove app connects to by default.
+pub const DEFAULT_LIVE_PORT: u16 = 8765;
+
+/// What to record and where.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RecordOptions {
+    /// Write an MCAP file.
+    pub mcap: Option<McapOptions>,
+    /// Serve the same channels live over the Foxglove WebSocket protocol.
+    pub live: Option<LiveOptions>,
+    /// Items the ring holds (one per cycle, plus events and stats): 1024 ≈ 1 s at 1 kHz,
+    /// about 13 MB preallocated.
+    pub ring_capacity: usize,
+    /// Rate of the 3-D channels (`/tf`, `/scene/body`), Hz.
+    pub scene_rate_hz: f64,
+}
+
+impl Default for RecordOptions {
+    fn default() -> Self {
+        Self {
+            mcap: None,
+            live: None,
+            ring_capacity: 1024,
+            scene_rate_hz: 50.0,
+        }
+    }
+}
+
+/// The MCAP file and its caps. The file must not exist yet and its directory must.
+#[derive(Debug, Clone, PartialEq)]
+pub struct McapOptions {
+    pub path: PathBuf,
+    /// Stop writing once the file reaches this size (it may exceed it by about one
+    /// chunk, at most 1/8 of the cap, plus the summary).
+    pub max_bytes: Option<u64>,
+    /// Stop writing once this much loop time has been recorded, s.
+    pub max_duration_s: Option<f64>,
+}
+
+impl McapOptions {
+    /// A file without caps.
+    pub fn new(path: impl Into<PathBuf>) -> Self {
+        Self {
+            path: path.into(),
+            max_bytes: None,
+            max_duration_s: None,
+        }
+    }
+}
+
+/// Where the live view listens.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct LiveOptions {
+    /// Default `127.0.0.1:8765` (loopback: the live view has no authentication). Port 0
+    /// picks a free port ([`super::Recorder::live_addr`] tells which).
+    pub addr: SocketAddr,
+}
+
+impl Default for LiveOptions {
+    fn default() -> Self {
+        Self {
+            addr: SocketAddr::from((Ipv4Addr::LOCALHOST, DEFAULT_LIVE_PORT)),
+        }
+    }
+}
+
+/// What the recording is of: written as MCAP metadata, and used to name and draw.
+#[derive(Debug, Clone)]
+pub struct RecordingInfo {
+    /// Who records: `"snaked"` or `"snake-lab"`.
+    pub source: String,
+    /// One name per module, head first.
+    pub module_names: Vec<String>,
+    /// The body (module length, joint planes) the 3-D view is drawn from.
+    pub layout: BodyLayout,
+    /// The simulated world, drawn once in `/scene/world` (None on the robot).
+    pub world: Option<WorldSpec>,
+    /// Where controller ids are named.
+    pub catalog: Catalog,
+    /// Anything else worth keeping (configuration, scenario, seed, git revision...),
+    /// written as the `snaked.metadata` record.
+    pub metadata: Vec<(String, String)>,
+}
+
+/// Why the file stopped growing.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CapReason {
+    MaxBytes,
+    MaxDuration,
+    /// A write failed (e.g. the disk is full); the file was closed as well as it could be.
+    WriteError,
+}
+
+/// A snapshot of a running recorder.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct RecorderStatus {
+    /// Items taken from the ring.
+    pub items: u64,
+    /// Messages written to the MCAP file.
+    pub messages_written: u64,
+    /// Items the loop could not push because the ring was full.
+    pub dropped: u64,
+    /// Bytes in the MCAP file so far (grows a chunk at a time).
+    pub bytes: u64,
+    /// Set once a cap was reached: the file is finished, the ring is still drained.
+    pub capped: Option<CapReason>,
+    /// Live-view clients connected now.
+    pub live_clients: usize,
+}
+
+/// What a finished recording holds.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RecordSummary {
+    pub path: Option<PathBuf>,
+    /// Items taken from the ring.
+    pub items: u64,
+    /// Messages written to the MCAP file, all channels.
+    pub messages_written: u64,
+    /// Messages written per topic.
+    pub per_topic: BTreeMap<String, u64>,
+    /// Items the loop could not push because the ring was full.
+    pub dropped: u64,
+    /// Size of the finished file.
+    pub bytes: u64,
+    pub capped: Option<CapReason>,
+}

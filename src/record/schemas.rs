@@ -1,0 +1,157 @@
+//! JSON Schemas of the JSON channels (`jsonschema` encoding in MCAP and the live view),
+//! so Foxglove can complete message paths and other readers know the fields.
+
+use serde_json::{Value, json};
+
+fn numbers(unit: &str) -> Value {
+    json!({"type": "array", "items": {"type": ["number", "null"]}, "description": unit})
+}
+
+fn header() -> Value {
+    json!({
+        "cycle": {"type": "integer", "description": "loop cycle index"},
+        "t_ns": {"type": "integer", "description": "loop time, ns since the loop started"}
+    })
+}
+
+fn object(title: &str, mut properties: Value, extra: Value) -> Value {
+    if let (Some(p), Some(e)) = (properties.as_object_mut(), extra.as_object()) {
+        p.extend(e.clone());
+    }
+    json!({"$schema": "https://json-schema.org/draft/2020-12/schema", "title": title,
+           "type": "object", "properties": properties})
+}
+
+pub fn joints() -> Value {
+    object(
+        "snaked.Joints",
+        header(),
+        json!({
+            "position_rad": numbers("rad, per module, head first"),
+            "velocity_rad_s": numbers("rad/s"),
+            "torque_nm": numbers("N·m"),
+        }),
+    )
+}
+
+pub fn commands() -> Value {
+    object(
+        "snaked.Commands",
+        header(),
+        json!({
+            "position_rad": numbers("rad; null: not commanded"),
+            "velocity_rad_s": numbers("rad/s; null: not commanded"),
+        }),
+    )
+}
+
+pub fn imu() -> Value {
+    let xyz = |unit: &str| {
+        json!({"type": "object", "description": unit,
+               "properties": {"x": {"type": "number"}, "y": {"type": "number"}, "z": {"type": "number"}}})
+    };
+    object(
+        "snaked.Imu",
+        header(),
+        json!({"modules": {"type": "array", "items": {"type": "object", "properties": {
+            "accel_m_s2": xyz("specific force, m/s², module frame"),
+            "gyro_rad_s": xyz("angular velocity, rad/s, module frame"),
+        }}}}),
+    )
+}
+
+pub fn controller_signals() -> Value {
+    object(
+        "snaked.ControllerSignals",
+        header(),
+        json!({
+            "mode": {"type": "string"},
+            "reason": {"type": "string"},
+            "gait": {"type": "string"},
+            "controller_id": {"type": "integer", "description": "0: none"},
+            "controller": {"type": ["string", "null"]},
+            "preset": {"type": ["string", "null"]},
+            "engaged": {"type": "boolean"},
+            "signals": {"type": "object", "additionalProperties": {"type": ["number", "null"]},
+                        "description": "name → value while engaged; units in /controller/info"},
+        }),
+    )
+}
+
+pub fn controller_windows() -> Value {
+    let window = json!({"type": "object",
+        "properties": {"a": {"type": ["number", "null"]}, "b": {"type": ["number", "null"]}},
+        "additionalProperties": {"type": ["number", "null"]},
+        "description": "edges a, b in normalised arc length (null: open side) and the field's columns"});
+    object(
+        "snaked.ControllerWindows",
+        header(),
+        json!({
+            "controller_id": {"type": "integer"},
+            "fields": {"type": "array", "items": {"type": "object", "properties": {
+                "name": {"type": "string"},
+                "centralization": {"type": "string"},
+                "enabled": {"type": "boolean"},
+                "count": {"type": "integer"},
+                "windows": {"type": "array", "items": window},
+            }}},
+        }),
+    )
+}
+
+pub fn controller_info() -> Value {
+    object(
+        "snaked.ControllerInfo",
+        json!({}),
+        json!({
+            "id": {"type": "integer"},
+            "gait": {"type": "string"},
+            "controller": {"type": "string"},
+            "preset": {"type": "string"},
+            "config": {"type": "object"},
+            "report": {"type": "object", "description": "signals and fields with their units"},
+        }),
+    )
+}
+
+pub fn events() -> Value {
+    object(
+        "snaked.Event",
+        json!({"t_ns": {"type": "integer"}}),
+        json!({
+            "kind": {"enum": ["mode", "request", "engaged", "released", "setpoint_fault"]},
+            "mode": {"type": "string"},
+            "reason": {"type": "string"},
+            "ticket": {"type": "integer"},
+            "request": {"type": "string"},
+            "args": {"type": "object"},
+            "applied": {"type": "boolean"},
+            "error": {"type": ["string", "null"]},
+            "gait": {"type": "string"},
+            "controller_id": {"type": "integer"},
+            "controller": {"type": ["string", "null"]},
+            "joint": {"type": "integer"},
+        }),
+    )
+}
+
+pub fn stats() -> Value {
+    let summary = json!({"type": "object", "description": "µs", "properties": {
+        "count": {"type": "integer"}, "mean_us": {"type": "number"}, "min_us": {"type": "number"},
+        "p50_us": {"type": "number"}, "p99_us": {"type": "number"}, "p999_us": {"type": "number"},
+        "max_us": {"type": "number"}}});
+    object(
+        "snaked.Stats",
+        json!({"t_ns": {"type": "integer"}}),
+        json!({
+            "cycles": {"type": "integer"},
+            "period_error": summary,
+            "compute": summary,
+            "feedback_age": summary,
+            "overruns": {"type": "integer"},
+            "skipped_periods": {"type": "integer"},
+            "late_feedback": {"type": "integer"},
+            "bus_errors": {"type": "integer"},
+        }),
+    )
+}
