@@ -32,6 +32,14 @@ struct Args {
     /// Loop pacing (overrides loop.pacing).
     #[arg(long, value_enum)]
     pacing: Option<PacingArg>,
+    /// Record every cycle to this MCAP file (overrides record.path; `{time}` becomes
+    /// the start time). It must not exist yet.
+    #[arg(long, value_name = "FILE.mcap")]
+    record: Option<PathBuf>,
+    /// Serve the live view over the Foxglove WebSocket protocol (foxglove.enabled;
+    /// ws://127.0.0.1:8765 unless configured).
+    #[arg(long)]
+    foxglove: bool,
     /// Validate the configuration, print it, and exit.
     #[arg(long)]
     check_config: bool,
@@ -79,6 +87,8 @@ fn main() -> ExitCode {
             PacingArg::Realtime => Pacing::Realtime,
             PacingArg::Lockstep => Pacing::Lockstep,
         }),
+        record: args.record.clone(),
+        foxglove: args.foxglove,
     };
     daemon::apply_overrides(&mut cfg, &overrides);
     if args.check_config {

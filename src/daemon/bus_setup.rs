@@ -21,6 +21,9 @@ pub struct BuiltBus {
     /// Module names, head first.
     pub names: Vec<String>,
     pub kind: BusKind,
+    /// The emulated world, for the recorder's 3-D scene (`None` for real modules and
+    /// the joint-space plant).
+    pub world: Option<crate::emu::world::WorldSpec>,
 }
 
 pub fn build(cfg: &Config, emulated: bool, period_ns: u64) -> Result<BuiltBus> {
@@ -84,6 +87,7 @@ fn udp_bus(cfg: &Config) -> Result<BuiltBus> {
         bus: Box::new(bus),
         names,
         kind: BusKind::Udp,
+        world: None,
     })
 }
 
@@ -91,6 +95,7 @@ fn udp_bus(cfg: &Config) -> Result<BuiltBus> {
 fn emulated_bus(cfg: &Config, period_ns: u64) -> Result<BuiltBus> {
     let n = cfg.emulator.modules;
     let emu = &cfg.emulator;
+    let mut world = None;
     let plant: Box<dyn Plant> = if emu.world.as_os_str().is_empty() {
         let mut plant_cfg = PlantConfig::new(n);
         plant_cfg.first_plane = cfg.body.first_joint_plane;
@@ -104,7 +109,9 @@ fn emulated_bus(cfg: &Config, period_ns: u64) -> Result<BuiltBus> {
             seed: emu.seed,
             ..PhysicsConfig::default()
         };
-        Box::new(PhysicsPlant::new(&spec, config).context("building the emulated world")?)
+        let plant = PhysicsPlant::new(&spec, config).context("building the emulated world")?;
+        world = Some(spec);
+        Box::new(plant)
     };
     let bus = SimBus::new(
         plant,
@@ -125,5 +132,6 @@ fn emulated_bus(cfg: &Config, period_ns: u64) -> Result<BuiltBus> {
         bus: Box::new(bus),
         names,
         kind: BusKind::Emulated,
+        world,
     })
 }

@@ -18,6 +18,57 @@ pub struct Config {
     pub gait: GaitSection,
     pub control: ControlConfig,
     pub emulator: EmulatorConfig,
+    pub record: RecordConfig,
+    pub foxglove: FoxgloveConfig,
+}
+
+/// `[record]`: an MCAP file of every cycle (docs/recording.md).
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct RecordConfig {
+    /// The file to write; empty = no recording. It must not exist yet; its directory
+    /// must. `{time}` in the name is replaced by the start time (UTC, `YYYYmmdd-HHMMSS`).
+    pub path: PathBuf,
+    /// Stop writing (and finish the file) past this size, MB; 0 = no size cap.
+    pub max_mb: f64,
+    /// Stop writing past this much loop time, s; 0 = no duration cap.
+    pub max_duration_s: f64,
+    /// Items the ring between the loop and the writer holds (about 13 kB each).
+    pub ring_capacity: usize,
+    /// Rate of the ground truth and the 3-D body, Hz.
+    pub scene_rate_hz: f64,
+}
+
+impl Default for RecordConfig {
+    fn default() -> Self {
+        Self {
+            path: PathBuf::new(),
+            max_mb: 10000.0,
+            max_duration_s: 0.0,
+            ring_capacity: 1024,
+            scene_rate_hz: 50.0,
+        }
+    }
+}
+
+/// `[foxglove]`: the live view over the Foxglove WebSocket protocol.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct FoxgloveConfig {
+    pub enabled: bool,
+    /// Address to listen on; loopback unless a viewer on another machine must see it.
+    pub host: std::net::IpAddr,
+    pub port: u16,
+}
+
+impl Default for FoxgloveConfig {
+    fn default() -> Self {
+        Self {
+            enabled: false,
+            host: std::net::IpAddr::V4(std::net::Ipv4Addr::LOCALHOST),
+            port: crate::record::DEFAULT_LIVE_PORT,
+        }
+    }
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
@@ -430,6 +481,25 @@ impl Config {
             60.0,
         )?;
         range("emulator.modules", self.emulator.modules as f64, 2.0, 64.0)?;
+        range("record.max_mb", self.record.max_mb, 0.0, 1e7)?;
+        range(
+            "record.max_duration_s",
+            self.record.max_duration_s,
+            0.0,
+            1e7,
+        )?;
+        range(
+            "record.ring_capacity",
+            self.record.ring_capacity as f64,
+            16.0,
+            65536.0,
+        )?;
+        range(
+            "record.scene_rate_hz",
+            self.record.scene_rate_hz,
+            1.0,
+            1000.0,
+        )?;
         if let Some(old) = &self.gait.slithering_controller {
             return Err(bad(
                 "gait.slithering_controller",

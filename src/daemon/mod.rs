@@ -19,9 +19,11 @@ use crate::controller::catalog::Catalog;
 use crate::controller::registry;
 use crate::controllers::REGISTRY;
 use crate::gait::{BodyLayout, GaitKind, GaitSelector, GaitTable};
+use crate::record::{LiveOptions, McapOptions, RecordOptions, RecordTx, Recorder, RecordingInfo};
 use crate::rt::control_loop::{ControlLoop, LoopParts};
 use crate::rt::controller_slots::Installed;
 use crate::rt::pacer::{LockstepPacer, Pacer, RealTimePacer};
+use crate::rt::recording::LoopRecording;
 use crate::rt::telemetry::{self, Snapshot, TelemetryReader};
 use crate::rt::{messages, sys};
 use crate::safety::failsafe::{Failsafe, FailsafeConfig};
@@ -36,6 +38,10 @@ pub struct Overrides {
     pub tcp_port: Option<u16>,
     pub start: Option<StartMode>,
     pub pacing: Option<Pacing>,
+    /// `--record FILE.mcap` (overrides record.path).
+    pub record: Option<PathBuf>,
+    /// `--foxglove`: serve the live view (foxglove.enabled).
+    pub foxglove: bool,
 }
 
 /// Apply the command line to the configuration. `--emulated` starts the gait at once
@@ -53,6 +59,10 @@ pub fn apply_overrides(cfg: &mut Config, o: &Overrides) {
     if let Some(p) = o.pacing {
         cfg.loop_.pacing = p;
     }
+    if let Some(r) = &o.record {
+        cfg.record.path = r.clone();
+    }
+    cfg.foxglove.enabled |= o.foxglove;
     cfg.gait.start = match (o.start, o.emulated) {
         (Some(s), _) => s,
         (None, true) => StartMode::Run,
@@ -122,6 +132,7 @@ pub fn run(cfg: Config, emulated: bool) -> Result<()> {
     let layout = BodyLayout::alternating(n, cfg.body.first_joint_plane, cfg.body.module_length_m);
     let catalog = Catalog::default();
     let controllers = build_controllers(&cfg, &layout, &table, &catalog)?;
+    let recorder = start_recorder(&cfg, &built, &layout, &catalog)?;
     let selector = GaitSelector::new(
         layout.clone(),
         table,
@@ -197,6 +208,10 @@ pub fn run(cfg: Config, emulated: bool) -> Result<()> {
         retired: retired_tx,
         controllers,
         estimators: Vec::new(),
+        recording: recorder.as_ref().map(|(tx, _)| LoopRecording {
+            tx: tx.clone(),
+            wait_when_full: false,
+        }),
     };
     let rt = cfg.loop_.clone();
     let loop_thread = std::thread::Builder::new()
@@ -214,6 +229,9 @@ pub fn run(cfg: Config, emulated: bool) -> Result<()> {
         .map_err(|_| anyhow::anyhow!("the control loop panicked"))?;
     service::notify_stopping();
     server.shutdown();
+    if let Some((_, recorder)) = recorder {
+        finish_recorder(recorder);
+    }
     tracing::info!(
         cycles = report.cycles,
         period_error_p99_us = report.period_error.p99_us,
@@ -222,6 +240,74 @@ pub fn run(cfg: Config, emulated: bool) -> Result<()> {
         "stopped safely"
     );
     Ok(())
+}
+
+/// The recorder and live view the configuration asks for (`None`: neither). Fails
+/// before the loop starts if the file cannot be created or the port is taken.
+fn start_recorder(
+    cfg: &Config,
+    built: &bus_setup::BuiltBus,
+    layout: &BodyLayout,
+    catalog: &Catalog,
+) -> Result<Option<(RecordTx, Recorder)>> {
+    let rec = &cfg.record;
+    let path = (!rec.path.as_os_str().is_empty()).then(|| record_path(&rec.path));
+    if path.is_none() && !cfg.foxglove.enabled {
+        return Ok(None);
+    }
+    let opts = RecordOptions {
+        mcap: path.map(|p| McapOptions {
+            path: p,
+            max_bytes: (rec.max_mb > 0.0).then_some((rec.max_mb * 1e6) as u64),
+            max_duration_s: (rec.max_duration_s > 0.0).then_some(rec.max_duration_s),
+        }),
+        live: cfg.foxglove.enabled.then(|| LiveOptions {
+            addr: std::net::SocketAddr::new(cfg.foxglove.host, cfg.foxglove.port),
+        }),
+        ring_capacity: rec.ring_capacity,
+        scene_rate_hz: rec.scene_rate_hz,
+    };
+    let info = RecordingInfo {
+        source: "snaked".into(),
+        module_names: built.names.clone(),
+        layout: layout.clone(),
+        world: built.world.clone(),
+        catalog: catalog.clone(),
+        metadata: vec![
+            ("version".into(), env!("CARGO_PKG_VERSION").into()),
+            ("bus".into(), format!("{:?}", built.kind)),
+            ("loop_rate_hz".into(), cfg.loop_.rate_hz.to_string()),
+        ],
+    };
+    let (tx, recorder) = crate::record::start(opts, info).context("starting the recorder")?;
+    if let Some(addr) = recorder.live_addr() {
+        tracing::info!("live view (Foxglove WebSocket) on ws://{addr}");
+    }
+    Ok(Some((tx, recorder)))
+}
+
+/// `path` with `{time}` replaced by the start time, s since the Unix epoch.
+fn record_path(path: &std::path::Path) -> PathBuf {
+    let now = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_secs());
+    PathBuf::from(path.to_string_lossy().replace("{time}", &now.to_string()))
+}
+
+/// Finishes the file (summary and index) and says what it holds.
+fn finish_recorder(recorder: Recorder) {
+    match recorder.finish() {
+        Ok(s) => tracing::info!(
+            path = ?s.path,
+            items = s.items,
+            messages = s.messages_written,
+            dropped = s.dropped,
+            bytes = s.bytes,
+            capped = ?s.capped,
+            "recording finished"
+        ),
+        Err(e) => tracing::error!("recording: {e}"),
+    }
 }
 
 fn server_config(cfg: &Config) -> ServerConfig {

@@ -156,6 +156,7 @@ fn trial_loop(
             },
         )],
         estimators: Vec::new(),
+        recording: None,
     };
     Ok((ControlLoop::new(parts), names))
 }

@@ -13,10 +13,12 @@ use crate::bus::{Bus, GroupFeedback};
 use crate::controller::{BodyEstimate, Estimator, Imu, Observation};
 use crate::gait::{GaitKind, GaitSelector, ParamPatch};
 use crate::protocol::Command;
+use crate::record::RecordEvent;
 use crate::rt::controller_slots::{ControllerSlots, Installed};
 use crate::rt::messages::{Ack, Envelope, LoopRequest, Rejection};
 use crate::rt::pacer::{Cycle, Pacer};
-use crate::rt::setpoint_guard::SetpointGuard;
+use crate::rt::recording::{CycleView, LoopRecording, Recording};
+use crate::rt::setpoint_guard::{NonFiniteSetpoint, SetpointGuard};
 use crate::rt::stats::{LoopStats, StatsReport};
 use crate::rt::telemetry::TelemetryWriter;
 use crate::safety::failsafe::{Event, Failsafe, Health, Mode, Output};
@@ -48,6 +50,8 @@ pub struct LoopParts {
     pub controllers: Vec<(GaitKind, Installed)>,
     /// Fill the body estimate each cycle before the controllers run, in order.
     pub estimators: Vec<Box<dyn Estimator>>,
+    /// Where every cycle is recorded (`None`: not recorded).
+    pub recording: Option<LoopRecording>,
 }
 
 /// Whether the loop goes on.
@@ -71,6 +75,7 @@ pub struct ControlLoop {
     body: BodyEstimate,
     slots: ControllerSlots,
     guard: SetpointGuard,
+    recording: Option<Recording>,
     held: Vec<f64>,
     held_valid: bool,
     stats: LoopStats,
@@ -92,6 +97,7 @@ impl ControlLoop {
             slots.install(gait, c, &mut parts.selector, &[], 0.0);
         }
         let guard = SetpointGuard::new(n, parts.selector.max_joint_speed_rad_s());
+        let recording = parts.recording.take().map(Recording::new);
         Self {
             p: parts,
             group: GroupFeedback::new(n),
@@ -105,6 +111,7 @@ impl ControlLoop {
             body: BodyEstimate::default(),
             slots,
             guard,
+            recording,
             held: vec![0.0; n],
             held_valid: false,
             stats: LoopStats::default(),
@@ -191,7 +198,19 @@ impl ControlLoop {
             let Ok(env) = self.p.requests.try_recv() else {
                 break;
             };
-            let result = self.apply(env.request, env.controller, now_s, t_s, &health);
+            let request = env.request;
+            let result = self.apply(request, env.controller, now_s, t_s, &health);
+            if let Some(r) = &self.recording {
+                let ticket = env.ticket;
+                r.event(
+                    c.t_ns,
+                    RecordEvent::Request {
+                        ticket,
+                        request,
+                        result,
+                    },
+                );
+            }
             if result.is_ok() {
                 self.applied += 1;
             } else {
@@ -206,6 +225,7 @@ impl ControlLoop {
 
         // Update.
         let output = self.p.failsafe.update(now_s, &health);
+        let mut fault = None;
         let flow = match output {
             Output::Resync => {
                 self.p.selector.resync(&self.measured, t_s);
@@ -216,13 +236,13 @@ impl ControlLoop {
                     let _ = self.p.failsafe.request(now_s, Event::Hold);
                     self.hold_commands();
                 } else {
-                    self.run_commands(t_s, now_s);
+                    fault = self.run_commands(t_s, now_s);
                 }
                 self.started = true;
                 Flow::Continue
             }
             Output::Run => {
-                self.run_commands(t_s, now_s);
+                fault = self.run_commands(t_s, now_s);
                 Flow::Continue
             }
             Output::Hold => {
@@ -248,6 +268,7 @@ impl ControlLoop {
         let compute_ns = self.p.pacer.elapsed_ns().saturating_sub(started_ns);
         self.record(c, compute_ns);
         self.publish(c);
+        self.record_cycle(c, fault);
         // Answers leave after the telemetry that shows their effect (read-your-writes).
         // A full ack queue means nobody is waiting any more; the client times out.
         for ack in &self.pending_acks[..self.pending] {
@@ -410,7 +431,9 @@ impl ControlLoop {
         Ok(())
     }
 
-    fn run_commands(&mut self, t_s: f64, now_s: f64) {
+    /// Runs the gait (selector, estimators, controller, guard) into the commands;
+    /// a refused non-finite set-point is returned (the loop holds instead).
+    fn run_commands(&mut self, t_s: f64, now_s: f64) -> Option<NonFiniteSetpoint> {
         self.held_valid = false;
         self.p
             .selector
@@ -430,18 +453,17 @@ impl ControlLoop {
         let drove = self
             .slots
             .drive(t_s, &self.p.selector, &obs, &mut self.positions);
-        if self
+        let checked = self
             .guard
-            .check(t_s, &mut self.positions, &mut self.velocities, drove)
-            .is_err()
-        {
+            .check(t_s, &mut self.positions, &mut self.velocities, drove);
+        if let Err(fault) = checked {
             // Not sent: hold what was sent last cycle, say why, wait for the operator.
             self.p.failsafe.setpoint_fault(now_s);
             self.hold_commands();
             for (p, c) in self.positions.iter_mut().zip(&self.commands) {
                 *p = f64::from(c.position_rad);
             }
-            return;
+            return Some(fault);
         }
         for i in 0..self.commands.len() {
             let velocity = if self.p.velocity_feedforward {
@@ -455,6 +477,34 @@ impl ControlLoop {
                 torque_nm: f32::NAN,
             };
         }
+        None
+    }
+
+    /// Hands the cycle to the recorder, if there is one.
+    fn record_cycle(&mut self, c: &Cycle, fault: Option<NonFiniteSetpoint>) {
+        let Some(r) = self.recording.as_mut() else {
+            return;
+        };
+        if let Some(f) = fault {
+            let controller_id = self.slots.id(self.p.selector.active());
+            let event = RecordEvent::SetpointFault {
+                joint: f.joint,
+                controller_id,
+            };
+            r.event(c.t_ns, event);
+        }
+        r.cycle(&CycleView {
+            cycle: c.index,
+            t_ns: c.t_ns,
+            mode: self.p.failsafe.mode(),
+            reason: self.p.failsafe.reason(),
+            gait: self.p.selector.active(),
+            group: &self.group,
+            commands: &self.commands,
+            slots: &self.slots,
+            bus: self.p.bus.as_ref(),
+            stats: &self.stats,
+        });
     }
 
     /// Freeze the set-points: the last commanded ones when there are any, else the
@@ -504,6 +554,7 @@ impl ControlLoop {
         let (group, commands, stats) = (&self.group, &self.commands, &self.stats);
         let (selector, failsafe, bus) = (&self.p.selector, &self.p.failsafe, &self.p.bus);
         let (slots, guard) = (&self.slots, self.guard.counters());
+        let record_dropped = self.recording.as_ref().map_or(0, Recording::dropped);
         let (applied, refused) = (self.applied, self.refused);
         self.p.telemetry.write(|snap| {
             snap.cycle = c.index;
@@ -534,6 +585,7 @@ impl ControlLoop {
             snap.requests_refused = refused;
             slots.publish(selector.active(), &mut snap.controller);
             snap.guard = guard;
+            snap.record_dropped = record_dropped;
         });
     }
 }

@@ -120,6 +120,7 @@ pub fn echo_harness_on(
         retired: retired_tx,
         controllers,
         estimators: Vec::new(),
+        recording: None,
     });
     Harness {
         control,

@@ -6,6 +6,7 @@ pub mod controller_slots;
 pub mod harness;
 pub mod messages;
 pub mod pacer;
+pub mod recording;
 pub mod setpoint_guard;
 pub mod stats;
 pub mod sys;
