@@ -70,6 +70,10 @@ struct Pegboard {
     /// Output directory.
     #[arg(long, default_value = "lab-out/pegboard")]
     out: PathBuf,
+    /// Record every trial as MCAP into this directory (created if missing):
+    /// CONTROLLER-LAYOUT-sSTART.mcap, replayable in Foxglove (docs/recording.md).
+    #[arg(long, value_name = "DIR")]
+    record: Option<PathBuf>,
     /// No progress bar, no list of written files.
     #[arg(long)]
     quiet: bool,
@@ -140,7 +144,14 @@ fn pegboard(args: Pegboard) -> Result<(), LabError> {
             limit_s: args.seconds,
             ..TrialConfig::default()
         },
+        record_dir: args.record.clone(),
     };
+    if let Some(dir) = &exp.record_dir {
+        std::fs::create_dir_all(dir).map_err(|source| LabError::Io {
+            path: dir.clone(),
+            source,
+        })?;
+    }
     let results = run(
         &exp,
         RunOptions {

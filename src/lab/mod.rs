@@ -72,6 +72,12 @@ pub enum LabError {
         #[source]
         source: std::io::Error,
     },
+    #[error("recording {}: {source}", path.display())]
+    Record {
+        path: PathBuf,
+        #[source]
+        source: crate::record::RecordError,
+    },
     #[error("plot {}: {msg}", path.display())]
     Plot { path: PathBuf, msg: String },
 }
@@ -136,7 +142,7 @@ pub fn write_report(
 }
 
 /// `name` with anything but ASCII letters, digits, `-` and `_` replaced by `_`.
-fn file_stem(name: &str) -> String {
+pub(crate) fn file_stem(name: &str) -> String {
     name.chars()
         .map(|c| {
             if c.is_ascii_alphanumeric() || c == '-' || c == '_' {

@@ -11,8 +11,9 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use super::LabError;
 use super::board::{Board, Layout, trial_seed};
 use super::controllers::LabController;
+use super::file_stem;
 use super::metrics::{MetricsConfig, TrialMetrics, trial_metrics};
-use super::trial::{TrialConfig, TrialRecord, run_trial, slithering_setup};
+use super::trial::{TrialConfig, TrialRecord, TrialRecording, run_trial, slithering_setup};
 use crate::emu::world::WorldSpec;
 
 /// What to run.
@@ -24,6 +25,8 @@ pub struct Experiment {
     /// Starts per layout.
     pub starts: usize,
     pub trial: TrialConfig,
+    /// Record every trial to `DIR/<controller>-<layout>-s<start>.mcap` (must exist).
+    pub record_dir: Option<std::path::PathBuf>,
 }
 
 /// One world of the plan: a layout with one of its starts.
@@ -123,7 +126,31 @@ pub fn run(exp: &Experiment, opts: RunOptions) -> Result<Vec<TrialResult>, LabEr
     let run_one = |i: usize| {
         let (c, w) = (i / worlds.len(), &worlds[i % worlds.len()]);
         let controller = &exp.controllers[c];
-        let rec = run_trial(controller, &w.world, &w.board, w.noise_seed, &exp.trial)?;
+        let layout = &exp.layouts[w.layout].name;
+        let recording = exp.record_dir.as_ref().map(|dir| TrialRecording {
+            path: dir.join(format!(
+                "{}-{}-s{}.mcap",
+                file_stem(&controller.label),
+                file_stem(layout),
+                w.start
+            )),
+            world: &w.world,
+            metadata: vec![
+                ("experiment".into(), "pegboard".into()),
+                ("controller".into(), controller.label.clone()),
+                ("layout".into(), layout.clone()),
+                ("start".into(), w.start.to_string()),
+                ("noise_seed".into(), w.noise_seed.to_string()),
+            ],
+        });
+        let rec = run_trial(
+            controller,
+            &w.world,
+            &w.board,
+            w.noise_seed,
+            &exp.trial,
+            recording,
+        )?;
         let metrics = trial_metrics(
             &rec.centre_m,
             rec.sample_dt_s,
@@ -216,6 +243,7 @@ mod tests {
                 limit_s: 0.2,
                 ..TrialConfig::default()
             },
+            record_dir: None,
         }
     }
 

@@ -12,6 +12,7 @@ use super::LabError;
 use super::board::Board;
 use super::controllers::LabController;
 use crate::bus::sim::{SimBus, SimBusConfig};
+use crate::controller::catalog::Catalog;
 use crate::emu::Plant;
 use crate::emu::world::WorldSpec;
 use crate::emu::world::physics::{PhysicsConfig, PhysicsPlant};
@@ -20,9 +21,11 @@ use crate::gait::{
     BodyLayout, DEFAULT_BLEND_TIME_S, GaitKind, GaitParams, GaitSelector, GaitTable, Plane,
     SEA_MAX_JOINT_SPEED_RAD_S,
 };
+use crate::record::{McapOptions, RecordOptions, Recorder, RecordingInfo};
 use crate::rt::control_loop::{ControlLoop, Flow, LoopParts};
 use crate::rt::controller_slots::Installed;
 use crate::rt::pacer::LockstepPacer;
+use crate::rt::recording::LoopRecording;
 use crate::rt::telemetry::{self, Snapshot};
 use crate::safety::failsafe::{Failsafe, FailsafeConfig};
 
@@ -97,13 +100,24 @@ pub fn slithering_setup(modules: usize) -> (BodyLayout, GaitParams) {
     )
 }
 
+/// Where a trial is recorded, and with what.
+pub struct TrialRecording<'a> {
+    /// The MCAP file to write (must not exist).
+    pub path: std::path::PathBuf,
+    pub world: &'a WorldSpec,
+    /// Labels written into the file's metadata (experiment, layout, start, seed).
+    pub metadata: Vec<(String, String)>,
+}
+
 /// The loop of one trial: `controller` installed for its gait, the selector starting
-/// on that gait, over `plant`.
+/// on that gait, over `plant`; recorded when `recording` says where (the recorder is
+/// returned, to be finished at the trial's end).
 fn trial_loop(
     controller: &LabController,
     plant: PhysicsPlant,
     config: &TrialConfig,
-) -> Result<(ControlLoop, Vec<String>), LabError> {
+    recording: Option<TrialRecording<'_>>,
+) -> Result<(ControlLoop, Vec<String>, Option<Recorder>), LabError> {
     let n = config.modules;
     let gait = controller.gait;
     let layout = BodyLayout::alternating(n, Plane::Lateral, MODULE_LENGTH_M);
@@ -116,6 +130,36 @@ fn trial_loop(
         .iter()
         .map(|s| s.name.clone())
         .collect();
+    let (record, recorder) = match recording {
+        None => (None, None),
+        Some(r) => {
+            let catalog = Catalog::default();
+            catalog.insert(built.info.clone());
+            let info = RecordingInfo {
+                source: "snake-lab".into(),
+                module_names: (0..n).map(|i| format!("M{i:02}")).collect(),
+                layout: layout.clone(),
+                world: Some(r.world.clone()),
+                catalog,
+                metadata: r.metadata,
+            };
+            let opts = RecordOptions {
+                mcap: Some(McapOptions::new(&r.path)),
+                ..RecordOptions::default()
+            };
+            let (tx, recorder) =
+                crate::record::start(opts, info).map_err(|source| LabError::Record {
+                    path: r.path.clone(),
+                    source,
+                })?;
+            // Offline: the loop waits for the writer rather than drop a record.
+            let out = LoopRecording {
+                tx,
+                wait_when_full: true,
+            };
+            (Some(out), Some(recorder))
+        }
+    };
     let period_ns = (config.dt_s * 1e9).round() as u64;
     let bus = SimBus::new(
         Box::new(plant),
@@ -156,9 +200,9 @@ fn trial_loop(
             },
         )],
         estimators: Vec::new(),
-        recording: None,
+        recording: record,
     };
-    Ok((ControlLoop::new(parts), names))
+    Ok((ControlLoop::new(parts), names, recorder))
 }
 
 /// Runs `controller` in `world` until the front half crosses `board` or the time limit.
@@ -169,6 +213,7 @@ pub fn run_trial(
     board: &Board,
     noise_seed: u64,
     config: &TrialConfig,
+    recording: Option<TrialRecording<'_>>,
 ) -> Result<TrialRecord, LabError> {
     let physics = PhysicsConfig {
         modules: config.modules,
@@ -183,7 +228,11 @@ pub fn run_trial(
         .get(controller.gait)
         .temporal_freq_rad_s;
     let start_links_m = links(&plant);
-    let (mut lp, signal_names) = trial_loop(controller, plant, config)?;
+    let record_path = recording
+        .as_ref()
+        .map(|r| r.path.clone())
+        .unwrap_or_default();
+    let (mut lp, signal_names, recorder) = trial_loop(controller, plant, config, recording)?;
 
     let steps = (config.limit_s / config.dt_s).round() as usize;
     let per_sample = config.steps_per_sample();
@@ -219,6 +268,13 @@ pub fn run_trial(
     let plant = plant_of(&lp);
     rec.seconds = plant.time_s();
     rec.end_links_m = links(plant);
+    drop(lp); // The loop's end of the ring first: the file then holds everything.
+    if let Some(r) = recorder {
+        r.finish().map_err(|source| LabError::Record {
+            path: record_path,
+            source,
+        })?;
+    }
     Ok(rec)
 }
 
@@ -294,7 +350,7 @@ mod tests {
             ..TrialConfig::default()
         };
         let open_loop = LabController::named(GaitKind::Slithering, "open_loop").unwrap();
-        let rec = run_trial(&open_loop, &world, &board, 7, &config).unwrap();
+        let rec = run_trial(&open_loop, &world, &board, 7, &config, None).unwrap();
         assert!(!rec.success);
         assert!((rec.seconds - 0.5).abs() < 1e-9);
         assert_eq!(rec.centre_m.len(), 11, "t = 0 and every 50 ms");
@@ -302,7 +358,7 @@ mod tests {
         assert_ne!(rec.start_links_m, rec.end_links_m, "the body moved");
         assert_eq!(rec.temporal_freq_rad_s, 1.0);
         assert_eq!(rec.signal_names.len(), rec.signals.len());
-        let again = run_trial(&open_loop, &world, &board, 7, &config).unwrap();
+        let again = run_trial(&open_loop, &world, &board, 7, &config, None).unwrap();
         // Debug text: NaN (no signal before the takeover) equals itself there.
         assert_eq!(format!("{rec:?}"), format!("{again:?}"), "deterministic");
     }
@@ -324,7 +380,7 @@ mod tests {
             ..TrialConfig::default()
         };
         let open_loop = LabController::named(GaitKind::Slithering, "open_loop").unwrap();
-        let rec = run_trial(&open_loop, &world, &board, 1, &config).unwrap();
+        let rec = run_trial(&open_loop, &world, &board, 1, &config, None).unwrap();
         assert!(rec.success);
         assert!((rec.seconds - 0.05).abs() < 1e-9, "{}", rec.seconds);
     }
