@@ -3,6 +3,8 @@
 //! The peg-board experiment of SPEC §5 (thesis §4.1, Fig. 4.6): slithering controllers
 //! from the registry ([`crate::controllers::REGISTRY`]) on seeded random peg boards and on
 //! explicit layouts, several starts each. One concern per file:
+//! - [`experiment`]: what an experiment module names (gait, controllers, the goal
+//!   that ends a trial); [`pegboard`] is the peg-board experiment's.
 //! - [`board`]: the layouts (seeded boards, explicit scenario files), the board's region,
 //!   when a trial has crossed it.
 //! - [`controllers`]: the compared controllers, named ones and `--variant`s.
@@ -17,25 +19,18 @@
 
 pub mod board;
 pub mod controllers;
+pub mod experiment;
 pub mod metrics;
+pub mod pegboard;
 pub mod plots;
 pub mod report;
 pub mod runner;
 pub mod trial;
 
-/// The controllers of the slithering peg-board experiment, in report order: open
-/// loop, the ablations (each adds a compliant parameter), the centralisation variants
-/// of the full controller, and the CPG baseline.
-pub const PEGBOARD_CONTROLLERS: &[&str] = &[
-    "open_loop",
-    "a",
-    "a_ws",
-    "a_ws_omega",
-    "a_ws_omega_central",
-    "a_ws_omega_per_joint",
-    "a_ws_omega_windowed_phase",
-    "cpg",
-];
+pub use pegboard::CONTROLLERS as PEGBOARD_CONTROLLERS;
+
+/// Every experiment `snake-lab` runs, one module each.
+pub static EXPERIMENTS: &[&dyn experiment::ExperimentModule] = &[&pegboard::Pegboard];
 
 use std::path::{Path, PathBuf};
 

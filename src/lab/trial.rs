@@ -9,8 +9,8 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU64};
 
 use super::LabError;
-use super::board::Board;
 use super::controllers::LabController;
+use super::experiment::Goal;
 use crate::bus::sim::{SimBus, SimBusConfig};
 use crate::controller::catalog::Catalog;
 use crate::emu::Plant;
@@ -205,12 +205,12 @@ fn trial_loop(
     Ok((ControlLoop::new(parts), names, recorder))
 }
 
-/// Runs `controller` in `world` until the front half crosses `board` or the time limit.
+/// Runs `controller` in `world` until `goal` is reached or the time limit.
 /// Deterministic given `noise_seed` (the plant's sensor noise).
 pub fn run_trial(
     controller: &LabController,
     world: &WorldSpec,
-    board: &Board,
+    goal: &dyn Goal,
     noise_seed: u64,
     config: &TrialConfig,
     recording: Option<TrialRecording<'_>>,
@@ -259,7 +259,7 @@ pub fn run_trial(
         }
         if k % per_sample == 0 {
             record(&lp, &mut rec);
-            if board.crossed(front_half_centre(plant_of(&lp))) {
+            if goal.reached(plant_of(&lp)) {
                 rec.success = true;
                 break;
             }
@@ -327,6 +327,7 @@ pub fn front_half_centre(plant: &dyn Plant) -> [f64; 2] {
 mod tests {
     use super::*;
     use crate::emu::world::scenario::Region;
+    use crate::lab::board::Board;
 
     #[test]
     fn sampling_cadence() {

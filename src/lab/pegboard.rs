@@ -1,0 +1,47 @@
+//! The peg-board experiment (SPEC §5, thesis Fig. 4.6): slithering controllers on
+//! seeded irregular peg boards, a trial ending when the front half of the body leaves
+//! the board on the far side; time to traverse in body-wave cycles per metre.
+
+use super::board::Board;
+use super::experiment::{ExperimentModule, Goal};
+use super::trial::front_half_centre;
+use crate::emu::Plant;
+use crate::gait::GaitKind;
+
+/// The experiment's entry.
+pub struct Pegboard;
+
+/// Its controllers, in report order: open loop, the ablations (each adds a compliant
+/// parameter), the centralisation variants of the full controller, the CPG baseline.
+pub const CONTROLLERS: &[&str] = &[
+    "open_loop",
+    "a",
+    "a_ws",
+    "a_ws_omega",
+    "a_ws_omega_central",
+    "a_ws_omega_per_joint",
+    "a_ws_omega_windowed_phase",
+    "cpg",
+];
+
+impl ExperimentModule for Pegboard {
+    fn name(&self) -> &'static str {
+        "pegboard"
+    }
+    fn summary(&self) -> &'static str {
+        "slithering through seeded peg boards (SPEC §5): cycles per metre, success, time stuck"
+    }
+    fn gait(&self) -> GaitKind {
+        GaitKind::Slithering
+    }
+    fn controllers(&self) -> &'static [&'static str] {
+        CONTROLLERS
+    }
+}
+
+/// A trial is over when the front half of the body has crossed the board.
+impl Goal for Board {
+    fn reached(&self, plant: &dyn Plant) -> bool {
+        self.crossed(front_half_centre(plant))
+    }
+}
