@@ -11,6 +11,7 @@ use snaked::gait::GaitKind;
 use snaked::lab::PEGBOARD_CONTROLLERS;
 use snaked::lab::board::{Layout, PEG_BOARD_TOML};
 use snaked::lab::controllers::LabController;
+use snaked::lab::pegboard;
 use snaked::lab::report::SummaryContext;
 use snaked::lab::runner::{Experiment, RunOptions, run};
 use snaked::lab::trial::TrialConfig;
@@ -153,6 +154,7 @@ fn pegboard(args: Pegboard) -> Result<(), LabError> {
         })?;
     }
     let results = run(
+        &pegboard::Pegboard,
         &exp,
         RunOptions {
             threads,

@@ -29,9 +29,6 @@ pub mod trial;
 
 pub use pegboard::CONTROLLERS as PEGBOARD_CONTROLLERS;
 
-/// Every experiment `snake-lab` runs, one module each.
-pub static EXPERIMENTS: &[&dyn experiment::ExperimentModule] = &[&pegboard::Pegboard];
-
 use std::path::{Path, PathBuf};
 
 use crate::emu::world::physics::PhysicsError;

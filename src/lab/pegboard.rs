@@ -2,10 +2,13 @@
 //! seeded irregular peg boards, a trial ending when the front half of the body leaves
 //! the board on the far side; time to traverse in body-wave cycles per metre.
 
-use super::board::Board;
+use super::LabError;
+use super::board::{Board, Layout};
 use super::experiment::{ExperimentModule, Goal};
-use super::trial::front_half_centre;
+use super::metrics::{MetricsConfig, TrialMetrics, trial_metrics};
+use super::trial::{TrialRecord, front_half_centre};
 use crate::emu::Plant;
+use crate::emu::world::WorldSpec;
 use crate::gait::GaitKind;
 
 /// The experiment's entry.
@@ -25,6 +28,9 @@ pub const CONTROLLERS: &[&str] = &[
 ];
 
 impl ExperimentModule for Pegboard {
+    type Goal = Board;
+    type Metrics = TrialMetrics;
+
     fn name(&self) -> &'static str {
         "pegboard"
     }
@@ -36,6 +42,26 @@ impl ExperimentModule for Pegboard {
     }
     fn controllers(&self) -> &'static [&'static str] {
         CONTROLLERS
+    }
+
+    fn world(
+        &self,
+        layout: &Layout,
+        modules: usize,
+        start: u64,
+    ) -> Result<(WorldSpec, Board), LabError> {
+        layout.world(modules, start)
+    }
+
+    fn metrics(&self, rec: &TrialRecord) -> TrialMetrics {
+        trial_metrics(
+            &rec.centre_m,
+            rec.sample_dt_s,
+            rec.seconds,
+            rec.success,
+            rec.temporal_freq_rad_s,
+            &MetricsConfig::for_wave(rec.temporal_freq_rad_s),
+        )
     }
 }
 

@@ -9,12 +9,15 @@ use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use super::LabError;
-use super::board::{Board, Layout, trial_seed};
+use super::board::{Layout, trial_seed};
 use super::controllers::LabController;
+use super::experiment::ExperimentModule;
 use super::file_stem;
-use super::metrics::{MetricsConfig, TrialMetrics, trial_metrics};
-use super::trial::{TrialConfig, TrialRecord, TrialRecording, run_trial, slithering_setup};
+use super::pegboard::Pegboard;
+use super::trial::{TrialConfig, TrialRecord, TrialRecording, run_trial};
 use crate::emu::world::WorldSpec;
+use crate::emu::world::scenario::MODULE_LENGTH_M;
+use crate::gait::{BodyLayout, GaitTable, Plane};
 
 /// What to run.
 #[derive(Debug, Clone)]
@@ -31,25 +34,26 @@ pub struct Experiment {
 
 /// One world of the plan: a layout with one of its starts.
 #[derive(Debug, Clone)]
-pub struct PlannedWorld {
+pub struct PlannedWorld<G> {
     pub layout: usize,
     pub start: usize,
     pub world: Arc<WorldSpec>,
-    pub board: Board,
+    /// What ends its trials.
+    pub goal: G,
     /// Sensor-noise seed, shared by every controller on this world.
     pub noise_seed: u64,
 }
 
-/// One finished trial.
+/// One finished trial of experiment `E` (the peg board's unless named).
 #[derive(Debug, Clone)]
-pub struct TrialResult {
+pub struct TrialResult<E: ExperimentModule = Pegboard> {
     pub controller: String,
     pub layout: String,
     pub start: usize,
-    pub metrics: TrialMetrics,
+    pub metrics: E::Metrics,
     /// The world and the full record, kept for the trial the report plots (each
     /// controller's first layout and start).
-    pub plotted: Option<(Arc<WorldSpec>, Board, TrialRecord)>,
+    pub plotted: Option<(Arc<WorldSpec>, E::Goal, TrialRecord)>,
 }
 
 /// How to run.
@@ -61,16 +65,20 @@ pub struct RunOptions {
 }
 
 /// Checks the experiment and generates every world of it (fails before any trial runs).
-pub fn plan(exp: &Experiment) -> Result<Vec<PlannedWorld>, LabError> {
+pub fn plan<E: ExperimentModule>(
+    module: &E,
+    exp: &Experiment,
+) -> Result<Vec<PlannedWorld<E::Goal>>, LabError> {
     if exp.controllers.is_empty() {
         return Err(LabError::NoControllers {
             known: crate::controller::registry::known_names(
                 crate::controllers::REGISTRY,
-                crate::gait::GaitKind::Slithering,
+                module.gait(),
             ),
         });
     }
-    let (layout, params) = slithering_setup(exp.trial.modules);
+    let layout = BodyLayout::alternating(exp.trial.modules, Plane::Lateral, MODULE_LENGTH_M);
+    let params = *GaitTable::default().get(module.gait());
     for (i, c) in exp.controllers.iter().enumerate() {
         if exp.controllers[..i].iter().any(|o| o.label == c.label) {
             return Err(LabError::BadValue(format!(
@@ -96,12 +104,12 @@ pub fn plan(exp: &Experiment) -> Result<Vec<PlannedWorld>, LabError> {
     let mut worlds = Vec::with_capacity(exp.layouts.len() * exp.starts);
     for (li, l) in exp.layouts.iter().enumerate() {
         for start in 0..exp.starts {
-            let (world, board) = l.world(t.modules, start as u64)?;
+            let (world, goal) = module.world(l, t.modules, start as u64)?;
             worlds.push(PlannedWorld {
                 layout: li,
                 start,
                 world: Arc::new(world),
-                board,
+                goal,
                 noise_seed: trial_seed(l.seed(), start as u64),
             });
         }
@@ -111,8 +119,12 @@ pub fn plan(exp: &Experiment) -> Result<Vec<PlannedWorld>, LabError> {
 
 /// Runs every trial of `exp` and returns them sorted by (controller, layout, start).
 /// Stops at the first failing trial and returns its error.
-pub fn run(exp: &Experiment, opts: RunOptions) -> Result<Vec<TrialResult>, LabError> {
-    let worlds = plan(exp)?;
+pub fn run<E: ExperimentModule>(
+    module: &E,
+    exp: &Experiment,
+    opts: RunOptions,
+) -> Result<Vec<TrialResult<E>>, LabError> {
+    let worlds = plan(module, exp)?;
     let total = exp.controllers.len() * worlds.len();
     let bar = progress_bar(total, opts.progress);
     let next = AtomicUsize::new(0);
@@ -136,7 +148,7 @@ pub fn run(exp: &Experiment, opts: RunOptions) -> Result<Vec<TrialResult>, LabEr
             )),
             world: &w.world,
             metadata: vec![
-                ("experiment".into(), "pegboard".into()),
+                ("experiment".into(), module.name().into()),
                 ("controller".into(), controller.label.clone()),
                 ("layout".into(), layout.clone()),
                 ("start".into(), w.start.to_string()),
@@ -146,29 +158,22 @@ pub fn run(exp: &Experiment, opts: RunOptions) -> Result<Vec<TrialResult>, LabEr
         let rec = run_trial(
             controller,
             &w.world,
-            &w.board,
+            &w.goal,
             w.noise_seed,
             &exp.trial,
             recording,
         )?;
-        let metrics = trial_metrics(
-            &rec.centre_m,
-            rec.sample_dt_s,
-            rec.seconds,
-            rec.success,
-            rec.temporal_freq_rad_s,
-            &MetricsConfig::for_wave(rec.temporal_freq_rad_s),
-        );
+        let metrics = module.metrics(&rec);
         let first = w.layout == 0 && w.start == 0;
         Ok(TrialResult {
             controller: controller.label.clone(),
             layout: exp.layouts[w.layout].name.clone(),
             start: w.start,
             metrics,
-            plotted: first.then(|| (Arc::clone(&w.world), w.board, rec)),
+            plotted: first.then(|| (Arc::clone(&w.world), w.goal.clone(), rec)),
         })
     };
-    let mut done: Vec<(usize, Result<TrialResult, LabError>)> = std::thread::scope(|s| {
+    let mut done: Vec<(usize, Result<TrialResult<E>, LabError>)> = std::thread::scope(|s| {
         let workers: Vec<_> = (0..threads)
             .map(|_| {
                 s.spawn(|| {
@@ -262,23 +267,23 @@ mod tests {
             )
             .unwrap(),
         );
-        assert!(matches!(plan(&e), Err(LabError::BadValue(m)) if m.contains("narrow")));
+        assert!(matches!(plan(&Pegboard, &e), Err(LabError::BadValue(m)) if m.contains("narrow")));
         assert!(matches!(
-            plan(&experiment(&[], 1)),
+            plan(&Pegboard, &experiment(&[], 1)),
             Err(LabError::NoControllers { .. })
         ));
         assert!(matches!(
-            plan(&experiment(&["open_loop"], 0)),
+            plan(&Pegboard, &experiment(&["open_loop"], 0)),
             Err(LabError::NoLayouts)
         ));
         assert!(matches!(
-            plan(&experiment(&["open_loop", "open_loop"], 1)),
+            plan(&Pegboard, &experiment(&["open_loop", "open_loop"], 1)),
             Err(LabError::BadValue(_))
         ));
         let mut e = experiment(&["open_loop"], 1);
         e.starts = 0;
-        assert!(matches!(plan(&e), Err(LabError::NoStarts)));
-        let worlds = plan(&experiment(&["open_loop"], 2)).unwrap();
+        assert!(matches!(plan(&Pegboard, &e), Err(LabError::NoStarts)));
+        let worlds = plan(&Pegboard, &experiment(&["open_loop"], 2)).unwrap();
         assert_eq!(worlds.len(), 4);
         assert_ne!(worlds[0].world.start, worlds[1].world.start, "two starts");
         assert_ne!(worlds[0].world.pegs, worlds[2].world.pegs, "two layouts");
@@ -288,6 +293,7 @@ mod tests {
     fn results_come_in_plan_order_for_any_thread_count() {
         let e = experiment(&["open_loop"], 2);
         let one = run(
+            &Pegboard,
             &e,
             RunOptions {
                 threads: 1,
@@ -296,6 +302,7 @@ mod tests {
         )
         .unwrap();
         let two = run(
+            &Pegboard,
             &e,
             RunOptions {
                 threads: 2,
