@@ -352,10 +352,10 @@ fn a_path_the_os_refuses_names_the_os_reason() {
         ..RecordOptions::default()
     };
     let err = start(opts, info(catalog, false)).err().expect("an error");
-    let RecordError::Create { source, .. } = &err else {
+    let RecordError::Create { reason, .. } = &err else {
         panic!("{err:?}");
     };
-    assert!(err.to_string().ends_with(&source.to_string()), "{err}");
+    assert!(err.to_string().ends_with(&reason.to_string()), "{err}");
 }
 
 #[test]

@@ -3,7 +3,8 @@
 use std::net::SocketAddr;
 use std::path::PathBuf;
 
-/// A recorder error. Paths and addresses are named, OS reasons kept as the source.
+/// A recorder error: the path or address and the reason in one message (the reason is
+/// not also a `source()`, so printing the chain does not say it twice).
 #[derive(Debug, thiserror::Error)]
 pub enum RecordError {
     #[error("invalid recorder option: {0}")]
@@ -15,36 +16,32 @@ pub enum RecordError {
         dir.display()
     )]
     MissingDirectory { path: PathBuf, dir: PathBuf },
-    #[error("cannot create recording {}: {source}", path.display())]
+    #[error("cannot create recording {}: {reason}", path.display())]
     Create {
         path: PathBuf,
-        #[source]
-        source: std::io::Error,
+        reason: std::io::Error,
     },
-    #[error("cannot write recording {}: {source}", path.display())]
+    #[error("cannot write recording {}: {reason}", path.display())]
     Mcap {
         path: PathBuf,
-        #[source]
-        source: foxglove::FoxgloveError,
+        reason: foxglove::FoxgloveError,
     },
-    #[error("cannot finish recording {}: {source}", path.display())]
+    #[error("cannot finish recording {}: {reason}", path.display())]
     Finish {
         path: PathBuf,
-        #[source]
-        source: std::io::Error,
+        reason: std::io::Error,
     },
-    #[error("cannot start the live view on {addr}: {source}")]
+    #[error("cannot start the live view on {addr}: {reason}")]
     Live {
         addr: SocketAddr,
-        #[source]
-        source: foxglove::FoxgloveError,
+        reason: foxglove::FoxgloveError,
     },
     #[error("cannot set up the recorder's channels: {0}")]
-    Setup(#[source] foxglove::FoxgloveError),
+    Setup(foxglove::FoxgloveError),
     #[error("cannot start the live view's runtime: {0}")]
-    Runtime(#[source] std::io::Error),
+    Runtime(std::io::Error),
     #[error("cannot spawn the recorder thread: {0}")]
-    Thread(#[source] std::io::Error),
+    Thread(std::io::Error),
     #[error("the recorder thread panicked")]
     Panicked,
     #[error("the recorder was already finished")]

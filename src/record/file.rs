@@ -82,7 +82,7 @@ impl McapFile {
         // `create_new`: an earlier recording is never overwritten.
         let file = File::create_new(&path).map_err(|source| RecordError::Create {
             path: path.clone(),
-            source,
+            reason: source,
         })?;
         let failed = Arc::new(AtomicBool::new(false));
         size.store(0, Ordering::Relaxed);
@@ -105,7 +105,7 @@ impl McapFile {
             .create(BufWriter::new(counting))
             .map_err(|source| RecordError::Mcap {
                 path: path.clone(),
-                source,
+                reason: source,
             })?;
         let max_duration_ns = opts
             .max_duration_s
@@ -144,7 +144,7 @@ impl McapFile {
         h.write_metadata(name, map)
             .map_err(|source| RecordError::Mcap {
                 path: self.path.clone(),
-                source,
+                reason: source,
             })
     }
 
@@ -169,16 +169,19 @@ impl McapFile {
         let path = self.path.clone();
         let buffered = h.close().map_err(|source| RecordError::Mcap {
             path: path.clone(),
-            source,
+            reason: source,
         })?;
         let counting = buffered.into_inner().map_err(|e| RecordError::Finish {
             path: path.clone(),
-            source: e.into_error(),
+            reason: e.into_error(),
         })?;
         counting
             .file
             .sync_all()
-            .map_err(|source| RecordError::Finish { path, source })
+            .map_err(|source| RecordError::Finish {
+                path,
+                reason: source,
+            })
     }
 }
 

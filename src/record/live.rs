@@ -122,7 +122,7 @@ impl Live {
             .block_on(server.start())
             .map_err(|source| RecordError::Live {
                 addr: opts.addr,
-                source,
+                reason: source,
             })?;
         let addr = SocketAddr::new(opts.addr.ip(), handle.port());
         tracing::info!(%addr, "recorder: live view (Foxglove WebSocket) listening");
