@@ -49,3 +49,24 @@ pub fn engage_at(c: &mut dyn Controller, layout: &BodyLayout, params: &GaitParam
         layout,
     });
 }
+
+/// A report spec with two signals and one windowed field, for tests of what consumes
+/// reports (telemetry views, the recorder).
+pub fn sample_report_spec() -> super::report::ReportSpec {
+    use super::report::{FieldSpec, ReportSpec, SignalSpec};
+    ReportSpec {
+        signals: vec![
+            SignalSpec::new("amplitude_mean_rad", "rad"),
+            SignalSpec::new("windows", "count"),
+        ],
+        fields: vec![FieldSpec {
+            name: "amplitude".into(),
+            centralization: "windowed".into(),
+            enabled: true,
+            columns: vec![
+                SignalSpec::new("value", "rad"),
+                SignalSpec::new("force", "N"),
+            ],
+        }],
+    }
+}

@@ -433,7 +433,6 @@ impl Stats {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::controller::report::{FieldSpec, ReportSpec, SignalSpec};
     use crate::gait::GaitKind;
     use serde_json::{Value, json};
 
@@ -448,21 +447,7 @@ mod tests {
             controller: "compliant",
             preset: "test",
             config: json!({"k": 1}),
-            report: ReportSpec {
-                signals: vec![
-                    SignalSpec::new("amplitude_mean_rad", "rad"),
-                    SignalSpec::new("windows", "count"),
-                ],
-                fields: vec![FieldSpec {
-                    name: "amplitude".into(),
-                    centralization: "windowed".into(),
-                    enabled: true,
-                    columns: vec![
-                        SignalSpec::new("value", "rad"),
-                        SignalSpec::new("force", "N"),
-                    ],
-                }],
-            },
+            report: crate::controller::testing::sample_report_spec(),
         }
     }
 

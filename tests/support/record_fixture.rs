@@ -7,7 +7,6 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 use snaked::controller::catalog::{Catalog, ControllerInfo, next_id};
-use snaked::controller::report::{FieldSpec, ReportSpec, SignalSpec};
 use snaked::emu::world::{Peg, WorldSpec};
 use snaked::gait::{BodyLayout, GaitKind, Plane};
 use snaked::record::{
@@ -31,21 +30,7 @@ pub fn catalog() -> (Catalog, u64) {
         controller: "fake_compliant",
         preset: "test",
         config: serde_json::json!({"gain": 0.5}),
-        report: ReportSpec {
-            signals: vec![
-                SignalSpec::new("amplitude_mean_rad", "rad"),
-                SignalSpec::new("windows", "count"),
-            ],
-            fields: vec![FieldSpec {
-                name: "amplitude".into(),
-                centralization: "windowed".into(),
-                enabled: true,
-                columns: vec![
-                    SignalSpec::new("value", "rad"),
-                    SignalSpec::new("force", "N"),
-                ],
-            }],
-        },
+        report: snaked::controller::testing::sample_report_spec(),
     });
     (catalog, id)
 }
