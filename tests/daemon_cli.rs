@@ -202,3 +202,44 @@ fn emulated_daemon_drives_the_physics_world() {
     d.signal(libc::SIGTERM);
     assert!(d.wait(Duration::from_secs(20)).success());
 }
+
+/// Logs go to stderr without colour codes unless it is a terminal, and in the journal's
+/// style (no timestamp of our own) under systemd.
+#[test]
+fn logs_carry_no_colour_codes_off_a_terminal() {
+    let dir = tempfile::tempdir().unwrap();
+    let bad = dir.path().join("missing").join("run.mcap");
+    let sock = dir.path().join("s.sock");
+    let run = |journal: bool| {
+        let mut cmd = Command::new(exe("snaked"));
+        cmd.args(["--emulated", "--record", bad.to_str().unwrap()])
+            .args(["--socket", sock.to_str().unwrap()])
+            .env("RUST_LOG", "info")
+            .env_remove("JOURNAL_STREAM");
+        if journal {
+            cmd.env("JOURNAL_STREAM", "8:12345");
+        }
+        let out = cmd.output().unwrap();
+        assert_eq!(out.status.code(), Some(1));
+        let stderr = String::from_utf8(out.stderr).unwrap();
+        assert!(out.stdout.is_empty(), "logs go to stderr");
+        assert!(!stderr.contains('\u{1b}'), "no colour codes: {stderr:?}");
+        assert!(stderr.contains("group ready"), "{stderr}");
+        assert!(
+            stderr.contains("directory") && stderr.contains("missing"),
+            "{stderr}"
+        );
+        stderr
+    };
+    let plain = run(false);
+    assert!(
+        plain.lines().next().unwrap().starts_with("20"),
+        "timestamped: {plain}"
+    );
+    let journal = run(true);
+    let first = journal.lines().next().unwrap();
+    assert!(
+        first.trim_start().starts_with("INFO"),
+        "no timestamp of ours under systemd: {first}"
+    );
+}

@@ -5,7 +5,6 @@ use std::process::ExitCode;
 
 use clap::{Parser, ValueEnum};
 use snaked::daemon::{self, Overrides, config::Config, config::Pacing, config::StartMode};
-use tracing_subscriber::EnvFilter;
 
 #[derive(Parser, Debug)]
 #[command(version, about = "Real-time control daemon for modular snake robots")]
@@ -58,11 +57,7 @@ enum PacingArg {
 }
 
 fn main() -> ExitCode {
-    tracing_subscriber::fmt()
-        .with_env_filter(
-            EnvFilter::try_from_default_env().unwrap_or_else(|_| EnvFilter::new("info")),
-        )
-        .init();
+    daemon::logging::init("info");
     let args = Args::parse();
     let mut cfg = match &args.config {
         Some(path) => match Config::load(path) {

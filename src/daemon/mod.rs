@@ -3,6 +3,7 @@
 
 pub mod bus_setup;
 pub mod config;
+pub mod logging;
 pub mod paths;
 pub mod service;
 
