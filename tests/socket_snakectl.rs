@@ -148,3 +148,26 @@ fn over_tcp() {
     let v: Value = serde_json::from_str(&stdout(&o)).unwrap();
     assert_eq!(v["modules"], 8);
 }
+
+/// `snakectl ... | head -c 10`: the reader goes away; snakectl stops quietly, as Unix
+/// tools do, instead of panicking on the broken pipe.
+#[test]
+fn a_closed_pipe_ends_snakectl_quietly() {
+    use std::process::Stdio;
+    let h = Harness::default_server();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_snakectl"))
+        .arg("--socket")
+        .arg(&h.path)
+        .args(["controller", "list"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("snakectl runs");
+    // Close the read end before snakectl writes its (several kB of) output.
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!err.contains("panicked"), "{err}");
+    assert!(err.is_empty(), "nothing said on a closed pipe: {err}");
+    assert_ne!(out.status.code(), Some(101), "not a panic");
+}

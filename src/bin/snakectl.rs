@@ -133,6 +133,12 @@ enum ParamsCmd {
 }
 
 fn main() -> ExitCode {
+    // A closed pipe (`snakectl status | head -c 10`) ends the process quietly, as it does
+    // Unix tools, instead of failing every later write (Rust ignores SIGPIPE by default).
+    // SAFETY: setting a signal's disposition to the default before any thread starts.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
     let cli = Cli::parse();
     match run(&cli) {
         Ok(()) => ExitCode::SUCCESS,

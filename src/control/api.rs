@@ -55,11 +55,21 @@ impl RpcError {
     }
 }
 
+/// A request's id exactly as the client wrote it (a JSON number or string), so the
+/// answer echoes it byte for byte: `123456789012345678901234567890` and `-0` come back
+/// as sent, not as a double.
+pub type RequestId = Box<RawValue>;
+
+/// The id of an answer to a request whose id could not be read.
+pub fn null_id() -> RequestId {
+    RawValue::from_string("null".to_owned()).expect("null is JSON")
+}
+
 /// One parsed request line.
 #[derive(Debug)]
 pub struct Request {
-    /// Echoed in the answer: a JSON number or string.
-    pub id: Value,
+    /// Echoed in the answer: a JSON number or string, as sent.
+    pub id: RequestId,
     pub method: String,
     pub params: Params,
 }
@@ -68,7 +78,7 @@ pub struct Request {
 /// (`null` when the id could not be read).
 #[derive(Debug)]
 pub struct BadRequest {
-    pub id: Value,
+    pub id: RequestId,
     pub error: RpcError,
 }
 
@@ -76,56 +86,68 @@ type RawMap = BTreeMap<String, Box<RawValue>>;
 
 /// Parse one request line (without its newline).
 pub fn parse_request(line: &[u8]) -> Result<Request, BadRequest> {
-    let bad = |id: &Value, code: i64, message: String| BadRequest {
-        id: id.clone(),
+    let bad = |id: &RawValue, code: i64, message: String| BadRequest {
+        id: id.to_owned(),
         error: RpcError::new(code, message),
     };
-    let null = Value::Null;
+    let null = null_id();
+    let null = null.as_ref();
     let text = std::str::from_utf8(line)
-        .map_err(|e| bad(&null, code::PARSE_ERROR, format!("invalid UTF-8: {e}")))?;
+        .map_err(|e| bad(null, code::PARSE_ERROR, format!("invalid UTF-8: {e}")))?;
     // Syntax only: raw values are skipped, numbers are not converted.
     let raw: Box<RawValue> = serde_json::from_str(text)
-        .map_err(|e| bad(&null, code::PARSE_ERROR, format!("invalid JSON: {e}")))?;
+        .map_err(|e| bad(null, code::PARSE_ERROR, format!("invalid JSON: {e}")))?;
     if !raw.get().starts_with('{') {
         let what = json_kind(raw.get());
         return Err(bad(
-            &null,
+            null,
             code::INVALID_REQUEST,
             format!("a request must be a JSON object, got {what}"),
         ));
     }
-    let mut top: RawMap = serde_json::from_str(raw.get()).map_err(|e| {
-        bad(
-            &null,
-            code::INVALID_REQUEST,
-            format!("invalid request: {e}"),
-        )
-    })?;
+    let mut top: RawMap = serde_json::from_str(raw.get())
+        .map_err(|e| bad(null, code::INVALID_REQUEST, format!("invalid request: {e}")))?;
+    // The id first, so that even a request refused for a duplicate key is answered
+    // with its id (when the id itself is readable).
+    let id_of = |top: &RawMap| match top.get("id") {
+        Some(raw_id) if matches!(json_kind(raw_id.get()), "a number" | "a string") => {
+            raw_id.to_owned()
+        }
+        _ => null.to_owned(),
+    };
+    if let Err(dup) = unique_keys(raw.get()) {
+        let id = id_of(&top);
+        return Err(bad(&id, code::INVALID_REQUEST, dup));
+    }
 
     let id = match top.remove("id") {
-        None => return Err(bad(&null, code::INVALID_REQUEST, "missing `id`".into())),
-        Some(raw_id) => match serde_json::from_str::<Value>(raw_id.get()) {
-            Ok(v @ (Value::Number(_) | Value::String(_))) => v,
-            Ok(other) => {
-                let what = json_kind(&other.to_string());
+        None => return Err(bad(null, code::INVALID_REQUEST, "missing `id`".into())),
+        Some(raw_id) => match json_kind(raw_id.get()) {
+            "a number" => raw_id,
+            // A string must be valid (a lone surrogate is not), else it cannot be echoed.
+            "a string" => match serde_json::from_str::<String>(raw_id.get()) {
+                Ok(_) => raw_id,
+                Err(e) => {
+                    let msg = format!("`id` is not a valid string: {e}");
+                    return Err(bad(null, code::INVALID_REQUEST, msg));
+                }
+            },
+            what => {
                 let msg = format!("`id` must be a number or a string, got {what}");
-                return Err(bad(&null, code::INVALID_REQUEST, msg));
-            }
-            Err(e) => {
-                let msg = format!("`id` is not a usable number: {e}");
-                return Err(bad(&null, code::INVALID_REQUEST, msg));
+                return Err(bad(null, code::INVALID_REQUEST, msg));
             }
         },
     };
     let method = match top.remove("method") {
         None => return Err(bad(&id, code::INVALID_REQUEST, "missing `method`".into())),
-        Some(m) => serde_json::from_str::<String>(m.get()).map_err(|_| {
+        Some(m) => serde_json::from_str::<String>(m.get()).map_err(|e| {
             let what = json_kind(m.get());
-            bad(
-                &id,
-                code::INVALID_REQUEST,
-                format!("`method` must be a string, got {what}"),
-            )
+            let msg = if what == "a string" {
+                format!("`method` is not a valid string: {e}")
+            } else {
+                format!("`method` must be a string, got {what}")
+            };
+            bad(&id, code::INVALID_REQUEST, msg)
         })?,
     };
     let params = match top.remove("params") {
@@ -230,9 +252,19 @@ impl Params {
         let Some(raw) = self.fields.remove(name) else {
             return Ok(None);
         };
-        serde_json::from_str::<Value>(raw.get())
+        // With the path to what failed inside it (e.g. `config.amplitude.gains.max`).
+        let mut de = serde_json::Deserializer::from_str(raw.get());
+        serde_path_to_error::deserialize::<_, Value>(&mut de)
             .map(Some)
-            .map_err(|e| RpcError::invalid_params(format!("`{name}`: {e}")))
+            .map_err(|e| {
+                let path = e.path().to_string();
+                let at = if path.is_empty() || path == "." {
+                    name.to_owned()
+                } else {
+                    format!("{name}.{path}")
+                };
+                RpcError::invalid_params(format!("`{at}`: {}", e.inner()))
+            })
     }
 
     /// A gait name param.
@@ -306,21 +338,84 @@ fn patch_slot<'a>(p: &'a mut ParamPatch, name: &str) -> Option<&'a mut Option<f6
     })
 }
 
+/// Refuses a JSON text in which some object has a key twice (serde would keep the last
+/// silently): the error names the key.
+fn unique_keys(text: &str) -> Result<(), String> {
+    use serde::de::{self, DeserializeSeed, Deserializer, MapAccess, SeqAccess, Visitor};
+    struct Walk;
+    impl<'de> DeserializeSeed<'de> for Walk {
+        type Value = ();
+        fn deserialize<D: Deserializer<'de>>(self, d: D) -> Result<(), D::Error> {
+            d.deserialize_any(Walk)
+        }
+    }
+    impl<'de> Visitor<'de> for Walk {
+        type Value = ();
+        fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+            f.write_str("any JSON value")
+        }
+        fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<(), A::Error> {
+            let mut seen = std::collections::BTreeSet::new();
+            while let Some(key) = map.next_key::<std::borrow::Cow<'de, str>>()? {
+                if !seen.insert(key.to_string()) {
+                    return Err(de::Error::custom(format!("duplicate key `{key}`")));
+                }
+                map.next_value_seed(Walk)?;
+            }
+            Ok(())
+        }
+        fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<(), A::Error> {
+            while seq.next_element_seed(Walk)?.is_some() {}
+            Ok(())
+        }
+        fn visit_bool<E>(self, _: bool) -> Result<(), E> {
+            Ok(())
+        }
+        fn visit_i64<E>(self, _: i64) -> Result<(), E> {
+            Ok(())
+        }
+        fn visit_u64<E>(self, _: u64) -> Result<(), E> {
+            Ok(())
+        }
+        fn visit_f64<E>(self, _: f64) -> Result<(), E> {
+            Ok(())
+        }
+        fn visit_str<E>(self, _: &str) -> Result<(), E> {
+            Ok(())
+        }
+        fn visit_unit<E>(self) -> Result<(), E> {
+            Ok(())
+        }
+    }
+    let mut de = serde_json::Deserializer::from_str(text);
+    // Numbers are not the point here (1e999 is refused where it is read).
+    match Walk.deserialize(&mut de) {
+        Ok(()) => Ok(()),
+        Err(e) if e.to_string().starts_with("duplicate key") => Err(e
+            .to_string()
+            .split(" at line")
+            .next()
+            .unwrap_or_default()
+            .to_owned()),
+        Err(_) => Ok(()),
+    }
+}
+
 /// The answer line for a result.
-pub fn result_line(id: &Value, result: &Value) -> String {
+pub fn result_line(id: &RawValue, result: &Value) -> String {
     #[derive(Serialize)]
     struct Answer<'a> {
-        id: &'a Value,
+        id: &'a RawValue,
         result: &'a Value,
     }
     to_line(&Answer { id, result })
 }
 
 /// The answer line for an error.
-pub fn error_line(id: &Value, error: &RpcError) -> String {
+pub fn error_line(id: &RawValue, error: &RpcError) -> String {
     #[derive(Serialize)]
     struct Answer<'a> {
-        id: &'a Value,
+        id: &'a RawValue,
         error: &'a RpcError,
     }
     to_line(&Answer { id, error })
@@ -355,7 +450,7 @@ mod tests {
     fn parses_a_request_with_params() {
         let r =
             parse_request(br#"{"id":7,"method":"gait.set","params":{"gait":"rolling"}}"#).unwrap();
-        assert_eq!(r.id, Value::from(7));
+        assert_eq!(r.id.get(), "7");
         assert_eq!(r.method, "gait.set");
         let mut p = r.params;
         assert_eq!(p.take_gait("gait").unwrap(), Some(GaitKind::Rolling));
@@ -371,10 +466,7 @@ mod tests {
             code::INVALID_REQUEST
         );
         let e = err(r#"{"id":"a"}"#);
-        assert_eq!(
-            (e.error.code, e.id),
-            (code::INVALID_REQUEST, Value::from("a"))
-        );
+        assert_eq!((e.error.code, e.id.get()), (code::INVALID_REQUEST, "\"a\""));
         assert_eq!(
             err(r#"{"id":1,"method":3}"#).error.code,
             code::INVALID_REQUEST
@@ -434,8 +526,60 @@ mod tests {
     }
 
     #[test]
+    fn ids_are_echoed_exactly_as_sent() {
+        for id in [
+            "123456789012345678901234567890",
+            "-0",
+            "1e3",
+            "0.1000000000000000055511151231257827",
+            "\"ü\\u0041\"",
+        ] {
+            let line = format!(r#"{{"id":{id},"method":"ping"}}"#);
+            let r = parse_request(line.as_bytes()).unwrap();
+            let answer = result_line(&r.id, &Value::Bool(true));
+            assert_eq!(answer, format!("{{\"id\":{id},\"result\":true}}\n"));
+        }
+    }
+
+    #[test]
+    fn duplicate_keys_are_refused_naming_the_key() {
+        let e =
+            err(r#"{"id":4,"method":"gait.set","params":{"gait":"rolling","gait":"slithering"}}"#);
+        assert_eq!(e.error.code, code::INVALID_REQUEST);
+        assert_eq!(e.id.get(), "4", "answered with the id");
+        assert!(
+            e.error.message.contains("duplicate key `gait`"),
+            "{}",
+            e.error.message
+        );
+        let e = err(r#"{"id":1,"id":2,"method":"ping"}"#);
+        assert!(e.error.message.contains("duplicate key `id`"));
+        let e = err(r#"{"id":1,"method":"x","params":{"config":{"a":{"b":1,"b":2}}}}"#);
+        assert!(
+            e.error.message.contains("duplicate key `b`"),
+            "{}",
+            e.error.message
+        );
+    }
+
+    #[test]
+    fn a_lone_surrogate_and_deep_bad_numbers_say_what_and_where() {
+        let e = err(r#"{"id":1,"method":"\ud800"}"#);
+        assert!(
+            e.error.message.contains("not a valid string"),
+            "{}",
+            e.error.message
+        );
+        let r = parse_request(br#"{"id":1,"method":"m","params":{"config":{"a":{"b":1e999}}}}"#)
+            .unwrap();
+        let mut p = r.params;
+        let e = p.take_json("config").unwrap_err();
+        assert!(e.message.starts_with("`config.a.b`"), "{}", e.message);
+    }
+
+    #[test]
     fn answer_lines_end_with_a_newline() {
-        let l = error_line(&Value::Null, &RpcError::new(code::BUSY, "busy"));
+        let l = error_line(&null_id(), &RpcError::new(code::BUSY, "busy"));
         assert_eq!(
             l,
             "{\"id\":null,\"error\":{\"code\":-32000,\"message\":\"busy\"}}\n"

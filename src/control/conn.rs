@@ -7,7 +7,6 @@
 //! counted, so a slow subscriber costs nobody else anything.
 use std::sync::Arc;
 
-use serde_json::Value;
 use tokio::io::{AsyncRead, AsyncWrite, AsyncWriteExt, BufWriter};
 use tokio::sync::mpsc;
 
@@ -35,7 +34,7 @@ where
             Ok(Line::Complete) if reader.line().iter().all(u8::is_ascii_whitespace) => continue,
             Ok(Line::Complete) => handle_line(&shared, &mut session, reader.line()).await,
             Ok(Line::TooLong) => api::error_line(
-                &Value::Null,
+                &api::null_id(),
                 &RpcError::new(
                     code::LINE_TOO_LONG,
                     format!(

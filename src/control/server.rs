@@ -10,7 +10,6 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::thread::JoinHandle;
 use std::time::Duration;
 
-use serde_json::Value;
 use tokio::io::{AsyncRead, AsyncWrite, AsyncWriteExt};
 use tokio::net::{TcpListener, UnixListener};
 
@@ -329,7 +328,7 @@ where
 /// Tell a client over the limit why, then close.
 async fn refuse<S: AsyncWrite + Unpin>(mut stream: S, max: usize) {
     let line = api::error_line(
-        &Value::Null,
+        &api::null_id(),
         &RpcError::new(
             code::TOO_MANY_CLIENTS,
             format!("too many clients (at most {max}); closing"),
