@@ -45,6 +45,42 @@ fn a_bad_configuration_is_named_and_exits_non_zero() {
     );
 }
 
+/// `--check-config` finds what would stop the daemon later, exit 2, file and key named.
+#[test]
+fn check_config_finds_cross_field_and_named_file_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    for (text, key) in [
+        (
+            "[network]\nfeedback_rate_hz = 100.0\ncommand_lifetime_s = 0.002\n",
+            "network.command_lifetime_s",
+        ),
+        (
+            "[control]\nchannel_capacity = 2\n",
+            "control.channel_capacity",
+        ),
+        (
+            "[network]\ntargets = [\"127.0.0.1:9-1\"]\n",
+            "network.targets",
+        ),
+        ("[emulator]\nworld = \"/nope.toml\"\n", "emulator.world"),
+        (
+            "[gait.params.sidewinding]\nhelix_radius_m = 0.1\n",
+            "gait.params.sidewinding",
+        ),
+    ] {
+        let path = dir.path().join("c.toml");
+        std::fs::write(&path, text).unwrap();
+        let out = Command::new(exe("snaked"))
+            .args(["--check-config", "--config", path.to_str().unwrap()])
+            .env("RUST_LOG", "off")
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{text}: {err}");
+        assert!(err.contains("c.toml") && err.contains(key), "{text}: {err}");
+    }
+}
+
 #[test]
 fn no_modules_on_the_network_is_a_clear_failure() {
     let port = common::free_udp_ports(2);

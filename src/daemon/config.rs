@@ -349,6 +349,58 @@ impl Config {
         Ok(table)
     }
 
+    /// Checks between keys, and of what the keys name (targets, the world file), so
+    /// that `--check-config` finds everything that would stop the daemon later.
+    fn cross_checks(&self, path: &Path) -> Result<(), ConfigError> {
+        let bad = |key: &'static str, value: String, why: String| ConfigError::Invalid {
+            path: path.to_owned(),
+            key,
+            value,
+            why,
+        };
+        let net = &self.network;
+        // A module drops a command older than its lifetime: it must outlive at least two
+        // of the loop's command periods and two feedback periods, or the joints go limp
+        // between commands.
+        let period_s = (1.0 / self.loop_.rate_hz).max(1.0 / net.feedback_rate_hz);
+        if net.command_lifetime_s < 2.0 * period_s {
+            return Err(bad(
+                "network.command_lifetime_s",
+                net.command_lifetime_s.to_string(),
+                format!(
+                    "must be at least two periods of the loop and of the feedback                      ({:.4} s at loop.rate_hz = {} and network.feedback_rate_hz = {}),                      or the modules go limp between commands",
+                    2.0 * period_s,
+                    self.loop_.rate_hz,
+                    net.feedback_rate_hz
+                ),
+            ));
+        }
+        let cap = crate::rt::control_loop::MAX_REQUESTS_PER_CYCLE;
+        if self.control.channel_capacity < cap {
+            return Err(bad(
+                "control.channel_capacity",
+                self.control.channel_capacity.to_string(),
+                format!(
+                    "must be at least the loop's {cap} requests per cycle (the loop's answers                      share the capacity; fewer would be lost and time out)"
+                ),
+            ));
+        }
+        for t in &net.targets {
+            if let Err(e) = crate::bus::udp::parse_targets(t) {
+                return Err(bad("network.targets", format!("{t:?}"), e.to_string()));
+            }
+        }
+        let world = &self.emulator.world;
+        if !world.as_os_str().is_empty() {
+            let scenario = crate::emu::world::scenario::WorldScenario::load(world)
+                .map_err(|e| bad("emulator.world", world.display().to_string(), e.to_string()))?;
+            scenario
+                .generate_trial(self.emulator.modules, self.emulator.world_trial)
+                .map_err(|e| bad("emulator.world", world.display().to_string(), e.to_string()))?;
+        }
+        Ok(())
+    }
+
     /// Each gait's controller: `[gait.controllers.*]` or `open_loop`.
     pub fn controller_selection(&self, gait: GaitKind) -> crate::controller::Selection {
         self.gait
@@ -500,6 +552,7 @@ impl Config {
             1.0,
             1000.0,
         )?;
+        self.cross_checks(path)?;
         if let Some(old) = &self.gait.slithering_controller {
             return Err(bad(
                 "gait.slithering_controller",
@@ -596,6 +649,47 @@ mod tests {
         assert!(
             Config::parse("[gait.params.sidewinding]\nwobble = 1.0\n", Path::new("x")).is_err()
         );
+    }
+
+    #[test]
+    fn cross_field_and_named_things_are_checked() {
+        for (text, needle) in [
+            (
+                "[network]\nfeedback_rate_hz = 100.0\ncommand_lifetime_s = 0.002\n",
+                "network.command_lifetime_s",
+            ),
+            (
+                "[control]\nchannel_capacity = 4\n",
+                "control.channel_capacity",
+            ),
+            (
+                "[network]\ntargets = [\"127.0.0.1:7010-7000\"]\n",
+                "network.targets",
+            ),
+            ("[network]\ntargets = [\"nonsense\"]\n", "network.targets"),
+            (
+                "[emulator]\nworld = \"/no/such/world.toml\"\n",
+                "emulator.world",
+            ),
+            (
+                "[gait.params.rolling]\ntaper = 0.5\n",
+                "gait.params.rolling",
+            ),
+            (
+                "[gait]\nmax_joint_speed_rad_s = 5.0\n",
+                "gait.max_joint_speed_rad_s",
+            ),
+        ] {
+            let msg = Config::parse(text, Path::new("x.toml"))
+                .unwrap_err()
+                .to_string();
+            assert!(
+                msg.contains(needle) && msg.contains("x.toml"),
+                "{text}: {msg}"
+            );
+        }
+        // At the defaults' rates a 50 ms lifetime is plenty.
+        assert!(Config::parse("", Path::new("x")).is_ok());
     }
 
     #[test]

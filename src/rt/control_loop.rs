@@ -24,7 +24,7 @@ use crate::rt::telemetry::TelemetryWriter;
 use crate::safety::failsafe::{Event, Failsafe, Health, Mode, Output};
 
 /// Requests applied per cycle at most, so a flood cannot stretch a cycle.
-const MAX_REQUESTS_PER_CYCLE: usize = 8;
+pub const MAX_REQUESTS_PER_CYCLE: usize = 8;
 
 /// Everything the loop is built from.
 pub struct LoopParts {
