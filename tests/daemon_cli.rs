@@ -90,6 +90,50 @@ fn no_modules_on_the_network_is_a_clear_failure() {
     ));
     assert_eq!(code, 1, "{err}");
     assert!(err.contains("discovery"), "{err}");
+    // What was looked for, where, and what answered (nothing): no empty list.
+    assert!(
+        err.contains("looking for") && err.contains("127.0.0.1:"),
+        "{err}"
+    );
+    let (code, err) = run_with_config(&format!(
+        "[network]\ntargets = [\"127.0.0.1:{port}-{}\"]\nexpected_modules = 2\n\
+         discovery_timeout_s = 0.3\n[control]\nsocket = \"\"\n",
+        port + 1
+    ));
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("none answered"), "{err}");
+    assert!(!err.trim_end().ends_with(':'), "{err}");
+}
+
+/// SIGTERM or SIGINT while discovery waits (here up to 30 s for modules that never
+/// answer) stops the daemon at once, exit 0.
+#[test]
+fn a_signal_during_discovery_stops_it_at_once() {
+    let port = common::free_udp_ports(2);
+    for sig in [libc::SIGTERM, libc::SIGINT] {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("c.toml");
+        std::fs::write(
+            &path,
+            format!(
+                "[network]\ntargets = [\"127.0.0.1:{port}-{}\"]\ndiscovery_timeout_s = 30.0\n\
+                 [control]\nsocket = \"\"\n",
+                port + 1
+            ),
+        )
+        .unwrap();
+        let mut d = Proc::spawn(
+            "snaked",
+            &exe("snaked"),
+            &["--config".into(), path.display().to_string()],
+        );
+        std::thread::sleep(Duration::from_millis(500));
+        let sent = std::time::Instant::now();
+        d.signal(sig);
+        let status = d.wait(Duration::from_secs(10));
+        println!("signal {sig}: exited {:?} after it", sent.elapsed());
+        assert!(status.success(), "exit 0 on signal {sig}: {status:?}");
+    }
 }
 
 #[test]

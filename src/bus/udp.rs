@@ -23,7 +23,7 @@ use std::net::{SocketAddr, UdpSocket};
 use std::time::{Duration, Instant};
 
 pub use connect::{ConnectError, FailReason, FailedModule};
-pub use discovery::{DiscoveryError, FoundModule, discover, format_mac};
+pub use discovery::{DiscoveryError, FoundModule, discover, discover_until, format_mac};
 pub use net::default_bind;
 pub use targets::{MAX_RANGE_PORTS, TargetError, parse_targets};
 

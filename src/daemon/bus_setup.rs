@@ -26,11 +26,32 @@ pub struct BuiltBus {
     pub world: Option<crate::emu::world::WorldSpec>,
 }
 
-pub fn build(cfg: &Config, emulated: bool, period_ns: u64) -> Result<BuiltBus> {
+/// The bus the configuration asks for. Discovery gives up (with
+/// [`udp::DiscoveryError::Stopped`] in the chain) as soon as `stop` is set.
+pub fn build(
+    cfg: &Config,
+    emulated: bool,
+    period_ns: u64,
+    stop: &std::sync::atomic::AtomicBool,
+) -> Result<BuiltBus> {
     if emulated {
         emulated_bus(cfg, period_ns)
     } else {
-        udp_bus(cfg)
+        udp_bus(cfg, stop)
+    }
+}
+
+/// What a lookup asks for, as an operator reads it.
+fn describe(filter: &LookupFilter, expected: Option<usize>) -> String {
+    let what = match filter {
+        LookupFilter::All => "any module".to_owned(),
+        LookupFilter::Family(f) => format!("family {f}"),
+        LookupFilter::Names(n) => format!("the modules named {n:?}"),
+        LookupFilter::Macs(m) => format!("{} modules by MAC", m.len()),
+    };
+    match expected {
+        Some(n) => format!("{n} of {what}"),
+        None => what,
     }
 }
 
@@ -38,7 +59,7 @@ fn name(s: &str, key: &str) -> Result<Name> {
     Name::new(s).map_err(|e| anyhow::anyhow!("{key}: {s:?}: {e}"))
 }
 
-fn udp_bus(cfg: &Config) -> Result<BuiltBus> {
+fn udp_bus(cfg: &Config, stop: &std::sync::atomic::AtomicBool) -> Result<BuiltBus> {
     let net = &cfg.network;
     let mut targets = Vec::new();
     for t in &net.targets {
@@ -64,8 +85,13 @@ fn udp_bus(cfg: &Config) -> Result<BuiltBus> {
     let timeout = Duration::from_secs_f64(net.discovery_timeout_s);
     let expected = (net.expected_modules > 0).then_some(net.expected_modules);
     tracing::info!(targets = targets.len(), ?filter, "looking up modules");
-    let found =
-        udp::discover(&targets, &filter, expected, bind, timeout).context("module discovery")?;
+    let looked_for = format!(
+        "module discovery (looking for {} on {})",
+        describe(&filter, expected),
+        net.targets.join(", ")
+    );
+    let found = udp::discover_until(&targets, &filter, expected, bind, timeout, stop)
+        .context(looked_for)?;
     if found.is_empty() {
         bail!("no modules answered");
     }

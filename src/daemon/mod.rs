@@ -125,7 +125,15 @@ pub fn run(cfg: Config, emulated: bool) -> Result<()> {
     // Everything that can be refused without the robot is checked before discovery.
     let table = gait_table(&cfg)?;
     let period_ns = (1e9 / cfg.loop_.rate_hz).round() as u64;
-    let built = bus_setup::build(&cfg, emulated, period_ns)?;
+    let built = match bus_setup::build(&cfg, emulated, period_ns, &stop) {
+        Ok(b) => b,
+        // A signal during discovery: nothing is driven yet, so stopping is all there is.
+        Err(e) if stopped_in_discovery(&e) => {
+            tracing::info!("stopped during discovery");
+            return Ok(());
+        }
+        Err(e) => return Err(e),
+    };
     let n = built.bus.module_count();
     tracing::info!(modules = n, bus = ?built.kind, names = ?built.names, "group ready");
     service::notify_status(&format!("group of {n} modules found"));
@@ -241,6 +249,15 @@ pub fn run(cfg: Config, emulated: bool) -> Result<()> {
         "stopped safely"
     );
     Ok(())
+}
+
+fn stopped_in_discovery(e: &anyhow::Error) -> bool {
+    e.chain().any(|c| {
+        matches!(
+            c.downcast_ref::<crate::bus::udp::DiscoveryError>(),
+            Some(crate::bus::udp::DiscoveryError::Stopped)
+        )
+    })
 }
 
 /// The recorder and live view the configuration asks for (`None`: neither). Fails

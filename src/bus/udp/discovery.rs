@@ -12,6 +12,9 @@ use crate::protocol::{
 
 /// How often the Lookup is repeated while waiting, so a lost datagram only delays.
 const LOOKUP_RESEND: Duration = Duration::from_millis(100);
+/// Longest wait between two looks at the stop flag: a signal during discovery ends it
+/// well within 200 ms.
+const STOP_POLL: Duration = Duration::from_millis(20);
 
 /// A module that answered a lookup, and where it answered from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -42,14 +45,29 @@ pub enum DiscoveryError {
     DuplicateName { name: String, macs: Vec<String> },
     #[error("no module answered within {0:?}")]
     NoneFound(Duration),
-    #[error("expected {expected} modules, {} answered within {timeout:?}: {}",
-        .found.len(), .found.join(", "))]
+    #[error("expected {expected} modules, {}", answered(.found, *.timeout))]
     CountMismatch {
         expected: usize,
         /// Names of the modules that did answer.
         found: Vec<String>,
         timeout: Duration,
     },
+    /// The stop flag was raised (SIGTERM, SIGINT) before the group was found.
+    #[error("stopped during discovery")]
+    Stopped,
+}
+
+/// "none answered within …" or "N answered within …: a, b".
+fn answered(found: &[String], timeout: Duration) -> String {
+    if found.is_empty() {
+        format!("none answered within {timeout:?}")
+    } else {
+        format!(
+            "{} answered within {timeout:?}: {}",
+            found.len(),
+            found.join(", ")
+        )
+    }
 }
 
 /// `aa:bb:cc:dd:ee:ff`.
@@ -75,6 +93,20 @@ pub fn discover(
     bind: SocketAddr,
     timeout: Duration,
 ) -> Result<Vec<FoundModule>, DiscoveryError> {
+    let never = std::sync::atomic::AtomicBool::new(false);
+    discover_until(targets, filter, expected, bind, timeout, &never)
+}
+
+/// [`discover`] that gives up with [`DiscoveryError::Stopped`] as soon as `stop` is set
+/// (the daemon's signal handler sets it), checked at least every 20 ms.
+pub fn discover_until(
+    targets: &[SocketAddr],
+    filter: &LookupFilter,
+    expected: Option<usize>,
+    bind: SocketAddr,
+    timeout: Duration,
+    stop: &std::sync::atomic::AtomicBool,
+) -> Result<Vec<FoundModule>, DiscoveryError> {
     if targets.is_empty() {
         return Err(DiscoveryError::NoTargets);
     }
@@ -94,6 +126,9 @@ pub fn discover(
     let mut next_send = Instant::now();
     let mut first_round = true;
     loop {
+        if stop.load(std::sync::atomic::Ordering::Relaxed) {
+            return Err(DiscoveryError::Stopped);
+        }
         let now = Instant::now();
         if wanted.is_some_and(|w| found.len() >= w) || now >= deadline {
             break;
@@ -103,7 +138,7 @@ pub fn discover(
             first_round = false;
             next_send = now + LOOKUP_RESEND;
         }
-        net::wait_readable(&socket, next_send.min(deadline) - now)?;
+        net::wait_readable(&socket, (next_send.min(deadline) - now).min(STOP_POLL))?;
         collect(&socket, filter, &mut found)?;
     }
     order_group(filter, expected, found, timeout)
