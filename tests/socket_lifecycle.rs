@@ -184,3 +184,94 @@ fn too_many_clients_are_told_and_closed() {
         }
     }
 }
+
+/// Connections that never send a byte hold every slot: an e-stop still gets through
+/// (served over the limit), and once they have idled a newcomer takes a slot from the
+/// idlest, which is told why and closed.
+#[test]
+fn an_estop_gets_through_when_every_slot_is_held() {
+    use std::io::{BufRead, BufReader, Write};
+    use std::os::unix::net::UnixStream;
+    let h = Harness::new(LoopSpec::default(), |c| c.max_clients = 3);
+    let squatters: Vec<UnixStream> = (0..3)
+        .map(|_| UnixStream::connect(&h.path).unwrap())
+        .collect();
+    // Let the server admit all three before the stop arrives.
+    std::thread::sleep(Duration::from_millis(200));
+    let mut stop = UnixStream::connect(&h.path).unwrap();
+    stop.set_read_timeout(Some(Duration::from_secs(10)))
+        .unwrap();
+    stop.write_all(b"{\"id\":9,\"method\":\"estop\"}\n")
+        .unwrap();
+    let mut lines = BufReader::new(stop).lines();
+    let notice: serde_json::Value = serde_json::from_str(&lines.next().unwrap().unwrap()).unwrap();
+    assert_eq!(error_code(&notice), code::TOO_MANY_CLIENTS, "{notice}");
+    let answer: serde_json::Value = serde_json::from_str(&lines.next().unwrap().unwrap()).unwrap();
+    assert_eq!(answer["id"], 9, "{answer}");
+    assert_eq!(
+        answer["result"]["ok"], true,
+        "the e-stop was applied: {answer}"
+    );
+    assert!(
+        h.fake
+            .seen()
+            .contains(&snaked::rt::messages::LoopRequest::EStop)
+    );
+    // Over the limit only stops are served.
+    let mut other = h.client();
+    let refused = other.call("ping", None).unwrap_err().to_string();
+    assert!(
+        refused.contains("estop") && refused.contains("-32004"),
+        "{refused}"
+    );
+
+    // After a second of silence the squatters are evictable: a real client gets in.
+    std::thread::sleep(Duration::from_millis(1200));
+    let mut c = h.client();
+    assert_eq!(c.call("ping", None).unwrap()["pong"], true);
+    let told: Vec<String> = squatters
+        .into_iter()
+        .filter_map(|s| {
+            s.set_read_timeout(Some(Duration::from_millis(500)))
+                .unwrap();
+            BufReader::new(s).lines().next().and_then(Result::ok)
+        })
+        .collect();
+    assert_eq!(
+        told.len(),
+        1,
+        "exactly one squatter gave its slot: {told:?}"
+    );
+    assert!(
+        told[0].contains("idle while the client limit was reached"),
+        "{told:?}"
+    );
+}
+
+/// A connection with neither a request nor a telemetry stream is closed after the idle
+/// timeout; a subscriber is not.
+#[test]
+fn idle_connections_time_out_but_subscribers_stay() {
+    let h = Harness::new(LoopSpec::default(), |c| {
+        c.idle_timeout = Some(Duration::from_millis(300))
+    });
+    let mut idle = h.client();
+    let mut sub = h.client();
+    sub.call(
+        "telemetry.subscribe",
+        Some(serde_json::json!({"rate_hz": 5})),
+    )
+    .unwrap();
+    std::thread::sleep(Duration::from_millis(600));
+    let m = idle.next_message().unwrap();
+    assert!(
+        m["error"]["message"]
+            .as_str()
+            .unwrap()
+            .contains("idle for too long"),
+        "{m}"
+    );
+    assert!(matches!(idle.next_message(), Err(ClientError::Closed)));
+    assert_eq!(sub.next_message().unwrap()["method"], "telemetry");
+    assert_eq!(sub.call("ping", None).unwrap()["pong"], true);
+}

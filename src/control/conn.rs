@@ -11,6 +11,7 @@ use tokio::io::{AsyncRead, AsyncWrite, AsyncWriteExt, BufWriter};
 use tokio::sync::mpsc;
 
 use super::api::{self, RpcError, code};
+use super::clients::Client;
 use super::lines::{Line, LineReader};
 use super::methods;
 use super::session::Session;
@@ -19,8 +20,23 @@ use super::shared::Shared;
 /// Lines queued for one client's writer.
 const OUT_QUEUE: usize = 32;
 
-/// Serve one client until it closes (or the runtime shuts down).
-pub(crate) async fn serve<S>(stream: S, shared: Arc<Shared>)
+/// Methods a connection over the client limit may call (one, then it closes).
+const STOP_METHODS: [&str; 3] = ["estop", "limp", "hold"];
+/// How long a connection over the limit has to send its stop request.
+const OVER_LIMIT_WAIT: std::time::Duration = std::time::Duration::from_secs(2);
+
+/// Why a served connection stopped waiting for its next line.
+enum Wake {
+    Line(std::io::Result<Line>),
+    /// Its slot went to a newcomer while it was idle.
+    Evicted,
+    /// No request and no stream for the idle timeout.
+    Idle,
+}
+
+/// Serve one client until it closes, is evicted or idles out (or the runtime shuts
+/// down).
+pub(crate) async fn serve<S>(stream: S, shared: Arc<Shared>, client: Arc<Client>)
 where
     S: AsyncRead + AsyncWrite + Send + Unpin + 'static,
 {
@@ -30,7 +46,28 @@ where
     let mut reader = LineReader::new(read_half, shared.max_line_bytes);
     let mut session = Session::new(out);
     loop {
-        let answer = match reader.next().await {
+        let idle = shared.idle_timeout.filter(|_| !session.subscribed());
+        let wake = tokio::select! {
+            line = reader.next() => Wake::Line(line),
+            () = client.evicted.notified() => Wake::Evicted,
+            () = sleep_or_never(idle) => Wake::Idle,
+        };
+        let line = match wake {
+            Wake::Line(line) => line,
+            Wake::Evicted | Wake::Idle => {
+                let why = if matches!(wake, Wake::Evicted) {
+                    "closing: this connection was idle while the client limit was reached"
+                } else {
+                    "closing: idle for too long (no request and no telemetry stream)"
+                };
+                let line =
+                    api::error_line(&api::null_id(), &RpcError::new(code::TOO_MANY_CLIENTS, why));
+                let _ = session.send(line).await;
+                break;
+            }
+        };
+        client.touch();
+        let answer = match line {
             Ok(Line::Complete) if reader.line().iter().all(u8::is_ascii_whitespace) => continue,
             Ok(Line::Complete) => handle_line(&shared, &mut session, reader.line()).await,
             Ok(Line::TooLong) => api::error_line(
@@ -59,10 +96,71 @@ where
         session
             .start_pending(&shared.telemetry, &shared.catalog)
             .await;
+        client.set_subscribed(session.subscribed());
+        client.touch();
     }
     session.unsubscribe().await;
     drop(session); // Closes the queue: the writer flushes what is left and ends.
     let _ = writer.await;
+}
+
+async fn sleep_or_never(d: Option<std::time::Duration>) {
+    match d {
+        Some(d) => tokio::time::sleep(d).await,
+        None => std::future::pending().await,
+    }
+}
+
+/// A connection beyond the client limit: told so at once, then served for one stop
+/// request (`estop`, `limp`, `hold`) if it sends one within two seconds, then closed.
+/// An e-stop always gets through, however many connections hold the slots.
+pub(crate) async fn serve_over_limit<S>(stream: S, shared: Arc<Shared>, max: usize)
+where
+    S: AsyncRead + AsyncWrite + Send + Unpin + 'static,
+{
+    let (read_half, mut write_half) = tokio::io::split(stream);
+    let notice = api::error_line(
+        &api::null_id(),
+        &RpcError::new(
+            code::TOO_MANY_CLIENTS,
+            format!(
+                "too many clients (at most {max}): this connection serves one of {} and closes",
+                STOP_METHODS.join(", ")
+            ),
+        ),
+    );
+    let mut reader = LineReader::new(read_half, shared.max_line_bytes);
+    let serve = async {
+        write_half.write_all(notice.as_bytes()).await?;
+        let line = match reader.next().await? {
+            Line::Complete => reader.line().to_vec(),
+            _ => return Ok(()),
+        };
+        let answer = match api::parse_request(&line) {
+            Err(bad) => api::error_line(&bad.id, &bad.error),
+            Ok(req) if STOP_METHODS.contains(&req.method.as_str()) => {
+                let (out, _unused) = mpsc::channel::<String>(1);
+                let mut session = Session::new(out);
+                match methods::dispatch(&shared, &mut session, &req.method, req.params).await {
+                    Ok(result) => api::result_line(&req.id, &result),
+                    Err(e) => api::error_line(&req.id, &e),
+                }
+            }
+            Ok(req) => api::error_line(
+                &req.id,
+                &RpcError::new(
+                    code::TOO_MANY_CLIENTS,
+                    format!(
+                        "too many clients (at most {max}): only {} are served over the limit",
+                        STOP_METHODS.join(", ")
+                    ),
+                ),
+            ),
+        };
+        write_half.write_all(answer.as_bytes()).await?;
+        write_half.shutdown().await
+    };
+    let _ = tokio::time::timeout(OVER_LIMIT_WAIT, serve).await;
 }
 
 async fn handle_line(shared: &Arc<Shared>, session: &mut Session, line: &[u8]) -> String {

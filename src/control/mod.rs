@@ -13,7 +13,8 @@
 //! - `server`: binding, the runtime thread, accept loops, the client limit.
 //! - `shared`: what every connection shares; `session`: one connection's state
 //!   (its telemetry stream).
-//! - `conn`: one connection: reading lines, answering in order, the writer.
+//! - `clients`: the client table (the limit, eviction of the idlest, stops over the
+//!   limit); `conn`: one connection: reading lines, answering in order, the writer.
 //! - `methods`: what each method does; `views`: JSON views of a snapshot.
 //! - `controllers`: the controller methods (`controller.list/get/set`), any gait's
 //!   controller in `status` and telemetry, read from the registry.
@@ -22,6 +23,7 @@
 
 pub mod api;
 pub mod client;
+mod clients;
 mod conn;
 mod controllers;
 mod lines;
@@ -64,6 +66,9 @@ pub struct ServerConfig {
     pub ack_timeout: Duration,
     /// Mode of the socket file (e.g. 0o660: owner and group may control the robot).
     pub socket_mode: u32,
+    /// A connection with no request and no telemetry stream for this long is closed
+    /// (`None`: never).
+    pub idle_timeout: Option<Duration>,
 }
 
 impl Default for ServerConfig {
@@ -75,6 +80,7 @@ impl Default for ServerConfig {
             max_clients: 64,
             ack_timeout: Duration::from_secs(1),
             socket_mode: 0o660,
+            idle_timeout: Some(Duration::from_secs(300)),
         }
     }
 }

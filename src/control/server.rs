@@ -6,7 +6,6 @@ use std::net::{Ipv4Addr, SocketAddr};
 use std::os::unix::fs::{FileTypeExt, MetadataExt, PermissionsExt};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
-use std::sync::atomic::{AtomicUsize, Ordering};
 use std::thread::JoinHandle;
 use std::time::Duration;
 
@@ -14,6 +13,7 @@ use tokio::io::{AsyncRead, AsyncWrite, AsyncWriteExt};
 use tokio::net::{TcpListener, UnixListener};
 
 use super::api::{self, RpcError, code};
+use super::clients::{Admission, Clients};
 use super::router::AckRouter;
 use super::shared::Shared;
 use super::{LoopHandle, ServerConfig, conn};
@@ -140,15 +140,13 @@ pub fn start(cfg: ServerConfig, handle: LoopHandle) -> Result<RunningServer, Ser
         telemetry: handle.telemetry,
         info: handle.info,
         max_line_bytes: cfg.max_line_bytes.max(1),
+        idle_timeout: cfg.idle_timeout,
         layout: handle.layout,
         retired: handle.retired,
         catalog: handle.catalog,
         controller_change: tokio::sync::Mutex::new(()),
     });
-    let clients = Arc::new(Clients {
-        active: AtomicUsize::new(0),
-        max: cfg.max_clients,
-    });
+    let clients = Clients::new(cfg.max_clients);
     {
         // Listeners must be registered with the runtime they will run on.
         let _enter = rt.enter();
@@ -246,39 +244,6 @@ impl Drop for SocketFile {
     }
 }
 
-/// Counts connections against `max_clients`.
-struct Clients {
-    active: AtomicUsize,
-    max: usize,
-}
-
-/// One slot of `Clients`, released when the connection ends.
-struct Slot(Arc<Clients>);
-
-impl Drop for Slot {
-    fn drop(&mut self) {
-        self.0.active.fetch_sub(1, Ordering::AcqRel);
-    }
-}
-
-impl Clients {
-    fn try_take(self: &Arc<Self>) -> Option<Slot> {
-        let mut n = self.active.load(Ordering::Acquire);
-        loop {
-            if n >= self.max {
-                return None;
-            }
-            match self
-                .active
-                .compare_exchange(n, n + 1, Ordering::AcqRel, Ordering::Acquire)
-            {
-                Ok(_) => return Some(Slot(self.clone())),
-                Err(now) => n = now,
-            }
-        }
-    }
-}
-
 async fn accept_unix(l: UnixListener, shared: Arc<Shared>, clients: Arc<Clients>) {
     loop {
         match l.accept().await {
@@ -310,22 +275,29 @@ fn admit<S>(stream: S, shared: &Arc<Shared>, clients: &Arc<Clients>)
 where
     S: AsyncRead + AsyncWrite + Send + Unpin + 'static,
 {
-    match clients.try_take() {
-        Some(slot) => {
-            let shared = shared.clone();
+    let shared = shared.clone();
+    match clients.admit() {
+        Admission::Served(client, seat) => {
             tokio::spawn(async move {
-                conn::serve(stream, shared).await;
-                drop(slot);
+                conn::serve(stream, shared, client).await;
+                drop(seat);
             });
         }
-        None => {
-            let max = clients.max;
+        Admission::OverLimit(seat) => {
+            let max = clients.max();
+            tokio::spawn(async move {
+                conn::serve_over_limit(stream, shared, max).await;
+                drop(seat);
+            });
+        }
+        Admission::Refused => {
+            let max = clients.max();
             tokio::spawn(refuse(stream, max));
         }
     }
 }
 
-/// Tell a client over the limit why, then close.
+/// Tell a client over every limit why, then close.
 async fn refuse<S: AsyncWrite + Unpin>(mut stream: S, max: usize) {
     let line = api::error_line(
         &api::null_id(),

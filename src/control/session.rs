@@ -37,6 +37,11 @@ impl Session {
         self.out.send(line).await.map_err(|_| ())
     }
 
+    /// Whether a telemetry stream runs (or starts after this answer).
+    pub(crate) fn subscribed(&self) -> bool {
+        self.stream.is_some() || self.pending_rate_hz.is_some()
+    }
+
     /// The running stream, if any (the connection waits for it on a half-close).
     pub(crate) fn take_stream(&mut self) -> Option<JoinHandle<()>> {
         self.stream.take()

@@ -13,6 +13,8 @@ pub(crate) struct Shared {
     pub(crate) telemetry: TelemetryReader,
     pub(crate) info: DaemonInfo,
     pub(crate) max_line_bytes: usize,
+    /// Close a connection idle this long (no request, no stream).
+    pub(crate) idle_timeout: Option<std::time::Duration>,
     /// The loop's body: controllers are built for it here, off the loop.
     pub(crate) layout: BodyLayout,
     /// Controllers the loop replaced or refused; freed here.

@@ -240,6 +240,9 @@ pub struct ControlConfig {
     pub max_clients: usize,
     pub channel_capacity: usize,
     pub ack_timeout_s: f64,
+    /// Close a connection with no request and no telemetry stream for this long, s;
+    /// 0 = never.
+    pub idle_timeout_s: f64,
 }
 
 impl Default for ControlConfig {
@@ -251,6 +254,7 @@ impl Default for ControlConfig {
             max_clients: 64,
             channel_capacity: 64,
             ack_timeout_s: 1.0,
+            idle_timeout_s: 300.0,
         }
     }
 }
@@ -531,6 +535,12 @@ impl Config {
             self.control.ack_timeout_s,
             0.01,
             60.0,
+        )?;
+        range(
+            "control.idle_timeout_s",
+            self.control.idle_timeout_s,
+            0.0,
+            86400.0,
         )?;
         range("emulator.modules", self.emulator.modules as f64, 2.0, 64.0)?;
         range("record.max_mb", self.record.max_mb, 0.0, 1e7)?;

@@ -342,6 +342,8 @@ fn server_config(cfg: &Config) -> ServerConfig {
         max_line_bytes: cfg.control.max_line_bytes,
         max_clients: cfg.control.max_clients,
         ack_timeout: Duration::from_secs_f64(cfg.control.ack_timeout_s),
+        idle_timeout: (cfg.control.idle_timeout_s > 0.0)
+            .then(|| Duration::from_secs_f64(cfg.control.idle_timeout_s)),
         ..ServerConfig::default()
     }
 }
