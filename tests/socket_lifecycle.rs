@@ -275,3 +275,44 @@ fn idle_connections_time_out_but_subscribers_stay() {
     assert_eq!(sub.next_message().unwrap()["method"], "telemetry");
     assert_eq!(sub.call("ping", None).unwrap()["pong"], true);
 }
+
+/// A socket directory another user owns, or any user may write without the sticky bit,
+/// is refused (another user could swap the socket for an impostor); a directory the
+/// daemon creates is its own, mode 0750.
+#[test]
+fn an_untrusted_socket_directory_is_refused() {
+    let start = |dir: &std::path::Path| {
+        let (_fake, handle) = fake_loop(LoopSpec::default());
+        let cfg = ServerConfig {
+            unix_path: Some(dir.join("snaked.sock")),
+            ..ServerConfig::default()
+        };
+        snaked::control::start(cfg, handle)
+    };
+    let base = tempfile::tempdir().unwrap();
+    let open = base.path().join("open");
+    std::fs::create_dir(&open).unwrap();
+    std::fs::set_permissions(&open, std::fs::Permissions::from_mode(0o777)).unwrap();
+    let e = start(&open).err().expect("world-writable: refused");
+    assert!(matches!(e, ServerError::UntrustedDirectory { .. }), "{e}");
+    assert!(e.to_string().contains("writable by every user"), "{e}");
+    // Sticky, like /tmp: files can only be removed by their owner, so it is fine.
+    std::fs::set_permissions(&open, std::fs::Permissions::from_mode(0o1777)).unwrap();
+    start(&open).expect("sticky is fine").shutdown();
+    // Created by the daemon: its own, 0750.
+    let made = base.path().join("made").join("here");
+    start(&made).expect("created").shutdown();
+    let mode = std::fs::metadata(&made).unwrap().permissions().mode() & 0o777;
+    assert_eq!(mode, 0o750);
+    // Owned by another user (needs root to arrange; the test runs as root in CI).
+    let theirs = base.path().join("theirs");
+    std::fs::create_dir(&theirs).unwrap();
+    let c = std::ffi::CString::new(theirs.to_str().unwrap()).unwrap();
+    // SAFETY: a valid NUL-terminated path; chown has no other preconditions.
+    if unsafe { libc::chown(c.as_ptr(), 65534, 65534) } != 0 {
+        println!("skipped the other-owner case: chown needs root");
+        return;
+    }
+    let e = start(&theirs).err().expect("another user's: refused");
+    assert!(e.to_string().contains("owned by uid 65534"), "{e}");
+}

@@ -3,7 +3,7 @@
 //! client limit.
 use std::io;
 use std::net::{Ipv4Addr, SocketAddr};
-use std::os::unix::fs::{FileTypeExt, MetadataExt, PermissionsExt};
+use std::os::unix::fs::{DirBuilderExt, FileTypeExt, MetadataExt, PermissionsExt};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::thread::JoinHandle;
@@ -27,6 +27,15 @@ pub enum ServerError {
     InUse { path: PathBuf },
     #[error("control socket {path}: exists and is not a socket; refusing to replace it")]
     NotASocket { path: PathBuf },
+    #[error(
+        "control socket {path}: its directory {dir} {why}; another user could replace the \
+         socket. Use a directory of your own (e.g. $XDG_RUNTIME_DIR) or fix its owner and mode"
+    )]
+    UntrustedDirectory {
+        path: PathBuf,
+        dir: PathBuf,
+        why: String,
+    },
     #[error("control socket {path}: {what}: {source}")]
     Unix {
         path: PathBuf,
@@ -201,7 +210,15 @@ fn bind_unix(path: &Path, mode: u32) -> Result<std::os::unix::net::UnixListener,
         }
     };
     if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
-        std::fs::create_dir_all(parent).map_err(err("cannot create its directory"))?;
+        if !parent.exists() {
+            // Ours, tight: the owner and its group (the operators) may reach the socket.
+            std::fs::DirBuilder::new()
+                .recursive(true)
+                .mode(0o750)
+                .create(parent)
+                .map_err(err("cannot create its directory"))?;
+        }
+        check_directory(path, parent)?;
     }
     match std::fs::symlink_metadata(path) {
         Ok(meta) if !meta.file_type().is_socket() => {
@@ -231,6 +248,41 @@ fn bind_unix(path: &Path, mode: u32) -> Result<std::os::unix::net::UnixListener,
         .set_nonblocking(true)
         .map_err(err("cannot make it non-blocking"))?;
     Ok(listener)
+}
+
+/// The socket's directory must be ours (or root's), and nobody else may replace files in
+/// it: not writable by others unless sticky (like /tmp, where only a file's owner may
+/// remove it). Otherwise another local user could swap the socket for an impostor.
+fn check_directory(path: &Path, dir: &Path) -> Result<(), ServerError> {
+    let meta = std::fs::metadata(dir).map_err(|source| ServerError::Unix {
+        path: path.to_owned(),
+        what: "cannot inspect its directory",
+        source,
+    })?;
+    // SAFETY: geteuid has no preconditions and cannot fail.
+    let euid = unsafe { libc::geteuid() };
+    let mode = meta.mode();
+    let why = if meta.uid() != euid && meta.uid() != 0 {
+        Some(format!(
+            "is owned by uid {}, not by this daemon's user (uid {euid}) or root",
+            meta.uid()
+        ))
+    } else if mode & 0o002 != 0 && mode & 0o1000 == 0 {
+        Some(format!(
+            "is writable by every user (mode {:o}) without the sticky bit",
+            mode & 0o7777
+        ))
+    } else {
+        None
+    };
+    match why {
+        Some(why) => Err(ServerError::UntrustedDirectory {
+            path: path.to_owned(),
+            dir: dir.to_owned(),
+            why,
+        }),
+        None => Ok(()),
+    }
 }
 
 /// Removes a socket file we bound if `start` fails after binding it.
