@@ -17,23 +17,53 @@ fn connect(path: &std::path::Path) -> Client {
     .unwrap()
 }
 
+/// TCP listens on loopback only and serves nothing before `auth` with the token: a
+/// local user without the token can neither read nor act.
 #[test]
-fn tcp_listener_on_loopback() {
+fn tcp_listener_on_loopback_needs_the_token() {
     let (_fake, handle) = fake_loop(LoopSpec::default());
     let cfg = ServerConfig {
         unix_path: None,
         tcp_port: Some(0),
         ..ServerConfig::default()
     };
+    assert!(matches!(
+        snaked::control::start(cfg.clone(), handle),
+        Err(ServerError::TcpWithoutToken)
+    ));
+    let (fake, handle) = fake_loop(LoopSpec::default());
+    let cfg = ServerConfig {
+        tcp_token: Some("s3cret-token".into()),
+        ..cfg
+    };
     let server = snaked::control::start(cfg, handle).unwrap();
     let addr = server.tcp_addr().unwrap();
     assert!(addr.ip().is_loopback());
-    let mut c = Client::connect(
-        &Endpoint::Tcp(addr.to_string()),
-        Some(Duration::from_secs(10)),
-    )
-    .unwrap();
+    let connect = || {
+        Client::connect(
+            &Endpoint::Tcp(addr.to_string()),
+            Some(Duration::from_secs(10)),
+        )
+        .unwrap()
+    };
+    let mut c = connect();
+    for method in ["status", "estop", "gait.list"] {
+        let e = c.call(method, None).unwrap_err().to_string();
+        assert!(e.contains("-32005") && e.contains("auth"), "{method}: {e}");
+    }
+    let e = c
+        .call("auth", Some(serde_json::json!({"token": "guess"})))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("wrong token"), "{e}");
+    assert!(fake.seen().is_empty(), "nothing reached the loop");
+    c.call("auth", Some(serde_json::json!({"token": "s3cret-token"})))
+        .unwrap();
     assert_eq!(c.call("status", None).unwrap()["modules"], 8);
+    assert_eq!(c.call("estop", None).unwrap()["ok"], true);
+    // Per connection: a new one starts unauthorised.
+    let e = connect().call("status", None).unwrap_err().to_string();
+    assert!(e.contains("-32005"), "{e}");
     server.shutdown();
 }
 

@@ -135,20 +135,6 @@ fn the_socket_comes_from_the_environment() {
     );
 }
 
-#[test]
-fn over_tcp() {
-    let h = Harness::new(socket_support::LoopSpec::default(), |c| {
-        c.tcp_port = Some(0)
-    });
-    let addr = h.server.as_ref().unwrap().tcp_addr().unwrap().to_string();
-    let o = Command::new(env!("CARGO_BIN_EXE_snakectl"))
-        .args(["--tcp", &addr, "--json", "status"])
-        .output()
-        .unwrap();
-    let v: Value = serde_json::from_str(&stdout(&o)).unwrap();
-    assert_eq!(v["modules"], 8);
-}
-
 /// `snakectl ... | head -c 10`: the reader goes away; snakectl stops quietly, as Unix
 /// tools do, instead of panicking on the broken pipe.
 #[test]
@@ -170,4 +156,36 @@ fn a_closed_pipe_ends_snakectl_quietly() {
     assert!(!err.contains("panicked"), "{err}");
     assert!(err.is_empty(), "nothing said on a closed pipe: {err}");
     assert_ne!(out.status.code(), Some(101), "not a panic");
+}
+
+/// `snakectl --tcp ... --token-file F` authenticates first; without the file it says so.
+#[test]
+fn snakectl_over_tcp_sends_the_token() {
+    let h = Harness::new(socket_support::LoopSpec::default(), |c| {
+        c.tcp_port = Some(0);
+        c.tcp_token = Some("t0ken".into());
+    });
+    let addr = h.server.as_ref().unwrap().tcp_addr().unwrap().to_string();
+    let dir = tempfile::tempdir().unwrap();
+    let token = dir.path().join("token");
+    std::fs::write(&token, "t0ken\n").unwrap();
+    let run = |extra: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_snakectl"))
+            .args(["--tcp", &addr])
+            .args(extra)
+            .args(["--json", "status"])
+            .env_remove("SNAKED_TOKEN_FILE")
+            .output()
+            .unwrap()
+    };
+    let ok = run(&["--token-file", token.to_str().unwrap()]);
+    let v: Value = serde_json::from_str(&stdout(&ok)).unwrap();
+    assert_eq!(v["modules"], 8);
+    let no_token = run(&[]);
+    assert_eq!(no_token.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&no_token.stderr).contains("--token-file"));
+    std::fs::write(&token, "wrong\n").unwrap();
+    let wrong = run(&["--token-file", token.to_str().unwrap()]);
+    assert_eq!(wrong.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&wrong.stderr).contains("wrong token"));
 }

@@ -22,9 +22,12 @@ struct Cli {
     /// $XDG_RUNTIME_DIR/snaked.sock, whichever exists].
     #[arg(long, value_name = "PATH", global = true, conflicts_with = "tcp")]
     socket: Option<PathBuf>,
-    /// Talk to the daemon's TCP listener instead.
+    /// Talk to the daemon's TCP listener instead (needs its token: --token-file).
     #[arg(long, value_name = "HOST:PORT", global = true)]
     tcp: Option<String>,
+    /// The daemon's TCP token file (control.tcp_token_file) [default: $SNAKED_TOKEN_FILE].
+    #[arg(long, value_name = "PATH", global = true, requires = "tcp")]
+    token_file: Option<PathBuf>,
     /// Print the daemon's raw JSON result instead of text.
     #[arg(long, global = true)]
     json: bool,
@@ -187,7 +190,11 @@ fn run(cli: &Cli) -> Result<(), Failure> {
     // Build the request first: usage errors must not need a daemon.
     let (method, params) = request(&cli.cmd)?;
     let timeout = Duration::from_secs_f64(cli.timeout);
+    let token = tcp_token(cli)?;
     let mut client = Client::connect(&endpoint(cli), Some(timeout))?;
+    if let Some(token) = token {
+        client.call("auth", Some(json!({ "token": token })))?;
+    }
     let result = client.call(method, params)?;
     match &cli.cmd {
         Cmd::Watch { count, .. } => return watch(&mut client, cli.json, *count),
@@ -196,6 +203,30 @@ fn run(cli: &Cli) -> Result<(), Failure> {
         cmd => print_human(cmd, &result),
     }
     Ok(())
+}
+
+/// The token a TCP connection authenticates with (`None` on the Unix socket).
+fn tcp_token(cli: &Cli) -> Result<Option<String>, Failure> {
+    if cli.tcp.is_none() {
+        return Ok(None);
+    }
+    let path = cli
+        .token_file
+        .clone()
+        .or_else(|| std::env::var_os("SNAKED_TOKEN_FILE").map(PathBuf::from))
+        .ok_or_else(|| {
+            Failure::Usage("--tcp needs the daemon's token: --token-file PATH".into())
+        })?;
+    let text = std::fs::read_to_string(&path)
+        .map_err(|e| Failure::Usage(format!("--token-file {}: {e}", path.display())))?;
+    let token = text.lines().next().unwrap_or_default().trim().to_owned();
+    if token.is_empty() {
+        return Err(Failure::Usage(format!(
+            "--token-file {}: empty",
+            path.display()
+        )));
+    }
+    Ok(Some(token))
 }
 
 /// The method and params a command sends.

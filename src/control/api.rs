@@ -32,6 +32,9 @@ pub mod code {
     pub const LINE_TOO_LONG: i64 = -32003;
     /// The server already serves `max_clients` connections; it closes this one.
     pub const TOO_MANY_CLIENTS: i64 = -32004;
+    /// A TCP client called a method before authenticating (`auth`), or with a wrong
+    /// token.
+    pub const UNAUTHORIZED: i64 = -32005;
 }
 
 /// An error answer: `{"code": .., "message": ".."}`.

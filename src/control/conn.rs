@@ -36,8 +36,12 @@ enum Wake {
 
 /// Serve one client until it closes, is evicted or idles out (or the runtime shuts
 /// down).
-pub(crate) async fn serve<S>(stream: S, shared: Arc<Shared>, client: Arc<Client>)
-where
+pub(crate) async fn serve<S>(
+    stream: S,
+    shared: Arc<Shared>,
+    client: Arc<Client>,
+    transport: super::server::Transport,
+) where
     S: AsyncRead + AsyncWrite + Send + Unpin + 'static,
 {
     let (read_half, write_half) = tokio::io::split(stream);
@@ -45,6 +49,7 @@ where
     let writer = tokio::spawn(write_lines(write_half, out_rx));
     let mut reader = LineReader::new(read_half, shared.max_line_bytes);
     let mut session = Session::new(out);
+    session.set_authorized(transport == super::server::Transport::Unix);
     loop {
         let idle = shared.idle_timeout.filter(|_| !session.subscribed());
         let wake = tokio::select! {
@@ -141,6 +146,7 @@ where
             Ok(req) if STOP_METHODS.contains(&req.method.as_str()) => {
                 let (out, _unused) = mpsc::channel::<String>(1);
                 let mut session = Session::new(out);
+                session.set_authorized(true); // Unix only: see `server::admit`.
                 match methods::dispatch(&shared, &mut session, &req.method, req.params).await {
                     Ok(result) => api::result_line(&req.id, &result),
                     Err(e) => api::error_line(&req.id, &e),

@@ -14,7 +14,8 @@ use crate::gait::{GaitKind, ParamPatch};
 use crate::rt::messages::LoopRequest;
 
 /// Every method the server knows (listed in the unknown-method error).
-pub const METHODS: [&str; 16] = [
+pub const METHODS: [&str; 17] = [
+    "auth",
     "status",
     "gait.list",
     "gait.set",
@@ -45,7 +46,29 @@ pub(crate) async fn dispatch(
     method: &str,
     mut p: Params,
 ) -> Result<Value, RpcError> {
+    if !session.authorized() && method != "auth" {
+        return Err(RpcError::new(
+            code::UNAUTHORIZED,
+            "unauthorized: a TCP client sends `auth` with the token first",
+        ));
+    }
     match method {
+        "auth" => {
+            let token = p.take_str("token")?.ok_or_else(|| missing("token"))?;
+            p.finish(&["token"])?;
+            let ok = shared.tcp_token.as_deref().is_some_and(|t| {
+                use subtle::ConstantTimeEq;
+                bool::from(t.as_bytes().ct_eq(token.as_bytes()))
+            });
+            if !ok && !session.authorized() {
+                return Err(RpcError::new(
+                    code::UNAUTHORIZED,
+                    "unauthorized: wrong token",
+                ));
+            }
+            session.set_authorized(true);
+            Ok(json!({ "authorized": true }))
+        }
         "ping" => {
             p.finish(&[])?;
             Ok(json!({ "pong": true }))

@@ -69,6 +69,9 @@ pub struct ServerConfig {
     /// A connection with no request and no telemetry stream for this long is closed
     /// (`None`: never).
     pub idle_timeout: Option<Duration>,
+    /// The token a TCP client must send with `auth` before any other method; required
+    /// when `tcp_port` is set.
+    pub tcp_token: Option<String>,
 }
 
 impl Default for ServerConfig {
@@ -81,6 +84,7 @@ impl Default for ServerConfig {
             ack_timeout: Duration::from_secs(1),
             socket_mode: 0o660,
             idle_timeout: Some(Duration::from_secs(300)),
+            tcp_token: None,
         }
     }
 }

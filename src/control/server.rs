@@ -49,6 +49,11 @@ pub enum ServerError {
         #[source]
         source: io::Error,
     },
+    #[error(
+        "control socket: TCP needs a token (control.tcp_token_file): without one any local \
+         user could drive the robot"
+    )]
+    TcpWithoutToken,
     #[error("control socket: cannot start its runtime: {0}")]
     Runtime(#[source] io::Error),
 }
@@ -114,6 +119,9 @@ pub fn start(cfg: ServerConfig, handle: LoopHandle) -> Result<RunningServer, Ser
     if cfg.unix_path.is_none() && cfg.tcp_port.is_none() {
         return Err(ServerError::NoListener);
     }
+    if cfg.tcp_port.is_some() && cfg.tcp_token.as_deref().is_none_or(str::is_empty) {
+        return Err(ServerError::TcpWithoutToken);
+    }
     // TCP first: if it fails, no socket file has been created yet.
     let tcp = match cfg.tcp_port {
         Some(port) => Some(
@@ -150,6 +158,7 @@ pub fn start(cfg: ServerConfig, handle: LoopHandle) -> Result<RunningServer, Ser
         info: handle.info,
         max_line_bytes: cfg.max_line_bytes.max(1),
         idle_timeout: cfg.idle_timeout,
+        tcp_token: cfg.tcp_token.clone(),
         layout: handle.layout,
         retired: handle.retired,
         catalog: handle.catalog,
@@ -299,7 +308,7 @@ impl Drop for SocketFile {
 async fn accept_unix(l: UnixListener, shared: Arc<Shared>, clients: Arc<Clients>) {
     loop {
         match l.accept().await {
-            Ok((s, _)) => admit(s, &shared, &clients),
+            Ok((s, _)) => admit(s, &shared, &clients, Transport::Unix),
             Err(e) => accept_failed(e).await,
         }
     }
@@ -310,7 +319,7 @@ async fn accept_tcp(l: TcpListener, shared: Arc<Shared>, clients: Arc<Clients>) 
         match l.accept().await {
             Ok((s, _)) => {
                 let _ = s.set_nodelay(true);
-                admit(s, &shared, &clients);
+                admit(s, &shared, &clients, Transport::Tcp);
             }
             Err(e) => accept_failed(e).await,
         }
@@ -323,7 +332,15 @@ async fn accept_failed(e: io::Error) {
     tokio::time::sleep(Duration::from_millis(100)).await;
 }
 
-fn admit<S>(stream: S, shared: &Arc<Shared>, clients: &Arc<Clients>)
+/// How a connection came in: Unix socket clients are vouched for by the socket file's
+/// permissions, TCP clients must authenticate with the token first.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Transport {
+    Unix,
+    Tcp,
+}
+
+fn admit<S>(stream: S, shared: &Arc<Shared>, clients: &Arc<Clients>, transport: Transport)
 where
     S: AsyncRead + AsyncWrite + Send + Unpin + 'static,
 {
@@ -331,9 +348,14 @@ where
     match clients.admit() {
         Admission::Served(client, seat) => {
             tokio::spawn(async move {
-                conn::serve(stream, shared, client).await;
+                conn::serve(stream, shared, client, transport).await;
                 drop(seat);
             });
+        }
+        // Over the limit a TCP client could not authenticate and stop in one line.
+        Admission::OverLimit(_) if transport == Transport::Tcp => {
+            let max = clients.max();
+            tokio::spawn(refuse(stream, max));
         }
         Admission::OverLimit(seat) => {
             let max = clients.max();

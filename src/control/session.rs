@@ -20,6 +20,8 @@ pub(crate) struct Session {
     pending_rate_hz: Option<f64>,
     /// Telemetry messages dropped because this client read too slowly.
     dropped: Arc<AtomicU64>,
+    /// May call methods (Unix clients always; TCP clients after `auth`).
+    authorized: bool,
 }
 
 impl Session {
@@ -29,7 +31,16 @@ impl Session {
             stream: None,
             pending_rate_hz: None,
             dropped: Arc::default(),
+            authorized: false,
         }
+    }
+
+    pub(crate) fn authorized(&self) -> bool {
+        self.authorized
+    }
+
+    pub(crate) fn set_authorized(&mut self, on: bool) {
+        self.authorized = on;
     }
 
     /// Queue a line for the writer (waits for room); `Err` once the writer is gone.

@@ -15,6 +15,8 @@ pub(crate) struct Shared {
     pub(crate) max_line_bytes: usize,
     /// Close a connection idle this long (no request, no stream).
     pub(crate) idle_timeout: Option<std::time::Duration>,
+    /// The token TCP clients must send (`auth`) before anything else.
+    pub(crate) tcp_token: Option<String>,
     /// The loop's body: controllers are built for it here, off the loop.
     pub(crate) layout: BodyLayout,
     /// Controllers the loop replaced or refused; freed here.

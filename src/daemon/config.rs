@@ -243,6 +243,9 @@ pub struct ControlConfig {
     /// Close a connection with no request and no telemetry stream for this long, s;
     /// 0 = never.
     pub idle_timeout_s: f64,
+    /// The token TCP clients must present (`auth`): a file readable by the operators'
+    /// group, not by every user. Required when `tcp_port` is set.
+    pub tcp_token_file: PathBuf,
 }
 
 impl Default for ControlConfig {
@@ -255,6 +258,7 @@ impl Default for ControlConfig {
             channel_capacity: 64,
             ack_timeout_s: 1.0,
             idle_timeout_s: 300.0,
+            tcp_token_file: PathBuf::new(),
         }
     }
 }
@@ -377,6 +381,15 @@ impl Config {
                     self.loop_.rate_hz,
                     net.feedback_rate_hz
                 ),
+            ));
+        }
+        if self.control.tcp_port != 0 && self.control.tcp_token_file.as_os_str().is_empty() {
+            return Err(bad(
+                "control.tcp_token_file",
+                "\"\"".into(),
+                "TCP needs a token file (readable by the operators' group, not by every user): \
+                 without one any local user could drive the robot"
+                    .into(),
             ));
         }
         let cap = crate::rt::control_loop::MAX_REQUESTS_PER_CYCLE;
