@@ -1,0 +1,296 @@
+//! The configuration's checks: every key's range, the checks between keys, and what the
+//! keys name (targets, the world file, each gait's parameters and controller), so that
+//! `snaked --check-config` finds everything that would stop the daemon later.
+use std::path::Path;
+
+use super::{Config, ConfigError, LookupBy, parse_mac};
+use crate::gait::GaitKind;
+
+impl Config {
+    /// The default gait parameters with `[gait.params.*]` applied, each checked for
+    /// this body's module length.
+    pub fn gait_table(&self, path: &Path) -> Result<crate::gait::GaitTable, ConfigError> {
+        let l = self.body.module_length_m;
+        let mut table = crate::gait::GaitTable::default();
+        let mut kinds: Vec<_> = self.gait.params.keys().copied().collect();
+        kinds.sort_by_key(|k| k.index());
+        for kind in kinds {
+            let p = table
+                .get(kind)
+                .patched_for(kind, &self.gait.params[&kind], l)
+                .map_err(|source| ConfigError::GaitParams {
+                    path: path.to_owned(),
+                    gait: kind.name(),
+                    source,
+                })?;
+            *table.get_mut(kind) = p;
+        }
+        Ok(table)
+    }
+
+    /// Checks between keys, and of what the keys name (targets, the world file), so
+    /// that `--check-config` finds everything that would stop the daemon later.
+    fn cross_checks(&self, path: &Path) -> Result<(), ConfigError> {
+        let bad = |key: &'static str, value: String, why: String| ConfigError::Invalid {
+            path: path.to_owned(),
+            key,
+            value,
+            why,
+        };
+        let net = &self.network;
+        // A module drops a command older than its lifetime: it must outlive at least two
+        // of the loop's command periods and two feedback periods, or the joints go limp
+        // between commands.
+        let period_s = (1.0 / self.loop_.rate_hz).max(1.0 / net.feedback_rate_hz);
+        if net.command_lifetime_s < 2.0 * period_s {
+            return Err(bad(
+                "network.command_lifetime_s",
+                net.command_lifetime_s.to_string(),
+                format!(
+                    "must be at least two periods of the loop and of the feedback                      ({:.4} s at loop.rate_hz = {} and network.feedback_rate_hz = {}),                      or the modules go limp between commands",
+                    2.0 * period_s,
+                    self.loop_.rate_hz,
+                    net.feedback_rate_hz
+                ),
+            ));
+        }
+        if self.control.tcp_port != 0 && self.control.tcp_token_file.as_os_str().is_empty() {
+            return Err(bad(
+                "control.tcp_token_file",
+                "\"\"".into(),
+                "TCP needs a token file (readable by the operators' group, not by every user): \
+                 without one any local user could drive the robot"
+                    .into(),
+            ));
+        }
+        let cap = crate::rt::control_loop::MAX_REQUESTS_PER_CYCLE;
+        if self.control.channel_capacity < cap {
+            return Err(bad(
+                "control.channel_capacity",
+                self.control.channel_capacity.to_string(),
+                format!(
+                    "must be at least the loop's {cap} requests per cycle (the loop's answers                      share the capacity; fewer would be lost and time out)"
+                ),
+            ));
+        }
+        for t in &net.targets {
+            if let Err(e) = crate::bus::udp::parse_targets(t) {
+                return Err(bad("network.targets", format!("{t:?}"), e.to_string()));
+            }
+        }
+        let world = &self.emulator.world;
+        if !world.as_os_str().is_empty() {
+            let scenario = crate::emu::world::scenario::WorldScenario::load(world)
+                .map_err(|e| bad("emulator.world", world.display().to_string(), e.to_string()))?;
+            scenario
+                .generate_trial(self.emulator.modules, self.emulator.world_trial)
+                .map_err(|e| bad("emulator.world", world.display().to_string(), e.to_string()))?;
+        }
+        Ok(())
+    }
+
+    /// Each gait's controller: `[gait.controllers.*]` or `open_loop`.
+    pub fn controller_selection(&self, gait: GaitKind) -> crate::controller::Selection {
+        self.gait
+            .controllers
+            .get(&gait)
+            .cloned()
+            .unwrap_or_else(|| crate::controller::Selection::named("open_loop"))
+    }
+
+    /// Builds every configured controller once (for a body of `emulator.modules`
+    /// modules) so a bad one is named before the daemon starts.
+    fn check_gaits(&self, path: &Path) -> Result<(), ConfigError> {
+        let table = self.gait_table(path)?;
+        let layout = crate::gait::BodyLayout::alternating(
+            self.emulator.modules.max(2),
+            self.body.first_joint_plane,
+            self.body.module_length_m,
+        );
+        for gait in GaitKind::ALL {
+            let ctx = crate::controller::BuildContext {
+                gait,
+                layout: &layout,
+                params: table.get(gait),
+            };
+            let sel = self.controller_selection(gait);
+            crate::controller::registry::build(crate::controllers::REGISTRY, &sel, &ctx).map_err(
+                |source| ConfigError::Controller {
+                    path: path.to_owned(),
+                    gait: gait.name(),
+                    source,
+                },
+            )?;
+        }
+        Ok(())
+    }
+
+    pub fn validate(&self, path: &Path) -> Result<(), ConfigError> {
+        let bad = |key: &'static str, value: String, why: &str| ConfigError::Invalid {
+            path: path.to_owned(),
+            key,
+            value,
+            why: why.to_owned(),
+        };
+        let range = |key: &'static str, v: f64, lo: f64, hi: f64| {
+            if v.is_finite() && v >= lo && v <= hi {
+                Ok(())
+            } else {
+                Err(bad(key, v.to_string(), &format!("must be in [{lo}, {hi}]")))
+            }
+        };
+        range("loop.rate_hz", self.loop_.rate_hz, 1.0, 10_000.0)?;
+        range(
+            "loop.lockstep_timeout_s",
+            self.loop_.lockstep_timeout_s,
+            0.001,
+            60.0,
+        )?;
+        range(
+            "loop.sched_fifo_priority",
+            self.loop_.sched_fifo_priority as f64,
+            0.0,
+            99.0,
+        )?;
+        range("body.module_length_m", self.body.module_length_m, 0.01, 1.0)?;
+        range(
+            "network.discovery_timeout_s",
+            self.network.discovery_timeout_s,
+            0.01,
+            60.0,
+        )?;
+        range(
+            "network.feedback_rate_hz",
+            self.network.feedback_rate_hz,
+            1.0,
+            2000.0,
+        )?;
+        range(
+            "network.command_lifetime_s",
+            self.network.command_lifetime_s,
+            0.001,
+            10.0,
+        )?;
+        range(
+            "failsafe.feedback_timeout_s",
+            self.failsafe.feedback_timeout_s,
+            0.001,
+            10.0,
+        )?;
+        range(
+            "failsafe.limp_after_s",
+            self.failsafe.limp_after_s,
+            0.0,
+            60.0,
+        )?;
+        range(
+            "failsafe.shutdown_hold_s",
+            self.failsafe.shutdown_hold_s,
+            0.0,
+            10.0,
+        )?;
+        range("gait.blend_time_s", self.gait.blend_time_s, 0.1, 30.0)?;
+        range(
+            "gait.max_joint_speed_rad_s",
+            self.gait.max_joint_speed_rad_s,
+            0.1,
+            crate::gait::SEA_MAX_JOINT_SPEED_RAD_S,
+        )?;
+        range(
+            "control.max_line_bytes",
+            self.control.max_line_bytes as f64,
+            256.0,
+            16.0 * 1024.0 * 1024.0,
+        )?;
+        range(
+            "control.max_clients",
+            self.control.max_clients as f64,
+            1.0,
+            4096.0,
+        )?;
+        range(
+            "control.channel_capacity",
+            self.control.channel_capacity as f64,
+            1.0,
+            65536.0,
+        )?;
+        range(
+            "control.ack_timeout_s",
+            self.control.ack_timeout_s,
+            0.01,
+            60.0,
+        )?;
+        range(
+            "control.idle_timeout_s",
+            self.control.idle_timeout_s,
+            0.0,
+            86400.0,
+        )?;
+        range("emulator.modules", self.emulator.modules as f64, 2.0, 64.0)?;
+        range("record.max_mb", self.record.max_mb, 0.0, 1e7)?;
+        range(
+            "record.max_duration_s",
+            self.record.max_duration_s,
+            0.0,
+            1e7,
+        )?;
+        range(
+            "record.ring_capacity",
+            self.record.ring_capacity as f64,
+            16.0,
+            65536.0,
+        )?;
+        range(
+            "record.scene_rate_hz",
+            self.record.scene_rate_hz,
+            1.0,
+            1000.0,
+        )?;
+        self.cross_checks(path)?;
+        if let Some(old) = &self.gait.slithering_controller {
+            return Err(bad(
+                "gait.slithering_controller",
+                format!("{old:?}"),
+                &format!(
+                    "replaced by a table per gait: [gait.controllers.slithering] controller = \
+                     {old:?} (docs/control-socket.md)"
+                ),
+            ));
+        }
+        self.check_gaits(path)?;
+        if self.network.targets.is_empty() {
+            return Err(bad(
+                "network.targets",
+                "[]".into(),
+                "needs at least one target",
+            ));
+        }
+        match self.network.lookup {
+            LookupBy::Names if self.network.names.is_empty() => {
+                return Err(bad(
+                    "network.names",
+                    "[]".into(),
+                    "lookup = \"names\" needs names",
+                ));
+            }
+            LookupBy::Macs if self.network.macs.is_empty() => {
+                return Err(bad(
+                    "network.macs",
+                    "[]".into(),
+                    "lookup = \"macs\" needs MACs",
+                ));
+            }
+            _ => {}
+        }
+        for m in &self.network.macs {
+            parse_mac(m).ok_or_else(|| {
+                bad(
+                    "network.macs",
+                    m.clone(),
+                    "not a MAC like 02:53:4e:00:00:01",
+                )
+            })?;
+        }
+        Ok(())
+    }
+}
