@@ -16,6 +16,11 @@ pub struct ModuleState {
     pub received_ns: Option<u64>,
     /// True when new feedback arrived during the last `receive` call.
     pub fresh: bool,
+    /// How long ago, ns on the loop's clock, the daemon sent the command this feedback
+    /// says the module had applied (`last_command_seq`): the round trip, an upper bound
+    /// on how old the data are, which a delay anywhere on the path shows (the receive
+    /// time alone does not). `None` before the first command or on an in-process bus.
+    pub command_age_ns: Option<u64>,
 }
 
 /// Feedback of the whole group, sized once at start-up; index 0 is the head.

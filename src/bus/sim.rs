@@ -117,6 +117,7 @@ impl Bus for SimBus {
                 feedback,
                 received_ns: Some(now_ns),
                 fresh: true,
+                command_age_ns: None,
             };
         }
         self.counters.feedback_received += n as u64;

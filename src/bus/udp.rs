@@ -27,7 +27,7 @@ pub use discovery::{DiscoveryError, FoundModule, discover, discover_until, forma
 pub use net::default_bind;
 pub use targets::{MAX_RANGE_PORTS, TargetError, parse_targets};
 
-use super::{Bus, BusCounters, BusError, FeedbackWait, GroupFeedback, ModuleState};
+use super::{Bus, BusCounters, BusError, FeedbackWait, GroupFeedback};
 use crate::protocol::{
     Command, MAGIC, MAX_DATAGRAM, Message, MsgType, Settings, VERSION, decode, encode,
 };
@@ -47,6 +47,10 @@ pub struct UdpBus {
     rx_buf: [u8; MAX_DATAGRAM + 1],
     /// Header seq of the last Command cycle (0 before the first: "none").
     command_seq: u32,
+    /// When each of the last `SENT_RING` command cycles was sent (the loop clock of the
+    /// `receive` before it), by seq modulo the ring's size.
+    sent_ns: Box<[u64; SENT_RING]>,
+    last_receive_ns: u64,
     /// Header seq of control requests (Acquire, Settings, Release).
     request_seq: u32,
     counters: BusCounters,
@@ -161,19 +165,39 @@ impl UdpBus {
             .all(|s| s.last_seq.is_some() && s.newest.module_time_us >= min_module_time_us)
     }
 
-    /// Hand feedback that arrived since the last call to the loop.
+    /// Hand feedback that arrived since the last call to the loop, and every module's
+    /// command round trip now.
     fn publish(&mut self, group: &mut GroupFeedback, now_ns: u64) {
+        let (last, sent) = (self.command_seq, &*self.sent_ns);
         for (slot, state) in self.slots.iter_mut().zip(group.modules.iter_mut()) {
             if slot.pending {
                 slot.pending = false;
-                *state = ModuleState {
-                    feedback: slot.newest,
-                    received_ns: Some(now_ns),
-                    fresh: true,
-                };
+                state.feedback = slot.newest;
+                state.received_ns = Some(now_ns);
+                state.fresh = true;
             }
+            state.command_age_ns =
+                command_age_ns(last, sent, state.feedback.last_command_seq, now_ns);
         }
     }
+}
+
+/// Command cycles whose send times are kept (4 s at 1 kHz); a feedback reporting an
+/// older one is treated as that old at least.
+pub(crate) const SENT_RING: usize = 4096;
+
+/// How long ago command cycle `seq` was sent, given the last one sent and the ring of
+/// send times (`None` for 0, "none yet"). A seq beyond the ring, or ahead of the last
+/// one sent (not ours), counts as very old.
+fn command_age_ns(last: u32, sent: &[u64; SENT_RING], seq: u32, now_ns: u64) -> Option<u64> {
+    if seq == 0 || last == 0 {
+        return None;
+    }
+    let behind = last.wrapping_sub(seq) as usize;
+    if behind >= SENT_RING {
+        return Some(u64::MAX / 2);
+    }
+    Some(now_ns.saturating_sub(sent[seq as usize % SENT_RING]))
 }
 
 impl Bus for UdpBus {
@@ -190,6 +214,8 @@ impl Bus for UdpBus {
         }
         // 0 means "no command yet" in feedback: skip it on wrap.
         self.command_seq = self.command_seq.wrapping_add(1).max(1);
+        // Sent within this cycle, just after its `receive`.
+        self.sent_ns[self.command_seq as usize % SENT_RING] = self.last_receive_ns;
         for (m, cmd) in self.modules.iter().zip(commands) {
             let sent = encode(
                 self.session,
@@ -223,6 +249,7 @@ impl Bus for UdpBus {
         for m in &mut group.modules {
             m.fresh = false;
         }
+        self.last_receive_ns = now_ns;
         self.drain(&mut |_, _| false)?;
         if let FeedbackWait::Lockstep {
             min_module_time_us,

@@ -288,7 +288,16 @@ impl ControlLoop {
         let mut min_module_time: Option<u64> = None;
         for (i, m) in self.group.modules.iter().enumerate() {
             match m.received_ns {
-                Some(r) => oldest_ns = oldest_ns.max(c.clock_ns.saturating_sub(r)),
+                // The older of when it arrived and (over UDP) the round trip of the
+                // command it reports: feedback delayed on the way looks fresh by the
+                // first alone.
+                Some(r) => {
+                    let age = c
+                        .clock_ns
+                        .saturating_sub(r)
+                        .max(m.command_age_ns.unwrap_or(0));
+                    oldest_ns = oldest_ns.max(age);
+                }
                 None => never = true,
             }
             if !m.fresh {
@@ -575,7 +584,10 @@ impl ControlLoop {
                 j.velocity_rad_s = m.feedback.velocity_rad_s as f64;
                 j.torque_nm = m.feedback.torque_nm as f64;
                 j.feedback_age_s = match m.received_ns {
-                    Some(r) => c.clock_ns.saturating_sub(r) as f64 * 1e-9,
+                    Some(r) => {
+                        let age = c.clock_ns.saturating_sub(r);
+                        age.max(m.command_age_ns.unwrap_or(0)) as f64 * 1e-9
+                    }
                     None => f64::INFINITY,
                 };
             }

@@ -137,6 +137,8 @@ impl UdpBus {
             tx_buf: [0; MAX_DATAGRAM],
             rx_buf: [0; MAX_DATAGRAM + 1],
             command_seq: 0,
+            sent_ns: Box::new([0; super::SENT_RING]),
+            last_receive_ns: 0,
             request_seq: 0,
             counters: BusCounters::default(),
             // Nothing to release until something is acquired.
