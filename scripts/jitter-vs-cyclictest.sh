@@ -11,6 +11,8 @@
 # (docs/architecture.md): the same quantity for a loop on absolute deadlines.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+# shellcheck source=scripts/emu-config.sh
+source scripts/emu-config.sh
 rounds=${1:-3}
 secs=${2:-30}
 n=${3:-18}
@@ -30,17 +32,7 @@ if [ "${RT:-0}" = 1 ]; then
 fi
 "${emu_cmd[@]}" 2> "$dir/emu.log" &
 emu=$!
-cat > "$dir/snaked.toml" <<TOML
-$rt_toml
-[network]
-targets = ["127.0.0.1:$base-$((base + n - 1))"]
-expected_modules = $n
-[gait]
-initial = "sidewinding"
-start = "run"
-[control]
-socket = "$dir/snaked.sock"
-TOML
+emu_config "$dir/snaked.toml" "$base" "$n" "$dir" "$rt_toml"
 sleep 1
 for r in $(seq 1 "$rounds"); do
     echo "round $r/$rounds: cyclictest ${secs} s" >&2

@@ -8,6 +8,8 @@
 # emulator on CPU 0 (needs root or CAP_SYS_NICE; refused settings only warn).
 set -euo pipefail
 cd "$(dirname "$0")/.."
+# shellcheck source=scripts/emu-config.sh
+source scripts/emu-config.sh
 secs=${1:-60}
 n=${2:-18}
 cargo build --release --bins -q
@@ -22,17 +24,7 @@ if [ "${RT:-0}" = 1 ]; then
 fi
 "${emu_cmd[@]}" &
 emu=$!
-cat > "$dir/snaked.toml" <<TOML
-$rt_toml
-[network]
-targets = ["127.0.0.1:$base-$((base + n - 1))"]
-expected_modules = $n
-[gait]
-initial = "sidewinding"
-start = "run"
-[control]
-socket = "$dir/snaked.sock"
-TOML
+emu_config "$dir/snaked.toml" "$base" "$n" "$dir" "$rt_toml"
 ./target/release/snaked --config "$dir/snaked.toml" &
 daemon=$!
 sleep 1
