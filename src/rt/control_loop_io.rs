@@ -1,0 +1,155 @@
+//! The loop's bookkeeping around the gait: how healthy the feedback is (and the measured
+//! pose the controllers see), the cycle statistics, the telemetry snapshot and the
+//! recording. Part of [`super::ControlLoop`]; nothing here allocates or blocks.
+
+use super::ControlLoop;
+use crate::controller::Imu;
+use crate::record::RecordEvent;
+use crate::rt::pacer::Cycle;
+use crate::rt::recording::{CycleView, Recording};
+use crate::rt::setpoint_guard::NonFiniteSetpoint;
+use crate::safety::failsafe::Health;
+
+impl ControlLoop {
+    /// Feedback health and the measured pose; also lockstep's notion of module time.
+    pub(super) fn assess(&mut self, c: &Cycle) -> Health {
+        let mut oldest_ns = 0u64;
+        let mut never = false;
+        let mut non_finite = false;
+        let mut late = 0u64;
+        let mut min_module_time: Option<u64> = None;
+        for (i, m) in self.group.modules.iter().enumerate() {
+            match m.received_ns {
+                // The older of when it arrived and (over UDP) the round trip of the
+                // command it reports: feedback delayed on the way looks fresh by the
+                // first alone.
+                Some(r) => {
+                    let age = c
+                        .clock_ns
+                        .saturating_sub(r)
+                        .max(m.command_age_ns.unwrap_or(0));
+                    oldest_ns = oldest_ns.max(age);
+                }
+                None => never = true,
+            }
+            if !m.fresh {
+                late += 1;
+            }
+            let f = &m.feedback;
+            let finite = f.position_rad.is_finite()
+                && f.velocity_rad_s.is_finite()
+                && f.torque_nm.is_finite()
+                && f.accel_m_s2
+                    .iter()
+                    .chain(&f.gyro_rad_s)
+                    .all(|v| v.is_finite());
+            if m.received_ns.is_some() && !finite {
+                non_finite = true;
+            }
+            self.measured[i] = f.position_rad as f64;
+            self.measured_velocity[i] = f.velocity_rad_s as f64;
+            self.torques[i] = f.torque_nm as f64;
+            self.imu[i] = Imu {
+                accel_m_s2: f.accel_m_s2.map(f64::from),
+                gyro_rad_s: f.gyro_rad_s.map(f64::from),
+            };
+            min_module_time =
+                Some(min_module_time.map_or(f.module_time_us, |t| t.min(f.module_time_us)));
+        }
+        if !never {
+            self.last_module_time_us = min_module_time;
+        }
+        self.stats.late_feedback += late;
+        self.stats
+            .feedback_age
+            .record(if never { c.clock_ns } else { oldest_ns });
+        Health {
+            oldest_feedback_age_s: if never {
+                f64::INFINITY
+            } else {
+                oldest_ns as f64 * 1e-9
+            },
+            non_finite,
+        }
+    }
+
+    /// Hands the cycle to the recorder, if there is one.
+    pub(super) fn record_cycle(&mut self, c: &Cycle, fault: Option<NonFiniteSetpoint>) {
+        let Some(r) = self.recording.as_mut() else {
+            return;
+        };
+        if let Some(f) = fault {
+            let controller_id = self.slots.id(self.p.selector.active());
+            let event = RecordEvent::SetpointFault {
+                joint: f.joint,
+                controller_id,
+            };
+            r.event(c.t_ns, event);
+        }
+        r.cycle(&CycleView {
+            cycle: c.index,
+            t_ns: c.t_ns,
+            mode: self.p.failsafe.mode(),
+            reason: self.p.failsafe.reason(),
+            gait: self.p.selector.active(),
+            group: &self.group,
+            commands: &self.commands,
+            slots: &self.slots,
+            bus: self.p.bus.as_ref(),
+            stats: &self.stats,
+        });
+    }
+
+    pub(super) fn record(&mut self, c: &Cycle, compute_ns: u64) {
+        let s = &mut self.stats;
+        s.cycles += 1;
+        s.period_error.record(c.lateness_ns);
+        s.compute.record(compute_ns);
+        if c.skipped > 0 {
+            s.overruns += 1;
+            s.skipped_periods += c.skipped;
+        }
+    }
+
+    pub(super) fn publish(&mut self, c: &Cycle) {
+        let (group, commands, stats) = (&self.group, &self.commands, &self.stats);
+        let (selector, failsafe, bus) = (&self.p.selector, &self.p.failsafe, &self.p.bus);
+        let (slots, guard) = (&self.slots, self.guard.counters());
+        let record_dropped = self.recording.as_ref().map_or(0, Recording::dropped);
+        let (applied, refused) = (self.applied, self.refused);
+        self.p.telemetry.write(|snap| {
+            snap.cycle = c.index;
+            snap.t_s = c.t_ns as f64 * 1e-9;
+            snap.mode = failsafe.mode();
+            snap.reason = failsafe.reason();
+            snap.gait = selector.active();
+            snap.blend_progress = selector.blend_progress();
+            snap.blend_time_s = selector.blend_time_s();
+            snap.params = *selector.table();
+            for (j, (m, cmd)) in snap
+                .joints
+                .iter_mut()
+                .zip(group.modules.iter().zip(commands))
+            {
+                j.setpoint_rad = cmd.position_rad as f64;
+                j.position_rad = m.feedback.position_rad as f64;
+                j.velocity_rad_s = m.feedback.velocity_rad_s as f64;
+                j.torque_nm = m.feedback.torque_nm as f64;
+                j.feedback_age_s = match m.received_ns {
+                    Some(r) => {
+                        let age = c.clock_ns.saturating_sub(r);
+                        age.max(m.command_age_ns.unwrap_or(0)) as f64 * 1e-9
+                    }
+                    None => f64::INFINITY,
+                };
+            }
+            snap.stats = *stats;
+            snap.bus = bus.counters();
+            snap.requests_applied = applied;
+            snap.requests_refused = refused;
+            slots.publish(selector.active(), &mut snap.controller);
+            snap.guard = guard;
+            snap.record_dropped = record_dropped;
+        });
+    }
+}
