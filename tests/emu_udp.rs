@@ -1,129 +1,15 @@
 //! The UDP emulator end to end over loopback, spoken to with the protocol codec.
 //! Servers bind OS-chosen ports (base_port 0), so parallel tests never collide.
 
-use std::net::{SocketAddr, UdpSocket};
-use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
-use snaked::emu::plant::{JointSpacePlant, NoiseConfig, Obstacle, ObstacleSide, PlantConfig};
-use snaked::emu::server::{Mode, Server, ServerConfig, ServerCounters};
-use snaked::protocol::{
-    AcquireReply, Command, ControlStrategy, Feedback, Header, LookupFilter, MAX_DATAGRAM, Message,
-    Name, Settings, decode, encode,
-};
+use snaked::emu::plant::{NoiseConfig, Obstacle, ObstacleSide, PlantConfig};
+use snaked::emu::server::{Mode, ServerConfig};
+use snaked::protocol::{Command, ControlStrategy, LookupFilter, Message, Name, Settings};
 
-const S: u32 = 0x5EED;
-
-struct Running {
-    addrs: Vec<SocketAddr>,
-    stop: Arc<AtomicBool>,
-    handle: JoinHandle<ServerCounters>,
-}
-
-impl Running {
-    fn start(config: ServerConfig, plant: PlantConfig) -> Self {
-        let plant = JointSpacePlant::new(plant).unwrap();
-        let mut server = Server::new(config, Box::new(plant)).unwrap();
-        let addrs = server.local_addrs().unwrap();
-        let stop = Arc::new(AtomicBool::new(false));
-        let flag = stop.clone();
-        let handle = std::thread::spawn(move || server.run(&flag).unwrap());
-        Self {
-            addrs,
-            stop,
-            handle,
-        }
-    }
-
-    fn stop(self) -> ServerCounters {
-        self.stop.store(true, Ordering::Relaxed);
-        self.handle.join().unwrap()
-    }
-}
-
-struct Client {
-    sock: UdpSocket,
-    seq: u32,
-}
-
-impl Client {
-    fn new() -> Self {
-        let sock = UdpSocket::bind("127.0.0.1:0").unwrap();
-        sock.set_read_timeout(Some(Duration::from_millis(20)))
-            .unwrap();
-        Self { sock, seq: 0 }
-    }
-
-    fn send(&mut self, to: SocketAddr, session: u32, msg: &Message) -> u32 {
-        self.seq += 1;
-        let mut buf = [0u8; MAX_DATAGRAM];
-        let n = encode(session, self.seq, msg, &mut buf).unwrap();
-        self.sock.send_to(&buf[..n], to).unwrap();
-        self.seq
-    }
-
-    /// Next datagram within `within`, decoded.
-    fn recv(&self, within: Duration) -> Option<(SocketAddr, Header, Message)> {
-        let end = Instant::now() + within;
-        let mut buf = [0u8; 2048];
-        while Instant::now() < end {
-            if let Ok((n, from)) = self.sock.recv_from(&mut buf) {
-                let (h, m) = decode(&buf[..n]).expect("emulator sent a valid datagram");
-                return Some((from, h, m));
-            }
-        }
-        None
-    }
-
-    /// Next message that is not feedback (replies), skipping streamed feedback.
-    fn reply(&self) -> Option<(SocketAddr, Header, Message)> {
-        let end = Instant::now() + Duration::from_secs(2);
-        while Instant::now() < end {
-            match self.recv(Duration::from_millis(100)) {
-                Some((_, _, Message::Feedback(_))) => continue,
-                other @ Some(_) => return other,
-                None => {}
-            }
-        }
-        None
-    }
-
-    /// Every feedback from the module at `from` received during `within`.
-    fn feedback_from(&self, from: SocketAddr, within: Duration) -> Vec<(Header, Feedback)> {
-        let end = Instant::now() + within;
-        let mut out = Vec::new();
-        while Instant::now() < end {
-            if let Some((a, h, Message::Feedback(f))) = self.recv(Duration::from_millis(10))
-                && a == from
-            {
-                out.push((h, f));
-            }
-        }
-        out
-    }
-
-    fn acquire(&mut self, to: SocketAddr) {
-        self.send(to, S, &Message::Acquire);
-        let (from, h, msg) = self.reply().expect("acquire reply");
-        assert_eq!(from, to);
-        assert_eq!(h.session, S);
-        assert_eq!(
-            msg,
-            Message::AcquireReply(AcquireReply {
-                granted: true,
-                owner_session: S
-            })
-        );
-    }
-
-    fn settings(&mut self, to: SocketAddr, s: Settings) {
-        self.send(to, S, &Message::Settings(s));
-        let (_, _, msg) = self.reply().expect("settings ack");
-        assert_eq!(msg, Message::SettingsAck(s));
-    }
-}
+#[path = "support/emu_client.rs"]
+mod emu_client;
+use emu_client::{Client, Running, S};
 
 fn exact_plant(n: usize) -> PlantConfig {
     PlantConfig {
@@ -160,7 +46,7 @@ fn realtime_protocol_end_to_end() {
     };
     assert_eq!(a.name.as_str(), "module-02");
     assert_eq!(a.family.as_str(), "SEA");
-    assert_eq!(a.owner_session, 0);
+    assert!(!a.owned);
     c.send(
         m1,
         0,
@@ -214,7 +100,9 @@ fn realtime_protocol_end_to_end() {
 
     // A stranger's command is dropped and counted; garbage is counted by kind.
     c.send(m1, 0xBAD, &Message::Command(Command::position(-0.3)));
-    c.sock.send_to(b"XX not a datagram at all....", m1).unwrap();
+    c.sock
+        .send_to(b"XX not a datagram at all............", m1)
+        .unwrap();
     std::thread::sleep(Duration::from_millis(50));
     let counters = emu.stop();
     assert_eq!(counters.wrong_session, 1);

@@ -9,91 +9,127 @@ use std::time::Duration;
 use snaked::bus::udp::{FoundModule, UdpBus};
 use snaked::bus::{Bus, FeedbackWait, GroupFeedback};
 use snaked::protocol::{
-    AcquireReply, Announce, Command, Feedback, LookupFilter, MAX_DATAGRAM, Message, Name, Settings,
-    decode, encode,
+    AcquireReply, Announce, Command, Feedback, Frames, Key, LookupFilter, MAX_DATAGRAM, Message,
+    Name, Route, Settings, encode, open,
 };
 
 #[path = "support/counting_alloc.rs"]
 mod counting_alloc;
 use counting_alloc::allocations;
 
-/// A lockstep module: grants, acknowledges, and answers every command with one
-/// feedback 1 ms later, plus some junk the bus must count and drop.
-fn spawn_module(name: &str, stop: Arc<AtomicBool>) -> (FoundModule, std::thread::JoinHandle<()>) {
+/// One endpoint serving `names` as units 0.., in lockstep: grants, acknowledges, and
+/// answers every command with one feedback 1 ms later, plus some junk the bus must
+/// count and drop. Open network; the module nonce is fixed.
+fn spawn_endpoint(
+    names: &[&str],
+    stop: Arc<AtomicBool>,
+) -> (Vec<FoundModule>, std::thread::JoinHandle<()>) {
     let socket = UdpSocket::bind("127.0.0.1:0").unwrap();
     socket
         .set_read_timeout(Some(Duration::from_millis(5)))
         .unwrap();
-    let announce = Announce {
-        mac: [2, 0, 0, 0, 0, name.len() as u8],
-        family: Name::new("SEA").unwrap(),
-        name: Name::new(name).unwrap(),
-        firmware: 1,
-        owner_session: 0,
-    };
-    let found = FoundModule {
-        addr: socket.local_addr().unwrap(),
-        announce,
-    };
+    let found: Vec<FoundModule> = names
+        .iter()
+        .enumerate()
+        .map(|(unit, name)| FoundModule {
+            addr: socket.local_addr().unwrap(),
+            unit: unit as u16,
+            announce: Announce {
+                mac: [2, 0, 0, 0, unit as u8, name.len() as u8],
+                family: Name::new("SEA").unwrap(),
+                name: Name::new(name).unwrap(),
+                firmware: 1,
+                owned: false,
+            },
+        })
+        .collect();
+    let macs: Vec<_> = found.iter().map(|f| f.announce.mac).collect();
     let handle = std::thread::spawn(move || {
         let (mut buf, mut tx) = ([0u8; MAX_DATAGRAM], [0u8; MAX_DATAGRAM]);
-        let (mut fb_seq, mut time_us) = (0u32, 0u64);
-        let send = |tx: &mut [u8], session, seq, m: &Message, to| {
-            let n = encode(session, seq, m, tx).unwrap();
+        let mut keys = vec![Key::OPEN; macs.len()];
+        let (mut fb_seq, mut time_us) = (vec![0u64; macs.len()], vec![0u64; macs.len()]);
+        let send = |tx: &mut [u8], session, seq, unit, m: &Message, key: &Key, to| {
+            let n = encode(Route { session, seq, unit }, m, key, tx).unwrap();
             socket.send_to(&tx[..n], to).unwrap();
         };
         while !stop.load(Ordering::Relaxed) {
             let Ok((n, src)) = socket.recv_from(&mut buf) else {
                 continue;
             };
-            let Ok((h, msg)) = decode(&buf[..n]) else {
-                continue;
-            };
-            let fb = |time_us| {
-                Message::Feedback(Feedback {
-                    module_time_us: time_us,
-                    ..Feedback::default()
-                })
-            };
-            match msg {
-                Message::Acquire => {
-                    let r = AcquireReply {
-                        granted: true,
-                        owner_session: h.session,
-                    };
-                    send(&mut tx, h.session, h.seq, &Message::AcquireReply(r), src);
+            for frame in Frames::new(&buf[..n]) {
+                let Ok((h, frame)) = frame else { break };
+                let u = usize::from(h.unit);
+                let key = if h.msg_type.uses_network_key() {
+                    Key::OPEN
+                } else {
+                    keys[u]
+                };
+                let Ok(msg) = open(frame, &key) else { continue };
+                let fb = |time_us| {
+                    Message::Feedback(Feedback {
+                        module_time_us: time_us,
+                        ..Feedback::default()
+                    })
+                };
+                let unit = h.unit;
+                match msg {
+                    Message::Acquire(host) => {
+                        let nonce = [7; 16];
+                        keys[u] = Key::OPEN.session_key(h.session, &macs[u], &host, &nonce);
+                        let r = AcquireReply {
+                            granted: true,
+                            module_nonce: nonce,
+                        };
+                        let m = Message::AcquireReply(r);
+                        send(&mut tx, h.session, h.seq, unit, &m, &Key::OPEN, src);
+                    }
+                    Message::Settings(s) => {
+                        let m = Message::SettingsAck(s);
+                        send(&mut tx, h.session, h.seq, unit, &m, &keys[u], src);
+                        fb_seq[u] += 1;
+                        let f = fb(time_us[u]);
+                        send(&mut tx, h.session, fb_seq[u], unit, &f, &keys[u], src);
+                    }
+                    Message::Command(_) => {
+                        // Junk first: a corrupted frame, a lookup, a wrong session,
+                        // a forged frame under the open key.
+                        let names = LookupFilter::Names(vec![Name::new("x").unwrap(); 3]);
+                        let lookup = Message::Lookup(names);
+                        send(&mut tx, 0, 0, 0, &lookup, &Key::OPEN, src);
+                        let f = fb(time_us[u]);
+                        send(&mut tx, h.session ^ 1, fb_seq[u], unit, &f, &keys[u], src);
+                        send(&mut tx, h.session, u64::MAX, unit, &f, &Key::OPEN, src);
+                        let r = Route {
+                            session: h.session,
+                            seq: fb_seq[u],
+                            unit,
+                        };
+                        let n = encode(r, &f, &keys[u], &mut tx).unwrap();
+                        tx[n - 1] ^= 0xff;
+                        socket.send_to(&tx[..n], src).unwrap();
+                        time_us[u] += 1000;
+                        fb_seq[u] += 2; // one "lost" every cycle
+                        let f = fb(time_us[u]);
+                        send(&mut tx, h.session, fb_seq[u], unit, &f, &keys[u], src);
+                    }
+                    _ => {}
                 }
-                Message::Settings(s) => {
-                    send(&mut tx, h.session, h.seq, &Message::SettingsAck(s), src);
-                    fb_seq += 1;
-                    send(&mut tx, h.session, fb_seq, &fb(time_us), src);
-                }
-                Message::Command(_) => {
-                    // Junk first: a corrupted datagram, a lookup, a wrong session.
-                    let names = LookupFilter::Names(vec![Name::new("x").unwrap(); 3]);
-                    send(&mut tx, 0, 0, &Message::Lookup(names), src);
-                    send(&mut tx, h.session ^ 1, fb_seq, &fb(time_us), src);
-                    let n = encode(h.session, fb_seq, &fb(time_us), &mut tx).unwrap();
-                    tx[n - 1] ^= 0xff;
-                    socket.send_to(&tx[..n], src).unwrap();
-                    time_us += 1000;
-                    fb_seq += 2; // one "lost" every cycle
-                    send(&mut tx, h.session, fb_seq, &fb(time_us), src);
-                }
-                _ => {}
             }
         }
     });
     (found, handle)
 }
 
-#[test]
-fn send_and_receive_do_not_allocate() {
+/// 40 lockstep cycles with the counting allocator on, over `endpoints` (each a list
+/// of unit names).
+fn run_without_allocating(endpoints: &[&[&str]]) {
     let stop = Arc::new(AtomicBool::new(false));
-    let (found, handles): (Vec<_>, Vec<_>) = ["a", "bb", "ccc"]
+    let (found, handles): (Vec<_>, Vec<_>) = endpoints
         .iter()
-        .map(|n| spawn_module(n, stop.clone()))
+        .map(|names| spawn_endpoint(names, stop.clone()))
         .unzip();
+    let found: Vec<FoundModule> = found.into_iter().flatten().collect();
+    let n = found.len();
     let mut bus = UdpBus::connect(
         &found,
         Settings::default(),
@@ -102,8 +138,8 @@ fn send_and_receive_do_not_allocate() {
         Duration::from_secs(3),
     )
     .unwrap();
-    let mut group = GroupFeedback::new(3);
-    let commands = [Command::position(0.1); 3];
+    let mut group = GroupFeedback::new(n);
+    let commands = vec![Command::position(0.1); n];
     let wait = |k: u64| FeedbackWait::Lockstep {
         min_module_time_us: k * 1000,
         timeout_ns: 3_000_000_000,
@@ -124,12 +160,22 @@ fn send_and_receive_do_not_allocate() {
     let c = bus.counters();
     // The junk really went through the counted-and-dropped paths.
     assert!(
-        c.bad_checksum >= 30 && c.unexpected >= 30 && c.wrong_session >= 30,
+        c.bad_tag >= 60 && c.unexpected >= 30 && c.wrong_session >= 30,
         "{c:?}"
     );
     assert!(c.feedback_lost >= 30);
-    assert_eq!(group.modules[2].feedback.module_time_us, 40_000);
+    assert_eq!(group.modules[n - 1].feedback.module_time_us, 40_000);
     bus.release();
     stop.store(true, Ordering::Relaxed);
     handles.into_iter().for_each(|h| h.join().unwrap());
+}
+
+#[test]
+fn send_and_receive_do_not_allocate() {
+    run_without_allocating(&[&["a"], &["bb"], &["ccc"]]);
+}
+
+#[test]
+fn bundled_send_and_receive_do_not_allocate() {
+    run_without_allocating(&[&["a", "bb", "ccc"]]);
 }

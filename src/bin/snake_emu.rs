@@ -19,7 +19,7 @@ use snaked::emu::world::physics::{PhysicsConfig, PhysicsPlant};
 use snaked::emu::world::scenario::WorldScenario;
 use tracing::{info, warn};
 
-/// UDP emulator of a modular series-elastic snake robot (protocol v1).
+/// UDP emulator of a modular series-elastic snake robot (protocol v2).
 #[derive(Debug, Parser)]
 #[command(name = "snake-emu", version)]
 struct Args {
@@ -32,6 +32,14 @@ struct Args {
     /// Module i listens on base-port + i (0: the OS picks each port; they are logged).
     #[arg(long, default_value_t = 7000)]
     base_port: u16,
+    /// Serve every module from one endpoint on base-port (units 0..n), with the frames
+    /// of a cycle bundled into one datagram each way, like a tether hub.
+    #[arg(long)]
+    gateway: bool,
+    /// The robot's network key (64 hex digits, not readable by every user); without
+    /// it the network is open (docs/protocol.md §4).
+    #[arg(long, value_name = "FILE")]
+    network_key_file: Option<PathBuf>,
     /// realtime: 1 kHz physics on the wall clock; lockstep: one step per command round.
     #[arg(long, value_enum, default_value_t = Mode::Realtime)]
     mode: Mode,
@@ -109,13 +117,22 @@ fn main() -> anyhow::Result<()> {
     if args.mode == Mode::Lockstep && args.delay_ms > 0.0 {
         warn!("--delay-ms has no effect in lockstep mode");
     }
+    let network_key = match &args.network_key_file {
+        Some(path) => snaked::protocol::Key::load(path)
+            .with_context(|| format!("--network-key-file {}", path.display()))?,
+        None => snaked::protocol::Key::OPEN,
+    };
     let config = ServerConfig {
         bind_ip: args.bind,
         base_port: args.base_port,
+        gateway: args.gateway,
         mode: args.mode,
         lockstep_timeout_s: args.lockstep_timeout,
         family: args.family.clone(),
-        module: ModuleConfig::default(),
+        module: ModuleConfig {
+            network_key,
+            ..ModuleConfig::default()
+        },
         faults: FaultConfig {
             loss_pct: args.loss,
             delay_s: args.delay_ms * 1e-3,
@@ -136,6 +153,8 @@ fn main() -> anyhow::Result<()> {
         first = %addrs[0],
         last = %addrs[addrs.len() - 1],
         mode = ?args.mode,
+        gateway = args.gateway,
+        keyed = !network_key.is_open(),
         "snake-emu serving"
     );
 

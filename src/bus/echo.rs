@@ -14,7 +14,7 @@ pub struct EchoBus {
     time_us: u64,
     positions: Vec<f32>,
     faults: Arc<EchoFaults>,
-    seq: u32,
+    seq: u64,
     counters: BusCounters,
     torque: Option<TorqueModel>,
 }
@@ -90,7 +90,7 @@ impl Bus for EchoBus {
         _wait: FeedbackWait,
     ) -> Result<(), BusError> {
         self.time_us += self.period_us;
-        self.seq = self.seq.wrapping_add(1);
+        self.seq += 1;
         for (i, m) in group.modules.iter_mut().enumerate() {
             let silent = self.faults.silent[i].load(Ordering::Relaxed);
             m.fresh = !silent;

@@ -49,6 +49,8 @@ pub struct BusCounters {
     pub feedback_received: u64,
     /// Feedback sequence gaps (datagrams the network lost).
     pub feedback_lost: u64,
+    /// Authenticated feedback not newer than the newest held (replayed or reordered).
+    pub feedback_replayed: u64,
     pub commands_sent: u64,
     /// Send calls that failed (socket full, unreachable).
     pub send_errors: u64,
@@ -56,9 +58,12 @@ pub struct BusCounters {
     pub bad_truncated: u64,
     pub bad_magic: u64,
     pub bad_version: u64,
+    /// Datagrams of protocol v1 (an old module or emulator): refused.
+    pub v1_refused: u64,
     pub bad_type: u64,
     pub bad_length: u64,
-    pub bad_checksum: u64,
+    /// Frames whose tag did not verify: corrupted, forged, or of another session.
+    pub bad_tag: u64,
     pub bad_malformed: u64,
     pub wrong_session: u64,
     /// Well-formed datagrams from an address that is not in the group, or of a type

@@ -37,7 +37,7 @@ pub struct SimBus {
     applied: Vec<Command>,
     /// Simulated time of the last `send`.
     last_send_s: Option<f64>,
-    seq: u32,
+    seq: u64,
     counters: BusCounters,
 }
 
@@ -84,7 +84,7 @@ impl Bus for SimBus {
         }
         self.commands.copy_from_slice(commands);
         self.last_send_s = Some(self.plant.time_s());
-        self.seq = self.seq.wrapping_add(1);
+        self.seq += 1;
         self.counters.commands_sent += commands.len() as u64;
         Ok(())
     }

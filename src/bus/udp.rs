@@ -1,14 +1,17 @@
 //! `UdpBus`: the loop's view of modules reached over UDP (real modules or
-//! `snake-emu`), protocol v1 (`docs/protocol.md`).
+//! `snake-emu`), protocol v2 (`docs/protocol.md`).
 //!
 //! Start-up (may allocate and block): [`parse_targets`] → [`discover`] →
 //! [`UdpBus::connect`] (Acquire, then Settings). Per cycle ([`Bus::send`],
 //! [`Bus::receive`]): no allocation, no lock, no blocking except the lockstep wait.
-//! One non-blocking socket talks to every module; modules are told apart by the
-//! source address of what they send.
+//! One non-blocking socket talks to every module; a module is the address it was
+//! discovered at plus its unit there, and only frames tagged under its session key
+//! count as its own. The frames for modules behind one address (a gateway) travel
+//! bundled: one datagram per endpoint per cycle.
 
 mod connect;
 mod discovery;
+mod endpoints;
 mod net;
 mod rx;
 mod targets;
@@ -29,30 +32,37 @@ pub use targets::{MAX_RANGE_PORTS, TargetError, parse_targets};
 
 use super::{Bus, BusCounters, BusError, FeedbackWait, GroupFeedback};
 use crate::protocol::{
-    Command, MAGIC, MAX_DATAGRAM, Message, MsgType, Settings, VERSION, decode, encode,
+    Command, Key, MAGIC, MAX_DATAGRAM, Message, MsgType, Route, Settings, VERSION, encode, open,
+    peek,
 };
+use endpoints::Endpoints;
 use rx::Slot;
 
 /// A group of modules acquired under one session.
 pub struct UdpBus {
     socket: UdpSocket,
     session: u32,
+    network_key: Key,
     /// Head first.
     modules: Vec<FoundModule>,
+    /// Parallel to `modules`: each module's session key (the network key until granted).
+    keys: Vec<Key>,
     /// Parallel to `modules`.
     slots: Vec<Slot>,
+    endpoints: Endpoints,
     settings: Settings,
     tx_buf: [u8; MAX_DATAGRAM],
     /// One byte more than the largest datagram, to see oversized ones.
     rx_buf: [u8; MAX_DATAGRAM + 1],
+    /// Header seq of every frame the bus sends, requests and commands alike: strictly
+    /// increasing, so a module can refuse anything replayed. Never wraps (u64).
+    tx_seq: u64,
     /// Header seq of the last Command cycle (0 before the first: "none").
-    command_seq: u32,
+    command_seq: u64,
     /// When each of the last `SENT_RING` command cycles was sent (the loop clock of the
     /// `receive` before it), by seq modulo the ring's size.
     sent_ns: Box<[u64; SENT_RING]>,
     last_receive_ns: u64,
-    /// Header seq of control requests (Acquire, Settings, Release).
-    request_seq: u32,
     counters: BusCounters,
     released: bool,
 }
@@ -79,30 +89,40 @@ impl UdpBus {
     }
 
     /// Header seq of the last Command cycle sent (0 before the first).
-    pub fn command_seq(&self) -> u32 {
+    pub fn command_seq(&self) -> u64 {
         self.command_seq
     }
 
-    fn next_request_seq(&mut self) -> u32 {
-        self.request_seq = self.request_seq.wrapping_add(1);
-        self.request_seq
+    fn next_seq(&mut self) -> u64 {
+        self.tx_seq += 1;
+        self.tx_seq
     }
 
-    /// Encode `msg` once and send it to the modules selected by `to`; failures are
-    /// counted as send errors.
+    /// Send `msg` to the modules selected by `to`, bundled per endpoint, each frame
+    /// tagged under the key its type calls for; failures count as send errors.
     fn send_control(&mut self, msg: &Message, to: impl Fn(usize) -> bool) {
-        let seq = self.next_request_seq();
-        let len = encode(self.session, seq, msg, &mut self.tx_buf)
-            .expect("control messages are small and valid");
-        for (i, m) in self.modules.iter().enumerate() {
-            if to(i) && self.socket.send_to(&self.tx_buf[..len], m.addr).is_err() {
-                self.counters.send_errors += 1;
-            }
-        }
+        let seq = self.next_seq();
+        let network = msg.msg_type().uses_network_key();
+        let (session, keys, modules) = (self.session, &self.keys, &self.modules);
+        let sent = self.endpoints.send_bundled(
+            &self.socket,
+            &mut self.tx_buf,
+            |i| to(i).then_some(()),
+            |i, (), buf| {
+                let key = if network { &self.network_key } else { &keys[i] };
+                let route = Route {
+                    session,
+                    seq,
+                    unit: modules[i].unit,
+                };
+                encode(route, msg, key, buf)
+            },
+        );
+        self.counters.send_errors += sent.failed_frames;
     }
 
     /// Receive until the socket is empty. Feedback goes to the slots; any other
-    /// well-formed datagram from a module is offered to `reply` (index, message),
+    /// authenticated frame from a module is offered to `reply` (index, message),
     /// which returns whether it wanted it; unwanted ones count as unexpected.
     fn drain(&mut self, reply: &mut dyn FnMut(usize, Message) -> bool) -> io::Result<()> {
         loop {
@@ -112,49 +132,68 @@ impl UdpBus {
                 Err(e) if net::is_transient(&e) => continue,
                 Err(e) => return Err(e),
             };
-            if let Some((i, msg)) = self.classify(n, src)
-                && !reply(i, msg)
-            {
-                self.counters.unexpected += 1;
-            }
+            self.on_datagram(n, src, reply);
         }
     }
 
-    /// Validate one received datagram; handle feedback, hand back anything else that
-    /// came well-formed from a module of the group.
-    fn classify(&mut self, n: usize, src: SocketAddr) -> Option<(usize, Message)> {
-        let c = &mut self.counters;
+    /// Validate every frame of one received datagram; handle feedback, hand back
+    /// anything else that came authenticated from a module of the group.
+    fn on_datagram(
+        &mut self,
+        n: usize,
+        src: SocketAddr,
+        reply: &mut dyn FnMut(usize, Message) -> bool,
+    ) {
         if n > MAX_DATAGRAM {
-            c.bad_length += 1;
-            return None;
+            self.counters.bad_length += 1;
+            return;
         }
-        let d = &self.rx_buf[..n];
-        // A Lookup is never meant for the bus, and decoding one could allocate.
-        if n >= 4 && d[..2] == MAGIC && d[2] == VERSION && d[3] == MsgType::Lookup as u8 {
-            c.unexpected += 1;
-            return None;
-        }
-        let (header, msg) = match decode(d) {
-            Ok(ok) => ok,
-            Err(e) => {
-                rx::count_decode_error(c, e);
-                return None;
+        let mut at = 0;
+        while at < n {
+            let d = &self.rx_buf[at..n];
+            // A Lookup is never meant for the bus, and decoding one could allocate.
+            if d.len() >= 4 && d[..2] == MAGIC && d[2] == VERSION && d[3] == MsgType::Lookup as u8 {
+                self.counters.unexpected += 1;
+                return;
             }
-        };
-        let Some(i) = self.modules.iter().position(|m| m.addr == src) else {
-            c.unexpected += 1;
-            return None;
-        };
-        match msg {
-            Message::Feedback(fb) if header.session == self.session => {
-                self.slots[i].offer(header.seq, fb, c);
-                None
+            // A bad header ends the datagram: nothing after it can be framed.
+            let (header, len) = match peek(d) {
+                Ok(h) => h,
+                Err(e) => return rx::count_decode_error(&mut self.counters, e),
+            };
+            let frame = at..at + len;
+            at += len;
+            let Some(i) = self.endpoints.module_at(src, header.unit) else {
+                self.counters.unexpected += 1;
+                continue;
+            };
+            let key = if header.msg_type.uses_network_key() {
+                self.network_key
+            } else if header.session == self.session {
+                self.keys[i]
+            } else {
+                self.counters.wrong_session += 1;
+                continue;
+            };
+            let msg = match open(&self.rx_buf[frame], &key) {
+                Ok(m) => m,
+                Err(e) => {
+                    rx::count_decode_error(&mut self.counters, e);
+                    continue;
+                }
+            };
+            match msg {
+                Message::Feedback(fb) => {
+                    self.slots[i].offer(header.seq, fb, &mut self.counters);
+                }
+                // Replies to our own requests only.
+                other if header.session == self.session => {
+                    if !reply(i, other) {
+                        self.counters.unexpected += 1;
+                    }
+                }
+                _ => self.counters.wrong_session += 1,
             }
-            Message::Feedback(_) => {
-                c.wrong_session += 1;
-                None
-            }
-            other => Some((i, other)),
         }
     }
 
@@ -162,7 +201,7 @@ impl UdpBus {
     fn all_reached(&self, min_module_time_us: u64) -> bool {
         self.slots
             .iter()
-            .all(|s| s.last_seq.is_some() && s.newest.module_time_us >= min_module_time_us)
+            .all(|s| s.last_seq > 0 && s.newest.module_time_us >= min_module_time_us)
     }
 
     /// Hand feedback that arrived since the last call to the loop, and every module's
@@ -189,12 +228,11 @@ pub(crate) const SENT_RING: usize = 4096;
 /// How long ago command cycle `seq` was sent, given the last one sent and the ring of
 /// send times (`None` for 0, "none yet"). A seq beyond the ring, or ahead of the last
 /// one sent (not ours), counts as very old.
-fn command_age_ns(last: u32, sent: &[u64; SENT_RING], seq: u32, now_ns: u64) -> Option<u64> {
+fn command_age_ns(last: u64, sent: &[u64; SENT_RING], seq: u64, now_ns: u64) -> Option<u64> {
     if seq == 0 || last == 0 {
         return None;
     }
-    let behind = last.wrapping_sub(seq) as usize;
-    if behind >= SENT_RING {
+    if seq > last || last - seq >= SENT_RING as u64 {
         return Some(u64::MAX / 2);
     }
     Some(now_ns.saturating_sub(sent[seq as usize % SENT_RING]))
@@ -212,25 +250,27 @@ impl Bus for UdpBus {
                 got: commands.len(),
             });
         }
-        // 0 means "no command yet" in feedback: skip it on wrap.
-        self.command_seq = self.command_seq.wrapping_add(1).max(1);
+        self.command_seq = self.next_seq();
         // Sent within this cycle, just after its `receive`.
         self.sent_ns[self.command_seq as usize % SENT_RING] = self.last_receive_ns;
-        for (m, cmd) in self.modules.iter().zip(commands) {
-            let sent = encode(
-                self.session,
-                self.command_seq,
-                &Message::Command(*cmd),
-                &mut self.tx_buf,
-            )
-            .ok()
-            .and_then(|len| self.socket.send_to(&self.tx_buf[..len], m.addr).ok());
-            match sent {
-                Some(_) => self.counters.commands_sent += 1,
-                // Would block, unreachable, or an infinite set-point (not encodable).
-                None => self.counters.send_errors += 1,
-            }
-        }
+        let (session, seq, keys, modules) =
+            (self.session, self.command_seq, &self.keys, &self.modules);
+        let sent = self.endpoints.send_bundled(
+            &self.socket,
+            &mut self.tx_buf,
+            |i| Some(commands[i]),
+            |i, cmd, buf| {
+                let route = Route {
+                    session,
+                    seq,
+                    unit: modules[i].unit,
+                };
+                // Refused for an infinite set-point (not encodable).
+                encode(route, &Message::Command(cmd), &keys[i], buf)
+            },
+        );
+        self.counters.commands_sent += sent.sent_frames;
+        self.counters.send_errors += sent.failed_frames;
         Ok(())
     }
 

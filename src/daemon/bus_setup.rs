@@ -90,7 +90,13 @@ fn udp_bus(cfg: &Config, stop: &std::sync::atomic::AtomicBool) -> Result<BuiltBu
         describe(&filter, expected),
         net.targets.join(", ")
     );
-    let found = udp::discover_until(&targets, &filter, expected, bind, timeout, stop)
+    let key = if net.key_file.as_os_str().is_empty() {
+        crate::protocol::Key::OPEN
+    } else {
+        crate::protocol::Key::load(&net.key_file)
+            .with_context(|| format!("network.key_file {}", net.key_file.display()))?
+    };
+    let found = udp::discover_until(&targets, &filter, expected, bind, timeout, &key, stop)
         .context(looked_for)?;
     if found.is_empty() {
         bail!("no modules answered");
@@ -106,8 +112,8 @@ fn udp_bus(cfg: &Config, stop: &std::sync::atomic::AtomicBool) -> Result<BuiltBu
             break s;
         }
     };
-    let bus =
-        UdpBus::connect(&found, settings, bind, session, timeout).context("taking the modules")?;
+    let bus = UdpBus::connect_keyed(&found, settings, bind, session, timeout, key)
+        .context("taking the modules")?;
     let names = found.iter().map(|f| f.announce.name.to_string()).collect();
     Ok(BuiltBus {
         bus: Box::new(bus),

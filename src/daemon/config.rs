@@ -150,6 +150,9 @@ pub struct NetworkConfig {
     pub discovery_timeout_s: f64,
     pub feedback_rate_hz: f64,
     pub command_lifetime_s: f64,
+    /// The robot's network key (64 hex digits, not readable by every user); empty =
+    /// an open network (docs/protocol.md §4).
+    pub key_file: PathBuf,
 }
 
 impl Default for NetworkConfig {
@@ -165,6 +168,7 @@ impl Default for NetworkConfig {
             discovery_timeout_s: 2.0,
             feedback_rate_hz: 1000.0,
             command_lifetime_s: 0.05,
+            key_file: PathBuf::new(),
         }
     }
 }

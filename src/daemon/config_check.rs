@@ -47,7 +47,9 @@ impl Config {
                 "network.command_lifetime_s",
                 net.command_lifetime_s.to_string(),
                 format!(
-                    "must be at least two periods of the loop and of the feedback                      ({:.4} s at loop.rate_hz = {} and network.feedback_rate_hz = {}),                      or the modules go limp between commands",
+                    "must be at least two periods of the loop and of the feedback \
+                     ({:.4} s at loop.rate_hz = {} and network.feedback_rate_hz = {}), \
+                     or the modules go limp between commands",
                     2.0 * period_s,
                     self.loop_.rate_hz,
                     net.feedback_rate_hz
@@ -69,9 +71,19 @@ impl Config {
                 "control.channel_capacity",
                 self.control.channel_capacity.to_string(),
                 format!(
-                    "must be at least the loop's {cap} requests per cycle (the loop's answers                      share the capacity; fewer would be lost and time out)"
+                    "must be at least the loop's {cap} requests per cycle (the loop's answers \
+                     share the capacity; fewer would be lost and time out)"
                 ),
             ));
+        }
+        if !net.key_file.as_os_str().is_empty() {
+            crate::protocol::Key::load(&net.key_file).map_err(|e| {
+                bad(
+                    "network.key_file",
+                    net.key_file.display().to_string(),
+                    e.to_string(),
+                )
+            })?;
         }
         for t in &net.targets {
             if let Err(e) = crate::bus::udp::parse_targets(t) {

@@ -1,7 +1,8 @@
-//! One emulated module's protocol state machine (protocol v1, see the brief and
-//! `docs/protocol.md`). Pure: time comes in as an argument, decoded messages and the
-//! sender's address come in, messages to send come out. The server owns sockets,
-//! faults and the plant.
+//! One emulated module's protocol state machine (protocol v2, `docs/protocol.md`).
+//! Pure but for its nonces: time comes in as an argument, authenticated messages and
+//! the sender's address come in, messages to send (with the key to tag them) come out.
+//! The server owns sockets, faults and the plant, and checks each frame's tag under
+//! the key [`Module::key_for`] names before handing it here.
 //!
 //! Two clocks: the **simulation** clock drives everything the module's firmware would
 //! time (command lifetime, feedback schedule, `module_time_us`), so lockstep runs are
@@ -18,8 +19,8 @@
 use std::net::SocketAddr;
 
 use crate::protocol::{
-    AcquireReply, Announce, Command, ControlStrategy, Feedback, Header, LookupFilter, Mac, Message,
-    NO_SESSION, Name, Settings,
+    AcquireReply, Announce, Command, ControlStrategy, Feedback, Header, Key, LookupFilter, Mac,
+    Message, NO_SESSION, Name, Nonce, Settings,
 };
 
 /// Who a module is.
@@ -68,12 +69,15 @@ impl ModuleIdentity {
 pub struct ModuleConfig {
     /// An owner silent for longer than this can be displaced by another session, s (wall).
     pub release_timeout_s: f64,
+    /// The robot's network key ([`Key::OPEN`] on an open network).
+    pub network_key: Key,
 }
 
 impl Default for ModuleConfig {
     fn default() -> Self {
         Self {
             release_timeout_s: 1.0,
+            network_key: Key::OPEN,
         }
     }
 }
@@ -102,14 +106,20 @@ impl ModuleTime {
 pub struct Outgoing {
     pub dest: SocketAddr,
     pub session: u32,
-    pub seq: u32,
+    pub seq: u64,
     pub message: Message,
+    /// What the frame is tagged under: the network key for replies to discovery and
+    /// Acquire, the session key otherwise.
+    pub key: Key,
 }
 
 /// Per-module counters, monotonically increasing.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
 pub struct ModuleCounters {
     pub wrong_session: u64,
+    /// Authenticated frames from the owner whose seq was not newer than the newest
+    /// accepted (a replay or a reordered duplicate): dropped.
+    pub replayed: u64,
     /// Well-formed messages a module never accepts (announce, feedback, …).
     pub unexpected: u64,
     pub commands: u64,
@@ -124,6 +134,12 @@ struct Owner {
     session: u32,
     addr: SocketAddr,
     last_heard_wall_s: f64,
+    host_nonce: Nonce,
+    module_nonce: Nonce,
+    /// Derived at Acquire from the network key and both nonces.
+    key: Key,
+    /// Newest seq accepted from the owner: anything not newer is a replay.
+    last_seq: u64,
 }
 
 /// One module's protocol state.
@@ -135,8 +151,8 @@ pub struct Module {
     settings: Settings,
     /// Newest command and when it arrived (sim time).
     command: Option<(Command, f64)>,
-    last_command_seq: u32,
-    feedback_seq: u32,
+    last_command_seq: u64,
+    feedback_seq: u64,
     next_feedback_s: f64,
     feedback_now: bool,
     /// Streaming starts with the first SettingsAck of a session (protocol §5.6).
@@ -174,6 +190,10 @@ impl Module {
     pub fn counters(&self) -> ModuleCounters {
         self.counters
     }
+    /// A frame of a session that does not own this module (its tag cannot be checked).
+    pub fn count_wrong_session(&mut self) {
+        self.counters.wrong_session += 1;
+    }
     pub fn settings(&self) -> Settings {
         self.settings
     }
@@ -185,7 +205,20 @@ impl Module {
         self.owner.is_some()
     }
 
-    /// Handle one decoded message from `from`; returns the reply, if any.
+    /// The key a frame with `header` must be tagged under: the network key for
+    /// discovery and Acquire, the owner's session key for the owner's session; `None`
+    /// (count it as wrong-session) for any other session.
+    pub fn key_for(&self, header: &Header) -> Option<Key> {
+        if header.msg_type.uses_network_key() {
+            return Some(self.config.network_key);
+        }
+        self.owner
+            .filter(|o| o.session == header.session)
+            .map(|o| o.key)
+    }
+
+    /// Handle one message from `from` whose tag was checked under
+    /// [`Module::key_for`]; returns the reply, if any.
     pub fn handle(
         &mut self,
         now: ModuleTime,
@@ -193,11 +226,13 @@ impl Module {
         header: &Header,
         msg: &Message,
     ) -> Option<Outgoing> {
-        let reply = |session, message| Outgoing {
+        let network_key = self.config.network_key;
+        let reply = |session, message, key| Outgoing {
             dest: from,
             session,
             seq: header.seq,
             message,
+            key,
         };
         match msg {
             Message::Lookup(filter) => self.identity.matches(filter).then(|| {
@@ -208,26 +243,28 @@ impl Module {
                         family: self.identity.family,
                         name: self.identity.name,
                         firmware: self.identity.firmware,
-                        owner_session: self.owner_session(),
+                        owned: self.is_owned(),
                     }),
+                    network_key,
                 )
             }),
-            Message::Acquire => {
+            Message::Acquire(host_nonce) => {
                 let s = header.session;
                 if s == NO_SESSION {
                     self.counters.wrong_session += 1;
                     return None;
                 }
-                let granted = self.acquire(now, from, s);
-                if !granted {
+                let module_nonce = self.acquire(now, from, s, host_nonce);
+                if module_nonce.is_none() {
                     self.counters.acquire_denied += 1;
                 }
                 Some(reply(
                     s,
                     Message::AcquireReply(AcquireReply {
-                        granted,
-                        owner_session: self.owner_session(),
+                        granted: module_nonce.is_some(),
+                        module_nonce: module_nonce.unwrap_or_default(),
                     }),
+                    network_key,
                 ))
             }
             Message::Release | Message::Settings(_) | Message::Command(_) => {
@@ -236,8 +273,13 @@ impl Module {
                     self.counters.wrong_session += 1;
                     return None;
                 };
+                if header.seq <= owner.last_seq {
+                    self.counters.replayed += 1;
+                    return None;
+                }
+                owner.last_seq = header.seq;
                 owner.last_heard_wall_s = now.wall_s;
-                let session = owner.session;
+                let (session, key) = (owner.session, owner.key);
                 match msg {
                     Message::Release => {
                         self.free();
@@ -254,7 +296,7 @@ impl Module {
                             self.feedback_now = true;
                         }
                         self.streaming = true;
-                        Some(reply(session, Message::SettingsAck(self.settings)))
+                        Some(reply(session, Message::SettingsAck(self.settings), key))
                     }
                     Message::Command(c) => {
                         self.command = Some((*c, now.sim_s));
@@ -276,25 +318,45 @@ impl Module {
         }
     }
 
-    /// Grant or deny session `s`; on grant, `from` becomes the feedback destination.
-    fn acquire(&mut self, now: ModuleTime, from: SocketAddr, s: u32) -> bool {
+    /// Grant session `s` (returning the module's nonce) or deny it (`None`). The
+    /// owner's own Acquire again (same session and nonce: a resend whose reply was
+    /// lost) gets the same answer and changes nothing, not even who hears feedback, so
+    /// a replayed Acquire cannot move the stream. On a new grant `from` becomes the
+    /// feedback destination.
+    fn acquire(
+        &mut self,
+        now: ModuleTime,
+        from: SocketAddr,
+        s: u32,
+        host_nonce: &Nonce,
+    ) -> Option<Nonce> {
         match self.owner {
-            Some(o) if o.session == s => {}
+            Some(o) if o.session == s && o.host_nonce == *host_nonce => {
+                return Some(o.module_nonce);
+            }
             Some(o) if now.wall_s - o.last_heard_wall_s <= self.config.release_timeout_s => {
-                return false;
+                return None;
             }
-            _ => {
-                // A new owner starts from a clean slate.
-                self.free();
-                self.next_feedback_s = now.sim_s;
-            }
+            _ => {}
         }
+        // A new owner starts from a clean slate.
+        self.free();
+        self.next_feedback_s = now.sim_s;
+        let module_nonce: Nonce = rand::random();
+        let key =
+            self.config
+                .network_key
+                .session_key(s, &self.identity.mac, host_nonce, &module_nonce);
         self.owner = Some(Owner {
             session: s,
             addr: from,
             last_heard_wall_s: now.wall_s,
+            host_nonce: *host_nonce,
+            module_nonce,
+            key,
+            last_seq: 0,
         });
-        true
+        Some(module_nonce)
     }
 
     fn free(&mut self) {
@@ -366,12 +428,13 @@ impl Module {
                 self.next_feedback_s = sim_s + period_s;
             }
         }
-        self.feedback_seq = self.feedback_seq.wrapping_add(1);
+        self.feedback_seq += 1;
         self.counters.feedback_sent += 1;
         Some(Outgoing {
             dest: owner.addr,
             session: owner.session,
             seq: self.feedback_seq,
+            key: owner.key,
             message: Message::Feedback(Feedback {
                 last_command_seq: self.last_command_seq,
                 ..sample

@@ -16,11 +16,14 @@ fn module() -> Module {
     )
 }
 
-fn hdr(msg: &Message, session: u32, seq: u32) -> Header {
+const NONCE: Nonce = [5; 16];
+
+fn hdr(msg: &Message, session: u32, seq: u64) -> Header {
     Header {
         msg_type: msg.msg_type(),
         session,
         seq,
+        unit: 0,
     }
 }
 
@@ -29,7 +32,7 @@ fn send(
     t: f64,
     from: u16,
     session: u32,
-    seq: u32,
+    seq: u64,
     msg: Message,
 ) -> Option<Outgoing> {
     m.handle(
@@ -42,7 +45,7 @@ fn send(
 
 fn acquired(t: f64) -> Module {
     let mut m = module();
-    let r = send(&mut m, t, 9000, S, 1, Message::Acquire).unwrap();
+    let r = send(&mut m, t, 9000, S, 1, Message::Acquire(NONCE)).unwrap();
     assert!(matches!(
         r.message,
         Message::AcquireReply(AcquireReply { granted: true, .. })
@@ -89,7 +92,7 @@ fn lookup_filters() {
             panic!()
         };
         assert_eq!(a.name, id.name);
-        assert_eq!(a.owner_session, NO_SESSION);
+        assert!(!a.owned);
     }
     let no = [
         LookupFilter::Family(Name::new("X5").unwrap()),
@@ -116,46 +119,71 @@ fn announce_reports_owner() {
     let Message::Announce(a) = r.message else {
         panic!()
     };
-    assert_eq!(a.owner_session, S);
+    assert!(a.owned);
 }
 
 #[test]
 fn acquire_rules() {
     let mut m = acquired(0.0);
     assert_eq!(m.owner_session(), S);
-    // Same session again: granted.
-    let r = send(&mut m, 0.5, 9000, S, 2, Message::Acquire).unwrap();
-    assert_eq!(
-        r.message,
-        Message::AcquireReply(AcquireReply {
-            granted: true,
-            owner_session: S
-        })
-    );
-    // Another session while the owner is alive: denied, told who owns it.
-    let r = send(&mut m, 1.4, 9001, OTHER, 1, Message::Acquire).unwrap();
-    assert_eq!(r.session, OTHER);
+    let granted = |r: &Outgoing| match r.message {
+        Message::AcquireReply(a) => a.granted.then_some(a.module_nonce),
+        _ => panic!("not an acquire reply: {r:?}"),
+    };
+    // The owner's own Acquire again (a resend): the same answer, nothing changes,
+    // not even where feedback goes.
+    let first = granted(&send(&mut m, 0.4, 9000, S, 2, Message::Acquire(NONCE)).unwrap());
+    let again = send(&mut m, 0.5, 9005, S, 3, Message::Acquire(NONCE)).unwrap();
+    assert_eq!(again.dest, addr(9005));
+    assert_eq!(granted(&again), first);
+    // The same session with another nonce is someone else: denied, and told nothing.
+    let r = send(&mut m, 0.5, 9006, S, 4, Message::Acquire([6; 16])).unwrap();
+    assert_eq!(granted(&r), None);
     assert_eq!(
         r.message,
         Message::AcquireReply(AcquireReply {
             granted: false,
-            owner_session: S
+            module_nonce: [0; 16]
         })
     );
-    assert_eq!(m.counters().acquire_denied, 1);
-    // Owner silent for more than 1 s (last heard at 0.5): taken over.
-    let r = send(&mut m, 1.6, 9001, OTHER, 2, Message::Acquire).unwrap();
-    assert_eq!(
-        r.message,
-        Message::AcquireReply(AcquireReply {
-            granted: true,
-            owner_session: OTHER
-        })
-    );
+    // Another session while the owner is alive: denied.
+    let r = send(&mut m, 0.9, 9001, OTHER, 1, Message::Acquire(NONCE)).unwrap();
+    assert_eq!(r.session, OTHER);
+    assert_eq!(granted(&r), None);
+    assert_eq!(m.counters().acquire_denied, 2);
+    // Owner silent for more than 1 s (last heard at 0.0: Acquires do not count): taken
+    // over, with a fresh nonce.
+    let r = send(&mut m, 1.1, 9001, OTHER, 2, Message::Acquire(NONCE)).unwrap();
+    assert_ne!(granted(&r), first);
+    assert!(granted(&r).is_some());
     assert_eq!(m.owner_session(), OTHER);
     // Session 0 can never own a module.
-    assert!(send(&mut m, 1.7, 9002, NO_SESSION, 1, Message::Acquire).is_none());
+    assert!(send(&mut m, 1.7, 9002, NO_SESSION, 1, Message::Acquire(NONCE)).is_none());
     assert_eq!(m.counters().wrong_session, 1);
+}
+
+#[test]
+fn session_frames_need_the_session_key_and_a_newer_seq() {
+    let mut m = acquired(0.0);
+    let h = |session, msg: &Message| hdr(msg, session, 1);
+    let cmd = Message::Command(Command::position(0.2));
+    // Handshake frames: the network key; the owner's frames: its session key; any
+    // other session: no key at all (so nothing it sends can be checked or accepted).
+    assert_eq!(
+        m.key_for(&h(OTHER, &Message::Acquire(NONCE))),
+        Some(Key::OPEN)
+    );
+    let key = m.key_for(&h(S, &cmd)).expect("the owner's key");
+    assert_ne!(key, Key::OPEN);
+    assert_eq!(m.key_for(&h(OTHER, &cmd)), None);
+    assert_eq!(m.key_for(&h(OTHER, &Message::Release)), None);
+    // Replays: a seq not newer than the newest accepted is dropped.
+    send(&mut m, 0.1, 9000, S, 10, cmd.clone());
+    send(&mut m, 0.2, 9000, S, 10, cmd.clone());
+    send(&mut m, 0.3, 9000, S, 9, Message::Release);
+    assert_eq!(m.counters().replayed, 2);
+    assert_eq!(m.counters().commands, 1);
+    assert!(m.is_owned());
 }
 
 #[test]
@@ -167,11 +195,11 @@ fn commands_keep_the_session_alive() {
             f64::from(i) * 0.1,
             9000,
             S,
-            i as u32,
+            i as u64,
             Message::Command(Command::position(0.1)),
         );
     }
-    let r = send(&mut m, 3.05, 9001, OTHER, 1, Message::Acquire).unwrap();
+    let r = send(&mut m, 3.05, 9001, OTHER, 1, Message::Acquire(NONCE)).unwrap();
     assert!(matches!(
         r.message,
         Message::AcquireReply(AcquireReply { granted: false, .. })
@@ -185,7 +213,7 @@ fn release_timeout_uses_the_wall_clock() {
         sim_s: 0.001,
         wall_s: 2.0,
     };
-    let msg = Message::Acquire;
+    let msg = Message::Acquire(NONCE);
     let r = m
         .handle(late_wall, addr(9001), &hdr(&msg, OTHER, 1), &msg)
         .unwrap();
@@ -271,19 +299,25 @@ fn settings_validated_and_acknowledged() {
     let r = send(&mut m, 0.0, 9000, S, 5, Message::Settings(good)).unwrap();
     assert_eq!(r.message, Message::SettingsAck(good));
     assert_eq!((r.session, r.seq), (S, 5));
-    for bad in [
+    for (bad, seq) in [
         settings(0.5, 0.2),
         settings(2001.0, 0.2),
         settings(100.0, 0.0005),
         settings(100.0, 10.5),
         settings(f32::NAN, 0.2),
-    ] {
-        let r = send(&mut m, 0.0, 9000, S, 6, Message::Settings(bad)).unwrap();
+    ]
+    .into_iter()
+    .zip(6..)
+    {
+        let r = send(&mut m, 0.0, 9000, S, seq, Message::Settings(bad)).unwrap();
         assert_eq!(r.message, Message::SettingsAck(good), "{bad:?} accepted");
     }
     assert_eq!(m.counters().settings_refused, 5);
-    for edge in [settings(1.0, 0.001), settings(2000.0, 10.0)] {
-        let r = send(&mut m, 0.0, 9000, S, 7, Message::Settings(edge)).unwrap();
+    for (edge, seq) in [settings(1.0, 0.001), settings(2000.0, 10.0)]
+        .into_iter()
+        .zip(20..)
+    {
+        let r = send(&mut m, 0.0, 9000, S, seq, Message::Settings(edge)).unwrap();
         assert_eq!(r.message, Message::SettingsAck(edge));
     }
     // Wrong session: dropped, counted, nothing changes.
@@ -455,7 +489,7 @@ fn messages_a_module_never_takes_are_unexpected() {
         Message::SettingsAck(Settings::default()),
         Message::AcquireReply(AcquireReply {
             granted: true,
-            owner_session: S,
+            module_nonce: NONCE,
         }),
     ];
     for msg in msgs {
@@ -484,7 +518,7 @@ fn new_owner_starts_with_default_settings() {
         3,
         Message::Command(Command::position(0.3)),
     );
-    send(&mut m, 5.0, 9001, OTHER, 1, Message::Acquire);
+    send(&mut m, 5.0, 9001, OTHER, 1, Message::Acquire(NONCE));
     assert_eq!(m.settings(), Settings::default());
     assert!(m.applied_command(5.0).is_limp());
 }

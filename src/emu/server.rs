@@ -1,5 +1,11 @@
-//! The UDP module emulator: every module its own non-blocking UDP endpoint on
-//! `bind_ip:base_port + i`, all served by one thread, with a [`Plant`] behind them.
+//! The UDP module emulator, protocol v2, with a [`Plant`] behind it, served by one
+//! thread. Two layouts of endpoints:
+//! - **per module** (the default, like modules with their own network ports): module
+//!   `i` is the non-blocking UDP endpoint `bind_ip:base_port + i`, unit 0;
+//! - **gateway** (`gateway: true`, like a tether hub): one endpoint on `base_port`
+//!   serves module `i` as unit `i`, and the frames to one destination travel bundled
+//!   in as few datagrams as fit (one command datagram and one feedback datagram per
+//!   cycle for an 18-module snake).
 //!
 //! - **Real time**: physics at `1 / physics_dt_s` on absolute deadlines
 //!   (`clock_nanosleep(TIMER_ABSTIME)`); each tick drains every socket, steps the
@@ -24,7 +30,10 @@ use super::module::{
 };
 use super::pose_recorder::PoseRecorder;
 use super::recorder::{RecordError, Recorder};
-use crate::protocol::{self, Command, DecodeError, Feedback, MAX_DATAGRAM, Message, Name};
+use crate::protocol::{
+    self, Command, DecodeError, Feedback, Header, Key, MAX_DATAGRAM, Message, MsgType, Name, Route,
+    VERSION_1,
+};
 use crate::rt::sys;
 
 mod io;
@@ -41,9 +50,11 @@ pub enum Mode {
 #[derive(Debug, Clone, PartialEq)]
 pub struct ServerConfig {
     pub bind_ip: IpAddr,
-    /// Module `i` binds `base_port + i`; 0 lets the OS pick a free port per module
-    /// (read them back with [`Server::local_addrs`]).
+    /// Module `i` binds `base_port + i` (the gateway binds `base_port`); 0 lets the OS
+    /// pick free ports (read them back with [`Server::local_addrs`]).
     pub base_port: u16,
+    /// One endpoint for every module (units 0..n) instead of one each.
+    pub gateway: bool,
     pub mode: Mode,
     /// Physics step, s.
     pub physics_dt_s: f64,
@@ -66,6 +77,7 @@ impl Default for ServerConfig {
         Self {
             bind_ip: IpAddr::V4(Ipv4Addr::LOCALHOST),
             base_port: 7000,
+            gateway: false,
             mode: Mode::Realtime,
             physics_dt_s: 1e-3,
             lockstep_timeout_s: 1.0,
@@ -109,9 +121,16 @@ pub struct ServerCounters {
     pub bad_version: u64,
     pub bad_type: u64,
     pub bad_length: u64,
-    pub bad_checksum: u64,
+    /// Frames whose tag did not verify: corrupted, forged, or of another session.
+    pub bad_tag: u64,
     pub bad_malformed: u64,
+    /// Datagrams of protocol version 1, which this emulator no longer speaks.
+    pub v1_refused: u64,
+    /// Frames for a unit the endpoint does not serve.
+    pub bad_unit: u64,
     pub wrong_session: u64,
+    /// Authenticated frames whose seq was not newer than the newest accepted.
+    pub replayed: u64,
     /// Well-formed messages a module never accepts.
     pub unexpected: u64,
     pub commands: u64,
@@ -135,10 +154,11 @@ impl ServerCounters {
         let c = match e {
             DecodeError::Truncated => &mut self.bad_truncated,
             DecodeError::BadMagic => &mut self.bad_magic,
+            DecodeError::WrongVersion(VERSION_1) => &mut self.v1_refused,
             DecodeError::WrongVersion(_) => &mut self.bad_version,
             DecodeError::UnknownType(_) => &mut self.bad_type,
             DecodeError::BadLength => &mut self.bad_length,
-            DecodeError::BadChecksum => &mut self.bad_checksum,
+            DecodeError::BadTag => &mut self.bad_tag,
             DecodeError::Malformed(_) => &mut self.bad_malformed,
         };
         *c += 1;
@@ -151,8 +171,16 @@ struct Delayed {
     module: usize,
     dest: SocketAddr,
     session: u32,
-    seq: u32,
+    seq: u64,
+    key: Key,
     feedback: Feedback,
+}
+
+/// Frames waiting to leave one endpoint, bundled per destination.
+struct Outbox {
+    buf: Vec<u8>,
+    len: usize,
+    dest: Option<SocketAddr>,
 }
 
 /// The UDP emulator (see the module docs).
@@ -169,7 +197,8 @@ pub struct Server {
     pose_recorder: Option<PoseRecorder>,
     counters: ServerCounters,
     recv_buf: Vec<u8>,
-    send_buf: Vec<u8>,
+    /// One per endpoint.
+    outboxes: Vec<Outbox>,
     start_ns: u64,
 }
 
@@ -186,14 +215,20 @@ impl Server {
         if n == 0 {
             return Err(ServerError::Config("the plant has no modules"));
         }
-        if config.base_port != 0 && usize::from(config.base_port) + n - 1 > usize::from(u16::MAX) {
+        let endpoints = if config.gateway { 1 } else { n };
+        if config.base_port != 0
+            && usize::from(config.base_port) + endpoints - 1 > usize::from(u16::MAX)
+        {
             return Err(ServerError::Config("base_port + modules exceeds 65535"));
+        }
+        if n > usize::from(u16::MAX) + 1 {
+            return Err(ServerError::Config("more modules than units"));
         }
         let family =
             Name::new(&config.family).map_err(|_| ServerError::Config("family name too long"))?;
         let faults = Faults::new(config.faults.clone(), n)?;
-        let mut sockets = Vec::with_capacity(n);
-        for i in 0..n {
+        let mut sockets = Vec::with_capacity(endpoints);
+        for i in 0..endpoints {
             let port = if config.base_port == 0 {
                 0
             } else {
@@ -238,12 +273,18 @@ impl Server {
             pose_recorder,
             counters: ServerCounters::default(),
             recv_buf: vec![0; 2 * MAX_DATAGRAM],
-            send_buf: vec![0; MAX_DATAGRAM],
+            outboxes: (0..endpoints)
+                .map(|_| Outbox {
+                    buf: vec![0; MAX_DATAGRAM],
+                    len: 0,
+                    dest: None,
+                })
+                .collect(),
             start_ns: sys::monotonic_ns(),
         })
     }
 
-    /// Address of each module's endpoint, module 0 first.
+    /// Address of each endpoint: one per module, module 0 first, or the gateway's.
     pub fn local_addrs(&self) -> Result<Vec<SocketAddr>, ServerError> {
         Ok(self
             .sockets
@@ -267,6 +308,7 @@ impl Server {
         for m in &self.modules {
             let mc = m.counters();
             c.wrong_session += mc.wrong_session;
+            c.replayed += mc.replayed;
             c.unexpected += mc.unexpected;
             c.commands += mc.commands;
         }
@@ -322,6 +364,7 @@ impl Server {
                 }
             }
             self.release_delayed();
+            self.flush_all();
             deadline_ns += period_ns;
             let now_ns = sys::monotonic_ns();
             if now_ns > deadline_ns + 20 * period_ns {
@@ -350,6 +393,7 @@ impl Server {
                     self.send_feedback(i, false);
                 }
             }
+            self.flush_all();
             let mut any_owned = false;
             let mut all_fresh = true;
             for (i, m) in self.modules.iter().enumerate() {
@@ -374,6 +418,7 @@ impl Server {
                     self.send_feedback(i, false);
                 }
             }
+            self.flush_all();
         }
         Ok(())
     }
@@ -395,13 +440,14 @@ impl Server {
         Ok(())
     }
 
-    /// Read every socket until it would block, handling each datagram.
+    /// Read every socket until it would block, handling each datagram; replies go
+    /// out at once.
     fn drain_all(&mut self) {
-        for i in 0..self.sockets.len() {
+        for e in 0..self.sockets.len() {
             loop {
-                match self.sockets[i].recv_from(&mut self.recv_buf) {
-                    Ok((len, from)) => self.on_datagram(i, len, from),
-                    Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => break,
+                match self.sockets[e].recv_from(&mut self.recv_buf) {
+                    Ok((len, from)) => self.on_datagram(e, len, from),
+                    Err(err) if err.kind() == std::io::ErrorKind::WouldBlock => break,
                     Err(_) => {
                         // E.g. an ICMP error queued on the socket: count, move on.
                         self.counters.recv_errors += 1;
@@ -410,29 +456,100 @@ impl Server {
                 }
             }
         }
+        self.flush_all();
     }
 
-    fn on_datagram(&mut self, i: usize, len: usize, from: SocketAddr) {
+    /// The module that endpoint `e` serves as `unit`.
+    fn module_at(&self, e: usize, unit: u16) -> Option<usize> {
+        let i = if self.config.gateway {
+            usize::from(unit)
+        } else if unit == 0 {
+            e
+        } else {
+            return None;
+        };
+        (i < self.modules.len()).then_some(i)
+    }
+
+    /// The endpoint and unit of module `i`.
+    fn endpoint_of(&self, i: usize) -> (usize, u16) {
+        if self.config.gateway {
+            (0, i as u16) // `new` checked that every module has a unit
+        } else {
+            (i, 0)
+        }
+    }
+
+    fn on_datagram(&mut self, e: usize, len: usize, from: SocketAddr) {
         self.counters.received += 1;
+        if len > MAX_DATAGRAM {
+            self.counters.bad_length += 1;
+            return;
+        }
         let now = self.now();
+        let mut at = 0;
+        while at < len {
+            // A bad header ends the datagram: nothing after it can be framed.
+            let (header, frame_len) = match protocol::peek(&self.recv_buf[at..len]) {
+                Ok(h) => h,
+                Err(err) => return self.count_decode_error(err, from),
+            };
+            let frame = at..at + frame_len;
+            at += frame_len;
+            if header.msg_type == MsgType::Lookup && self.config.gateway {
+                // A lookup asks the endpoint: every unit behind the gateway answers.
+                for i in 0..self.modules.len() {
+                    self.on_frame(i, &header, frame.clone(), now, from);
+                }
+                continue;
+            }
+            let Some(i) = self.module_at(e, header.unit) else {
+                self.counters.bad_unit += 1;
+                continue;
+            };
+            self.on_frame(i, &header, frame, now, from);
+        }
+    }
+
+    /// One frame (bytes `frame` of the receive buffer) for module `i`.
+    fn on_frame(
+        &mut self,
+        i: usize,
+        header: &Header,
+        frame: std::ops::Range<usize>,
+        now: ModuleTime,
+        from: SocketAddr,
+    ) {
         if self.faults.is_silent(i, now.sim_s) {
             self.counters.dropped_silent += 1;
             return;
         }
-        let (header, msg) = match protocol::decode(&self.recv_buf[..len]) {
-            Ok(d) => d,
-            Err(e) => {
-                self.counters.count_decode_error(e);
-                return;
-            }
+        let Some(key) = self.modules[i].key_for(header) else {
+            // Not the owner's session: nothing to check its tag with.
+            self.modules[i].count_wrong_session();
+            return;
+        };
+        let msg = match protocol::open(&self.recv_buf[frame], &key) {
+            Ok(m) => m,
+            Err(err) => return self.count_decode_error(err, from),
         };
         if matches!(msg, Message::Command(_)) && self.faults.lose() {
             self.counters.dropped_command_loss += 1;
             return;
         }
-        if let Some(reply) = self.modules[i].handle(now, from, &header, &msg) {
+        if let Some(reply) = self.modules[i].handle(now, from, header, &msg) {
             self.send(i, &reply);
         }
+    }
+
+    fn count_decode_error(&mut self, e: DecodeError, from: SocketAddr) {
+        if e == DecodeError::WrongVersion(VERSION_1) && self.counters.v1_refused == 0 {
+            tracing::warn!(
+                "refusing protocol v1 datagrams from {from}: this emulator speaks v2 \
+                 (docs/protocol.md); counted as v1_refused"
+            );
+        }
+        self.counters.count_decode_error(e);
     }
 
     /// Build module `i`'s next feedback and send it through the faults.
@@ -458,6 +575,7 @@ impl Server {
                     dest: out.dest,
                     session: out.session,
                     seq: out.seq,
+                    key: out.key,
                     feedback,
                 };
                 if self.delayed.push(t + delay_s, d).is_err() {
@@ -477,18 +595,58 @@ impl Server {
                 session: d.session,
                 seq: d.seq,
                 message: Message::Feedback(d.feedback),
+                key: d.key,
             };
             self.send(d.module, &out);
         }
     }
 
+    /// Queue `out` from module `i` in its endpoint's outbox: frames to the same
+    /// destination share a datagram while they fit.
     fn send(&mut self, i: usize, out: &Outgoing) {
-        match protocol::encode(out.session, out.seq, &out.message, &mut self.send_buf) {
-            Ok(len) => match self.sockets[i].send_to(&self.send_buf[..len], out.dest) {
+        let (e, unit) = self.endpoint_of(i);
+        if self.outboxes[e].dest != Some(out.dest) {
+            self.flush(e);
+        }
+        let route = Route {
+            session: out.session,
+            seq: out.seq,
+            unit,
+        };
+        for attempt in 0..2 {
+            let ob = &mut self.outboxes[e];
+            match protocol::encode(route, &out.message, &out.key, &mut ob.buf[ob.len..]) {
+                Ok(n) => {
+                    ob.len += n;
+                    ob.dest = Some(out.dest);
+                    if !self.config.gateway {
+                        self.flush(e);
+                    }
+                    return;
+                }
+                Err(protocol::EncodeError::BufferTooSmall) if attempt == 0 => self.flush(e),
+                Err(_) => break,
+            }
+        }
+        self.counters.send_errors += 1;
+    }
+
+    fn flush(&mut self, e: usize) {
+        let ob = &mut self.outboxes[e];
+        if let Some(dest) = ob.dest.take()
+            && ob.len > 0
+        {
+            match self.sockets[e].send_to(&ob.buf[..ob.len], dest) {
                 Ok(_) => self.counters.sent += 1,
                 Err(_) => self.counters.send_errors += 1,
-            },
-            Err(_) => self.counters.send_errors += 1,
+            }
+        }
+        ob.len = 0;
+    }
+
+    fn flush_all(&mut self) {
+        for e in 0..self.outboxes.len() {
+            self.flush(e);
         }
     }
 }

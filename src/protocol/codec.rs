@@ -1,27 +1,31 @@
-//! Encoding and decoding of protocol v1 datagrams. Byte layouts: `docs/protocol.md`.
+//! Encoding and decoding of protocol v2 frames. Byte layouts: `docs/protocol.md`.
 //!
-//! `datagram = header (16 B) | payload | crc32 (4 B)`, little endian. The encoding is
-//! canonical: every datagram `decode` accepts re-encodes to the same bytes (reserved
-//! bytes and name padding must be zero), so a corrupted datagram can never pass as a
-//! different valid one without also matching the checksum.
+//! `frame = header (20 B) | payload | tag (16 B)`, little endian; a datagram holds one
+//! or more frames back to back ([`Frames`]). The encoding is canonical: every frame
+//! `open` accepts re-encodes to the same bytes (reserved bytes and name padding must be
+//! zero), and the tag covers every byte before it.
 use super::{
-    AcquireReply, Announce, Command, ControlStrategy, Feedback, Header, LookupFilter, MAGIC, Mac,
-    Message, MsgType, NAME_CAPACITY, Name, Settings, VERSION,
+    AcquireReply, Announce, Command, ControlStrategy, Feedback, Header, Key, LookupFilter, MAGIC,
+    Mac, Message, MsgType, NAME_CAPACITY, NONCE_LEN, Name, Route, Settings, TAG_LEN, VERSION,
 };
 
 /// Largest datagram this protocol produces or accepts, bytes.
 pub const MAX_DATAGRAM: usize = 1400;
 
-const HEADER_LEN: usize = 16;
-const CRC_LEN: usize = 4;
-const MAX_PAYLOAD: usize = MAX_DATAGRAM - HEADER_LEN - CRC_LEN;
+/// Bytes of a frame header.
+pub const HEADER_LEN: usize = 20;
+/// Bytes a frame adds to its payload.
+pub const FRAME_OVERHEAD: usize = HEADER_LEN + TAG_LEN;
+/// Largest payload of one frame.
+pub const MAX_PAYLOAD: usize = MAX_DATAGRAM - FRAME_OVERHEAD;
 
 // Payload sizes of the fixed-size messages, bytes.
-const ANNOUNCE_LEN: usize = 82;
-const ACQUIRE_REPLY_LEN: usize = 8;
+const ANNOUNCE_LEN: usize = 78;
+const ACQUIRE_LEN: usize = NONCE_LEN;
+const ACQUIRE_REPLY_LEN: usize = 4 + NONCE_LEN;
 const SETTINGS_LEN: usize = 12;
 const COMMAND_LEN: usize = 12;
-const FEEDBACK_LEN: usize = 60;
+const FEEDBACK_LEN: usize = 64;
 /// Lookup payload before its entries: kind u8, reserved u8, count u16.
 const LOOKUP_HEAD_LEN: usize = 4;
 const MAC_LEN: usize = 6;
@@ -31,6 +35,9 @@ const FILTER_ALL: u8 = 0;
 const FILTER_FAMILY: u8 = 1;
 const FILTER_NAMES: u8 = 2;
 const FILTER_MACS: u8 = 3;
+
+/// Announce flags.
+const OWNED: u8 = 1;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
 pub enum EncodeError {
@@ -43,7 +50,7 @@ pub enum EncodeError {
     Invalid(&'static str),
 }
 
-/// Why a datagram was rejected. Receivers count these per kind and drop the datagram.
+/// Why a frame was rejected. Receivers count these per kind and drop the frame.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
 pub enum DecodeError {
     #[error("datagram truncated")]
@@ -56,20 +63,27 @@ pub enum DecodeError {
     UnknownType(u8),
     #[error("payload length does not match the datagram")]
     BadLength,
-    #[error("checksum mismatch")]
-    BadChecksum,
+    /// Corrupted, forged, or tagged under another key (another session, another network).
+    #[error("authentication tag mismatch")]
+    BadTag,
     #[error("malformed payload: {0}")]
     Malformed(&'static str),
 }
 
-/// Encode `msg` with the given session and sequence number into `buf`; returns the
-/// datagram length. Never allocates.
-pub fn encode(session: u32, seq: u32, msg: &Message, buf: &mut [u8]) -> Result<usize, EncodeError> {
+/// Encode `msg` as one frame with the header fields of `route`, tagged under `key`,
+/// at the start of `buf`; returns the frame's length. Never allocates.
+pub fn encode(
+    route: Route,
+    msg: &Message,
+    key: &Key,
+    buf: &mut [u8],
+) -> Result<usize, EncodeError> {
     let payload_len = payload_len(msg)?;
     if payload_len > MAX_PAYLOAD {
         return Err(EncodeError::TooLarge);
     }
-    let total = HEADER_LEN + payload_len + CRC_LEN;
+    let body = HEADER_LEN + payload_len;
+    let total = body + TAG_LEN;
     if buf.len() < total {
         return Err(EncodeError::BufferTooSmall);
     }
@@ -80,24 +94,32 @@ pub fn encode(session: u32, seq: u32, msg: &Message, buf: &mut [u8]) -> Result<u
     w.bytes(&MAGIC);
     w.u8(VERSION);
     w.u8(msg.msg_type() as u8);
-    w.u32(session);
-    w.u32(seq);
+    w.u32(route.session);
+    w.u64(route.seq);
+    w.u16(route.unit);
     w.u16(payload_len as u16); // <= MAX_PAYLOAD, checked above
-    w.u16(0);
     write_payload(msg, &mut w);
-    debug_assert_eq!(w.pos, HEADER_LEN + payload_len);
-    let crc = crc32fast::hash(&w.buf[..HEADER_LEN + payload_len]);
-    w.u32(crc);
+    debug_assert_eq!(w.pos, body);
+    let tag = key.tag(&w.buf[..body]);
+    w.bytes(&tag);
     Ok(total)
 }
 
-/// Decode and validate one datagram. Allocates only for lookups that list names or MACs.
-///
-/// Checks in order: length of header and trailer, magic, version, declared payload
-/// length against the datagram, checksum, reserved header field, message type, payload.
-pub fn decode(buf: &[u8]) -> Result<(Header, Message), DecodeError> {
-    if buf.len() < HEADER_LEN + CRC_LEN {
-        return Err(DecodeError::Truncated);
+/// Validate the header of the frame at the start of `buf` (magic, version, declared
+/// length against what is there, message type, fixed payload sizes) and return it
+/// with the frame's length. The tag is not checked: pick the key by the header, then
+/// [`open`] the frame.
+pub fn peek(buf: &[u8]) -> Result<(Header, usize), DecodeError> {
+    if buf.len() < FRAME_OVERHEAD {
+        return Err(
+            if buf.len() >= 3 && buf[..2] == MAGIC && buf[2] != VERSION {
+                DecodeError::WrongVersion(buf[2])
+            } else if buf.len() >= 2 && buf[..2] != MAGIC {
+                DecodeError::BadMagic
+            } else {
+                DecodeError::Truncated
+            },
+        );
     }
     if buf[0..2] != MAGIC {
         return Err(DecodeError::BadMagic);
@@ -111,38 +133,101 @@ pub fn decode(buf: &[u8]) -> Result<(Header, Message), DecodeError> {
     };
     let type_byte = r.u8()?;
     let session = r.u32()?;
-    let seq = r.u32()?;
+    let seq = r.u64()?;
+    let unit = r.u16()?;
     let payload_len = r.u16()? as usize;
-    let reserved = r.u16()?;
     if payload_len > MAX_PAYLOAD {
         return Err(DecodeError::BadLength);
     }
-    let total = HEADER_LEN + payload_len + CRC_LEN;
+    let total = FRAME_OVERHEAD + payload_len;
     if buf.len() < total {
         return Err(DecodeError::Truncated);
     }
-    if buf.len() > total {
+    let msg_type = msg_type_from(type_byte).ok_or(DecodeError::UnknownType(type_byte))?;
+    if fixed_len(msg_type).is_some_and(|n| n != payload_len) {
         return Err(DecodeError::BadLength);
     }
-    let body = &buf[..HEADER_LEN + payload_len];
-    let crc = u32::from_le_bytes(buf[total - CRC_LEN..].try_into().expect("4-byte trailer"));
-    if crc32fast::hash(body) != crc {
-        return Err(DecodeError::BadChecksum);
+    let header = Header {
+        msg_type,
+        session,
+        seq,
+        unit,
+    };
+    Ok((header, total))
+}
+
+/// Check the tag of `frame` (exactly one frame, as [`peek`] measured it) under `key`,
+/// then decode its payload. Allocates only for lookups that list names or MACs.
+pub fn open(frame: &[u8], key: &Key) -> Result<Message, DecodeError> {
+    let (header, total) = peek(frame)?;
+    if frame.len() != total {
+        return Err(DecodeError::BadLength);
     }
-    if reserved != 0 {
-        return Err(DecodeError::Malformed("reserved header field not zero"));
+    let body = total - TAG_LEN;
+    if !key.verify(&frame[..body], &frame[body..]) {
+        return Err(DecodeError::BadTag);
     }
-    let msg_type = msg_type_from(type_byte).ok_or(DecodeError::UnknownType(type_byte))?;
-    let payload = &body[HEADER_LEN..];
-    let msg = decode_payload(msg_type, payload)?;
-    Ok((
-        Header {
-            msg_type,
-            session,
-            seq,
-        },
-        msg,
-    ))
+    decode_payload(header.msg_type, &frame[HEADER_LEN..body])
+}
+
+/// Decode a datagram of exactly one frame whose key depends only on the message type
+/// (`key_for(header)`): discovery and tests. The loop uses [`Frames`] and [`open`].
+pub fn decode(
+    buf: &[u8],
+    key_for: impl FnOnce(&Header) -> Key,
+) -> Result<(Header, Message), DecodeError> {
+    let (header, total) = peek(buf)?;
+    if buf.len() != total {
+        return Err(DecodeError::BadLength);
+    }
+    let key = key_for(&header);
+    Ok((header, open(buf, &key)?))
+}
+
+/// The frames of a datagram, in order: each item is a frame's header and bytes, or
+/// the error that ends the walk (nothing after a bad header can be framed).
+pub struct Frames<'a> {
+    rest: &'a [u8],
+}
+
+impl<'a> Frames<'a> {
+    pub fn new(datagram: &'a [u8]) -> Self {
+        Self { rest: datagram }
+    }
+}
+
+impl<'a> Iterator for Frames<'a> {
+    type Item = Result<(Header, &'a [u8]), DecodeError>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        if self.rest.is_empty() {
+            return None;
+        }
+        match peek(self.rest) {
+            Ok((header, total)) => {
+                let (frame, rest) = self.rest.split_at(total);
+                self.rest = rest;
+                Some(Ok((header, frame)))
+            }
+            Err(e) => {
+                self.rest = &[];
+                Some(Err(e))
+            }
+        }
+    }
+}
+
+fn fixed_len(msg_type: MsgType) -> Option<usize> {
+    match msg_type {
+        MsgType::Lookup => None,
+        MsgType::Announce => Some(ANNOUNCE_LEN),
+        MsgType::Acquire => Some(ACQUIRE_LEN),
+        MsgType::Release => Some(0),
+        MsgType::AcquireReply => Some(ACQUIRE_REPLY_LEN),
+        MsgType::Settings | MsgType::SettingsAck => Some(SETTINGS_LEN),
+        MsgType::Command => Some(COMMAND_LEN),
+        MsgType::Feedback => Some(FEEDBACK_LEN),
+    }
 }
 
 fn msg_type_from(b: u8) -> Option<MsgType> {
@@ -175,7 +260,8 @@ fn payload_len(msg: &Message) -> Result<usize, EncodeError> {
                 }
         }
         Message::Announce(_) => ANNOUNCE_LEN,
-        Message::Acquire | Message::Release => 0,
+        Message::Acquire(_) => ACQUIRE_LEN,
+        Message::Release => 0,
         Message::AcquireReply(_) => ACQUIRE_REPLY_LEN,
         Message::Settings(s) | Message::SettingsAck(s) => {
             if !(s.feedback_rate_hz.is_finite() && s.command_lifetime_s.is_finite()) {
@@ -217,19 +303,20 @@ fn write_payload(msg: &Message, w: &mut Writer<'_>) {
         }
         Message::Announce(a) => {
             w.bytes(&a.mac);
-            w.u16(0);
+            w.u8(if a.owned { OWNED } else { 0 });
+            w.u8(0);
             w.u32(a.firmware);
-            w.u32(a.owner_session);
             w.u8(a.family.as_bytes().len() as u8);
             w.u8(a.name.as_bytes().len() as u8);
             w.padded_name(&a.family);
             w.padded_name(&a.name);
         }
-        Message::Acquire | Message::Release => {}
+        Message::Acquire(nonce) => w.bytes(nonce),
+        Message::Release => {}
         Message::AcquireReply(r) => {
             w.u8(r.granted as u8);
             w.bytes(&[0; 3]);
-            w.u32(r.owner_session);
+            w.bytes(&r.module_nonce);
         }
         Message::Settings(s) | Message::SettingsAck(s) => {
             w.f32(s.feedback_rate_hz);
@@ -244,7 +331,7 @@ fn write_payload(msg: &Message, w: &mut Writer<'_>) {
         }
         Message::Feedback(f) => {
             w.u64(f.module_time_us);
-            w.u32(f.last_command_seq);
+            w.u64(f.last_command_seq);
             for v in [
                 f.position_rad,
                 f.velocity_rad_s,
@@ -264,16 +351,7 @@ fn write_payload(msg: &Message, w: &mut Writer<'_>) {
 }
 
 fn decode_payload(msg_type: MsgType, p: &[u8]) -> Result<Message, DecodeError> {
-    let fixed_len = match msg_type {
-        MsgType::Lookup => None,
-        MsgType::Announce => Some(ANNOUNCE_LEN),
-        MsgType::Acquire | MsgType::Release => Some(0),
-        MsgType::AcquireReply => Some(ACQUIRE_REPLY_LEN),
-        MsgType::Settings | MsgType::SettingsAck => Some(SETTINGS_LEN),
-        MsgType::Command => Some(COMMAND_LEN),
-        MsgType::Feedback => Some(FEEDBACK_LEN),
-    };
-    if fixed_len.is_some_and(|n| n != p.len()) {
+    if fixed_len(msg_type).is_some_and(|n| n != p.len()) {
         return Err(DecodeError::BadLength);
     }
     let mut r = Reader { buf: p, pos: 0 };
@@ -281,9 +359,13 @@ fn decode_payload(msg_type: MsgType, p: &[u8]) -> Result<Message, DecodeError> {
         MsgType::Lookup => Message::Lookup(decode_lookup(&mut r)?),
         MsgType::Announce => {
             let mac: Mac = r.array()?;
-            r.zero(2)?;
+            let owned = match r.u8()? {
+                0 => false,
+                OWNED => true,
+                _ => return Err(DecodeError::Malformed("unknown announce flags")),
+            };
+            r.zero(1)?;
             let firmware = r.u32()?;
-            let owner_session = r.u32()?;
             let family_len = r.u8()?;
             let name_len = r.u8()?;
             let family = r.padded_name(family_len)?;
@@ -293,10 +375,10 @@ fn decode_payload(msg_type: MsgType, p: &[u8]) -> Result<Message, DecodeError> {
                 family,
                 name,
                 firmware,
-                owner_session,
+                owned,
             })
         }
-        MsgType::Acquire => Message::Acquire,
+        MsgType::Acquire => Message::Acquire(r.array()?),
         MsgType::Release => Message::Release,
         MsgType::AcquireReply => {
             let granted = match r.u8()? {
@@ -305,10 +387,10 @@ fn decode_payload(msg_type: MsgType, p: &[u8]) -> Result<Message, DecodeError> {
                 _ => return Err(DecodeError::Malformed("granted flag not 0 or 1")),
             };
             r.zero(3)?;
-            let owner_session = r.u32()?;
+            let module_nonce = r.array()?;
             Message::AcquireReply(AcquireReply {
                 granted,
-                owner_session,
+                module_nonce,
             })
         }
         MsgType::Settings | MsgType::SettingsAck => {
@@ -350,7 +432,7 @@ fn decode_payload(msg_type: MsgType, p: &[u8]) -> Result<Message, DecodeError> {
         }
         MsgType::Feedback => {
             let module_time_us = r.u64()?;
-            let last_command_seq = r.u32()?;
+            let last_command_seq = r.u64()?;
             let [position_rad, velocity_rad_s, torque_nm, deflection_rad] = r.f32s()?;
             let accel_m_s2 = r.f32s()?;
             let gyro_rad_s = r.f32s()?;
@@ -536,30 +618,97 @@ impl<'a> Reader<'a> {
 mod tests {
     use super::*;
 
+    const K: Key = Key::from_bytes([9; 32]);
+    fn route(session: u32, seq: u64, unit: u16) -> Route {
+        Route { session, seq, unit }
+    }
+
     #[test]
     fn header_fields_sit_at_their_offsets() {
         let mut buf = [0u8; MAX_DATAGRAM];
         let fb = Message::Feedback(Feedback::default());
-        let n = encode(0x0102_0304, 0x0a0b_0c0d, &fb, &mut buf).unwrap();
-        assert_eq!(n, HEADER_LEN + FEEDBACK_LEN + CRC_LEN);
-        assert_eq!(&buf[..4], b"SN\x01\x09");
+        let n = encode(
+            route(0x0102_0304, 0x0a0b_0c0d_0e0f_1011, 0x1213),
+            &fb,
+            &K,
+            &mut buf,
+        )
+        .unwrap();
+        assert_eq!(n, FRAME_OVERHEAD + FEEDBACK_LEN);
+        assert_eq!(&buf[..4], b"SN\x02\x09");
         assert_eq!(&buf[4..8], &[4, 3, 2, 1]);
-        assert_eq!(&buf[8..12], &[0x0d, 0x0c, 0x0b, 0x0a]);
-        assert_eq!(&buf[12..16], &[FEEDBACK_LEN as u8, 0, 0, 0]);
-        let crc = crc32fast::hash(&buf[..n - CRC_LEN]);
-        assert_eq!(&buf[n - CRC_LEN..n], &crc.to_le_bytes());
-        let (h, back) = decode(&buf[..n]).unwrap();
-        assert_eq!((h.session, h.seq, back), (0x0102_0304, 0x0a0b_0c0d, fb));
+        assert_eq!(
+            &buf[8..16],
+            &[0x11, 0x10, 0x0f, 0x0e, 0x0d, 0x0c, 0x0b, 0x0a]
+        );
+        assert_eq!(&buf[16..18], &[0x13, 0x12]);
+        assert_eq!(&buf[18..20], &[FEEDBACK_LEN as u8, 0]);
+        assert_eq!(&buf[n - TAG_LEN..n], &K.tag(&buf[..n - TAG_LEN]));
+        let (h, back) = decode(&buf[..n], |_| K).unwrap();
+        assert_eq!(
+            (h.session, h.seq, h.unit, back),
+            (0x0102_0304, 0x0a0b_0c0d_0e0f_1011, 0x1213, fb)
+        );
     }
 
     #[test]
-    fn checksum_covers_every_byte() {
+    fn tag_covers_every_byte_and_the_key() {
         let mut buf = [0u8; MAX_DATAGRAM];
-        let n = encode(1, 2, &Message::Command(Command::position(0.3)), &mut buf).unwrap();
-        for i in 16..n {
+        let n = encode(
+            route(1, 2, 0),
+            &Message::Command(Command::position(0.3)),
+            &K,
+            &mut buf,
+        )
+        .unwrap();
+        for i in 4..n {
             let mut d = buf;
             d[i] ^= 0x80;
-            assert_eq!(decode(&d[..n]), Err(DecodeError::BadChecksum), "byte {i}");
+            let e = decode(&d[..n], |_| K).unwrap_err();
+            // The tag catches it, or the header already does (type, length).
+            assert!(
+                matches!(
+                    e,
+                    DecodeError::BadTag
+                        | DecodeError::BadLength
+                        | DecodeError::Truncated
+                        | DecodeError::UnknownType(_)
+                ),
+                "byte {i}: {e:?}"
+            );
         }
+        assert_eq!(
+            decode(&buf[..n], |_| Key::OPEN).unwrap_err(),
+            DecodeError::BadTag
+        );
+    }
+
+    #[test]
+    fn frames_split_a_bundle() {
+        let mut buf = [0u8; MAX_DATAGRAM];
+        let mut len = 0;
+        for unit in 0..3u16 {
+            let m = Message::Command(Command::position(f64::from(unit)));
+            len += encode(route(5, 7, unit), &m, &K, &mut buf[len..]).unwrap();
+        }
+        let units: Vec<u16> = Frames::new(&buf[..len])
+            .map(|f| {
+                let (h, frame) = f.unwrap();
+                open(frame, &K).unwrap();
+                h.unit
+            })
+            .collect();
+        assert_eq!(units, [0, 1, 2]);
+        let cut: Vec<_> = Frames::new(&buf[..len - 1]).collect();
+        assert_eq!(cut.len(), 3);
+        assert_eq!(cut[2].unwrap_err(), DecodeError::Truncated);
+    }
+
+    #[test]
+    fn version_1_is_told_apart() {
+        let mut v1 = [0u8; 32];
+        v1[..4].copy_from_slice(b"SN\x01\x08");
+        assert_eq!(peek(&v1).unwrap_err(), DecodeError::WrongVersion(1));
+        assert_eq!(peek(&v1[..20]).unwrap_err(), DecodeError::WrongVersion(1));
     }
 }

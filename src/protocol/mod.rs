@@ -1,37 +1,57 @@
-//! Module network protocol v1 (see `docs/protocol.md`).
+//! Module network protocol v2 (see `docs/protocol.md`).
 //!
-//! A compact little-endian binary format. Every datagram is
-//! `header (16 bytes) | payload | crc32 (4 bytes)`. Every module is its own UDP
-//! endpoint. Decoding validates everything; a bad datagram is reported as a
-//! [`DecodeError`] which callers count and drop.
+//! A compact little-endian binary format. A datagram carries one or more frames, each
+//! `header (20 bytes) | payload | tag (16 bytes)`; the tag is a keyed BLAKE3 hash under
+//! the network key (discovery, Acquire) or the session key (everything a session
+//! sends), so only the owner can drive a module and only the module can report to it.
+//! Decoding validates everything; a bad frame is reported as a [`DecodeError`] which
+//! callers count and drop.
 //!
 //! The real-time path only encodes [`Command`]s and decodes [`Feedback`]: both are
 //! `Copy` and neither allocates.
 
 mod codec;
+mod key;
 mod name;
 
-pub use codec::{DecodeError, EncodeError, MAX_DATAGRAM, decode, encode};
+pub use codec::{
+    DecodeError, EncodeError, FRAME_OVERHEAD, Frames, HEADER_LEN, MAX_DATAGRAM, MAX_PAYLOAD,
+    decode, encode, open, peek,
+};
+pub use key::{KEY_LEN, Key, KeyError, NONCE_LEN, Nonce, TAG_LEN};
 pub use name::{NAME_CAPACITY, Name};
 
 /// First two bytes of every datagram: ASCII "SN".
 pub const MAGIC: [u8; 2] = *b"SN";
 /// The protocol version this build speaks.
-pub const VERSION: u8 = 1;
+pub const VERSION: u8 = 2;
+/// The previous version: refused, and counted apart so an old peer is easy to spot.
+pub const VERSION_1: u8 = 1;
 /// Session id that means "no session" (a free module, or a lookup).
 pub const NO_SESSION: u32 = 0;
 
 /// A module's hardware address.
 pub type Mac = [u8; 6];
 
-/// Fixed header of every datagram.
+/// Fixed header of every frame.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Header {
     pub msg_type: MsgType,
     /// Session that owns the module ([`NO_SESSION`] for lookups).
     pub session: u32,
-    /// Sender's sequence number, per sender and message stream.
-    pub seq: u32,
+    /// Sender's sequence number, per sender and message stream; never wraps.
+    pub seq: u64,
+    /// Which module of the endpoint the frame is for or from (0 for a module that is
+    /// its own endpoint; a gateway serves units 0..n on one address).
+    pub unit: u16,
+}
+
+/// What a sender chooses for a frame's header (the type comes from the message).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Route {
+    pub session: u32,
+    pub seq: u64,
+    pub unit: u16,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -68,18 +88,17 @@ pub struct Announce {
     pub family: Name,
     pub name: Name,
     pub firmware: u32,
-    /// Session currently driving it ([`NO_SESSION`] when free).
-    pub owner_session: u32,
+    /// Whether some session drives it now (which one is never disclosed).
+    pub owned: bool,
 }
 
-/// Ask to drive a module with the header's session id. Granted when the module is
-/// free, already owned by this session, or its owner has been silent longer than
-/// its release timeout.
+/// The answer to an Acquire. Granted when the module is free, already granted to this
+/// session and nonce, or its owner has been silent longer than its release timeout.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct AcquireReply {
     pub granted: bool,
-    /// The session that owns the module after this request.
-    pub owner_session: u32,
+    /// The module's half of the session key (zero when refused).
+    pub module_nonce: Nonce,
 }
 
 /// How the module's own servo runs.
@@ -145,7 +164,7 @@ pub struct Feedback {
     /// Module clock, µs since the module started (the emulator's simulated clock).
     pub module_time_us: u64,
     /// Sequence number of the last command the module applied (0 if none).
-    pub last_command_seq: u32,
+    pub last_command_seq: u64,
     pub position_rad: f32,
     pub velocity_rad_s: f32,
     /// Spring torque: stiffness × deflection. Positive when the output is pushed
@@ -163,7 +182,8 @@ pub struct Feedback {
 pub enum Message {
     Lookup(LookupFilter),
     Announce(Announce),
-    Acquire,
+    /// Ask to drive a module with the header's session; carries the host's nonce.
+    Acquire(Nonce),
     AcquireReply(AcquireReply),
     Release,
     Settings(Settings),
@@ -172,12 +192,23 @@ pub enum Message {
     Feedback(Feedback),
 }
 
+impl MsgType {
+    /// Discovery and Acquire are tagged with the network key, everything else with
+    /// the session key (`docs/protocol.md` §4).
+    pub fn uses_network_key(self) -> bool {
+        matches!(
+            self,
+            MsgType::Lookup | MsgType::Announce | MsgType::Acquire | MsgType::AcquireReply
+        )
+    }
+}
+
 impl Message {
     pub fn msg_type(&self) -> MsgType {
         match self {
             Message::Lookup(_) => MsgType::Lookup,
             Message::Announce(_) => MsgType::Announce,
-            Message::Acquire => MsgType::Acquire,
+            Message::Acquire(_) => MsgType::Acquire,
             Message::AcquireReply(_) => MsgType::AcquireReply,
             Message::Release => MsgType::Release,
             Message::Settings(_) => MsgType::Settings,

@@ -4,9 +4,10 @@ use std::io;
 use std::net::SocketAddr;
 use std::time::{Duration, Instant};
 
+use super::endpoints::Endpoints;
 use super::{FoundModule, UdpBus, net};
 use crate::bus::{Bus, BusCounters};
-use crate::protocol::{MAX_DATAGRAM, Message, NO_SESSION, Settings};
+use crate::protocol::{Key, MAX_DATAGRAM, Message, NO_SESSION, Nonce, Settings};
 
 /// Valid feedback rates, Hz (docs/protocol.md §3.5).
 const FEEDBACK_RATE_RANGE_HZ: std::ops::RangeInclusive<f32> = 1.0..=2000.0;
@@ -27,8 +28,8 @@ pub struct FailedModule {
 pub enum FailReason {
     /// Did not answer before the timeout.
     NoAnswer,
-    /// Refused the Acquire: another session owns it.
-    OwnedBy(u32),
+    /// Refused the Acquire: another session owns it (which one, modules never say).
+    Owned,
     /// Acknowledged other settings than those sent (it refused them).
     KeptSettings(Settings),
 }
@@ -38,7 +39,10 @@ impl fmt::Display for FailedModule {
         write!(f, "{} at {}: ", self.name, self.addr)?;
         match self.reason {
             FailReason::NoAnswer => write!(f, "no answer"),
-            FailReason::OwnedBy(s) => write!(f, "owned by session {s:#010x}"),
+            FailReason::Owned => write!(
+                f,
+                "driven by another session (it frees itself 1 s after that session falls silent)"
+            ),
             FailReason::KeptSettings(s) => write!(
                 f,
                 "refused the settings, kept {} Hz / {} s / {:?}",
@@ -62,8 +66,8 @@ pub enum ConnectError {
     NoModules,
     #[error("session 0 is reserved (\"no session\")")]
     NoSession,
-    #[error("two modules share the address {0}")]
-    DuplicateAddress(SocketAddr),
+    #[error("two modules share the address {0} and unit {1}")]
+    DuplicateAddress(SocketAddr, u16),
     #[error("invalid settings: {0}")]
     InvalidSettings(&'static str),
     #[error("could not acquire {} of {total} modules: {}", .failed.len(), list(.failed))]
@@ -106,8 +110,9 @@ impl UdpBus {
     /// stream feedback. Unanswered or refused requests are resent (at most every
     /// 100 ms) until `timeout`, which applies to each of the two phases.
     ///
-    /// Fails naming every module that refused (with its owner session) or did not
-    /// answer; anything acquired by then is released again.
+    /// Fails naming every module that refused or did not answer; anything acquired by
+    /// then is released again. On an open network ([`Key::OPEN`]); see
+    /// [`UdpBus::connect_keyed`].
     pub fn connect(
         found: &[FoundModule],
         settings: Settings,
@@ -115,50 +120,85 @@ impl UdpBus {
         session: u32,
         timeout: Duration,
     ) -> Result<UdpBus, ConnectError> {
+        Self::connect_keyed(found, settings, bind, session, timeout, Key::OPEN)
+    }
+
+    /// [`UdpBus::connect`] on a network keyed with `network_key`: each module's
+    /// session key is derived from it and the nonces both sides pick at Acquire.
+    pub fn connect_keyed(
+        found: &[FoundModule],
+        settings: Settings,
+        bind: SocketAddr,
+        session: u32,
+        timeout: Duration,
+        network_key: Key,
+    ) -> Result<UdpBus, ConnectError> {
         if found.is_empty() {
             return Err(ConnectError::NoModules);
         }
         if session == NO_SESSION {
             return Err(ConnectError::NoSession);
         }
-        for (i, m) in found.iter().enumerate() {
-            if found[..i].iter().any(|o| o.addr == m.addr) {
-                return Err(ConnectError::DuplicateAddress(m.addr));
-            }
-        }
+        let endpoints =
+            Endpoints::new(found).map_err(|(a, u)| ConnectError::DuplicateAddress(a, u))?;
         check_settings(&settings)?;
         let n = found.len();
         let mut bus = UdpBus {
             socket: net::open(bind, false)?,
             session,
+            network_key,
             modules: found.to_vec(),
+            keys: vec![network_key; n],
             slots: vec![Default::default(); n],
+            endpoints,
             settings,
             tx_buf: [0; MAX_DATAGRAM],
             rx_buf: [0; MAX_DATAGRAM + 1],
+            tx_seq: 0,
             command_seq: 0,
             sent_ns: Box::new([0; super::SENT_RING]),
             last_receive_ns: 0,
-            request_seq: 0,
             counters: BusCounters::default(),
             // Nothing to release until something is acquired.
             released: true,
         };
 
-        let mut owners = vec![None; n];
-        let granted = bus.handshake(&Message::Acquire, timeout, &mut |i, msg| match msg {
-            Message::AcquireReply(r) => {
-                owners[i] = Some(r.owner_session);
-                // A refused module is asked again: its owner may time out meanwhile.
-                Some(r.granted)
-            }
-            _ => None,
-        })?;
+        // One nonce for the whole group: each module adds its own, and the MAC too.
+        let host_nonce: Nonce = rand::random();
+        let mut answered = vec![false; n];
+        let mut keys = vec![None; n];
+        let granted = bus.handshake(
+            &Message::Acquire(host_nonce),
+            timeout,
+            &mut |i, msg| match msg {
+                Message::AcquireReply(r) => {
+                    answered[i] = true;
+                    if r.granted {
+                        let mac = &found[i].announce.mac;
+                        keys[i] = Some(network_key.session_key(
+                            session,
+                            mac,
+                            &host_nonce,
+                            &r.module_nonce,
+                        ));
+                    }
+                    // A refused module is asked again: its owner may time out meanwhile.
+                    Some(r.granted)
+                }
+                _ => None,
+            },
+        )?;
+        for (k, key) in bus.keys.iter_mut().zip(&keys) {
+            *k = key.unwrap_or(network_key);
+        }
         bus.released = false;
         if granted.iter().any(|g| !g) {
-            let failed = bus.failures(&granted, |i| match owners[i] {
-                Some(owner) => FailReason::OwnedBy(owner),
-                None => FailReason::NoAnswer,
+            let failed = bus.failures(&granted, |i| {
+                if answered[i] {
+                    FailReason::Owned
+                } else {
+                    FailReason::NoAnswer
+                }
             });
             bus.send_control(&Message::Release, |i| granted[i]);
             bus.released = true;

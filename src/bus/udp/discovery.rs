@@ -6,8 +6,8 @@ use std::time::{Duration, Instant};
 
 use super::net;
 use crate::protocol::{
-    Announce, EncodeError, LookupFilter, MAX_DATAGRAM, Mac, Message, NO_SESSION, Name, decode,
-    encode,
+    Announce, DecodeError, EncodeError, Frames, Key, LookupFilter, MAX_DATAGRAM, Mac, Message,
+    NO_SESSION, Name, Route, VERSION_1, encode, open,
 };
 
 /// How often the Lookup is repeated while waiting, so a lost datagram only delays.
@@ -19,8 +19,10 @@ const STOP_POLL: Duration = Duration::from_millis(20);
 /// A module that answered a lookup, and where it answered from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct FoundModule {
-    /// The module's own endpoint (the source of its Announce).
+    /// The module's endpoint (the source of its Announce).
     pub addr: SocketAddr,
+    /// Which module of that endpoint it is (0 unless behind a gateway).
+    pub unit: u16,
     pub announce: Announce,
 }
 
@@ -55,6 +57,13 @@ pub enum DiscoveryError {
     /// The stop flag was raised (SIGTERM, SIGINT) before the group was found.
     #[error("stopped during discovery")]
     Stopped,
+    /// Only peers of the old protocol answered.
+    #[error(
+        "{count} datagrams of protocol v1 came from {}: those modules (or that emulator) \
+         speak protocol v1, this daemon speaks v2 (docs/protocol.md)",
+        .from.iter().map(ToString::to_string).collect::<Vec<_>>().join(", ")
+    )]
+    OldProtocol { from: Vec<SocketAddr>, count: u64 },
 }
 
 /// "none answered within …" or "N answered within …: a, b".
@@ -94,17 +103,19 @@ pub fn discover(
     timeout: Duration,
 ) -> Result<Vec<FoundModule>, DiscoveryError> {
     let never = std::sync::atomic::AtomicBool::new(false);
-    discover_until(targets, filter, expected, bind, timeout, &never)
+    discover_until(targets, filter, expected, bind, timeout, &Key::OPEN, &never)
 }
 
-/// [`discover`] that gives up with [`DiscoveryError::Stopped`] as soon as `stop` is set
-/// (the daemon's signal handler sets it), checked at least every 20 ms.
+/// [`discover`] on a network keyed with `key` that gives up with
+/// [`DiscoveryError::Stopped`] as soon as `stop` is set (the daemon's signal handler
+/// sets it), checked at least every 20 ms.
 pub fn discover_until(
     targets: &[SocketAddr],
     filter: &LookupFilter,
     expected: Option<usize>,
     bind: SocketAddr,
     timeout: Duration,
+    key: &Key,
     stop: &std::sync::atomic::AtomicBool,
 ) -> Result<Vec<FoundModule>, DiscoveryError> {
     if targets.is_empty() {
@@ -119,9 +130,15 @@ pub fn discover_until(
     let socket = net::open(bind, true)?;
     let mut tx = [0u8; MAX_DATAGRAM];
     let lookup = Message::Lookup(filter.clone());
-    let len = encode(NO_SESSION, 1, &lookup, &mut tx).map_err(DiscoveryError::FilterTooLarge)?;
+    let route = Route {
+        session: NO_SESSION,
+        seq: 1,
+        unit: 0,
+    };
+    let len = encode(route, &lookup, key, &mut tx).map_err(DiscoveryError::FilterTooLarge)?;
 
     let mut found: Vec<FoundModule> = Vec::new();
+    let mut v1 = OldPeers::default();
     let deadline = net::deadline_after(timeout);
     let mut next_send = Instant::now();
     let mut first_round = true;
@@ -139,9 +156,22 @@ pub fn discover_until(
             next_send = now + LOOKUP_RESEND;
         }
         net::wait_readable(&socket, (next_send.min(deadline) - now).min(STOP_POLL))?;
-        collect(&socket, filter, &mut found)?;
+        collect(&socket, filter, key, &mut found, &mut v1)?;
     }
-    order_group(filter, expected, found, timeout)
+    match order_group(filter, expected, found, timeout) {
+        Err(_) if !v1.from.is_empty() => Err(DiscoveryError::OldProtocol {
+            from: v1.from,
+            count: v1.count,
+        }),
+        r => r,
+    }
+}
+
+/// Who answered in protocol v1, to say so when discovery fails.
+#[derive(Default)]
+struct OldPeers {
+    from: Vec<SocketAddr>,
+    count: u64,
 }
 
 /// Send the lookup everywhere. Failing to reach one target is not fatal (others may
@@ -170,17 +200,35 @@ fn send_to_all(
 fn collect(
     socket: &UdpSocket,
     filter: &LookupFilter,
+    key: &Key,
     found: &mut Vec<FoundModule>,
+    v1: &mut OldPeers,
 ) -> io::Result<()> {
     let mut rx = [0u8; MAX_DATAGRAM];
     loop {
         match socket.recv_from(&mut rx) {
             Ok((n, addr)) => {
-                if let Ok((_, Message::Announce(a))) = decode(&rx[..n])
-                    && matches_filter(filter, &a)
-                    && !found.iter().any(|f| f.announce.mac == a.mac)
-                {
-                    found.push(FoundModule { addr, announce: a });
+                // A gateway answers for all its units in one datagram.
+                for frame in Frames::new(&rx[..n]) {
+                    match frame.and_then(|(h, f)| Ok((h, open(f, key)?))) {
+                        Ok((h, Message::Announce(a)))
+                            if matches_filter(filter, &a)
+                                && !found.iter().any(|f| f.announce.mac == a.mac) =>
+                        {
+                            found.push(FoundModule {
+                                addr,
+                                unit: h.unit,
+                                announce: a,
+                            });
+                        }
+                        Err(DecodeError::WrongVersion(VERSION_1)) => {
+                            v1.count += 1;
+                            if !v1.from.contains(&addr) {
+                                v1.from.push(addr);
+                            }
+                        }
+                        _ => {}
+                    }
                 }
             }
             Err(e) if e.kind() == io::ErrorKind::WouldBlock => return Ok(()),

@@ -1,5 +1,6 @@
 //! A fake module for the bus tests: its own UDP socket and thread, speaking protocol
-//! v1 through the real codec. Behaviour switches live in [`FakeState`].
+//! v2 through the real codec on an open network. Behaviour switches live in
+//! [`FakeState`].
 use std::net::{SocketAddr, UdpSocket};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard};
@@ -8,14 +9,16 @@ use std::time::Duration;
 
 use super::FoundModule;
 use crate::protocol::{
-    AcquireReply, Announce, Command, Feedback, LookupFilter, MAX_DATAGRAM, Message, NO_SESSION,
-    Name, Settings, decode, encode,
+    AcquireReply, Announce, Command, Feedback, Key, LookupFilter, MAX_DATAGRAM, Message,
+    NO_SESSION, Name, Route, Settings, encode, open, peek,
 };
 
 #[derive(Debug, Default)]
 pub(super) struct FakeState {
     pub owner: u32,
     pub owner_addr: Option<SocketAddr>,
+    /// The owner's session key (the open key while free).
+    pub key: Option<Key>,
     pub settings: Option<Settings>,
     /// Drop this many Settings before answering (a lossy link).
     pub drop_settings: u32,
@@ -26,9 +29,9 @@ pub(super) struct FakeState {
     /// Send one feedback per command, advancing the clock by 1 ms (emulator lockstep).
     pub lockstep: bool,
     /// Commands received from the owner: (header seq, command).
-    pub commands: Vec<(u32, Command)>,
+    pub commands: Vec<(u64, Command)>,
     pub wrong_session: u32,
-    pub fb_seq: u32,
+    pub fb_seq: u64,
     pub time_us: u64,
 }
 
@@ -52,7 +55,7 @@ impl FakeModule {
             family: Name::new(family).unwrap(),
             name: Name::new(name).unwrap(),
             firmware: 1,
-            owner_session: NO_SESSION,
+            owned: false,
         };
         let state = Arc::new(Mutex::new(FakeState::default()));
         let stop = Arc::new(AtomicBool::new(false));
@@ -73,6 +76,7 @@ impl FakeModule {
     pub fn found(&self) -> FoundModule {
         FoundModule {
             addr: self.addr,
+            unit: 0,
             announce: self.announce,
         }
     }
@@ -87,9 +91,10 @@ impl FakeModule {
         self.socket.send_to(bytes, to).unwrap();
     }
 
-    /// Send a crafted feedback to the owner.
-    pub fn send_feedback(&self, session: u32, seq: u32, time_us: u64) {
-        self.send_raw(&feedback_datagram(session, seq, time_us));
+    /// Send a crafted feedback to the owner, tagged under the owner's session key.
+    pub fn send_feedback(&self, session: u32, seq: u64, time_us: u64) {
+        let key = self.state().key.expect("module is owned");
+        self.send_raw(&feedback_datagram(session, seq, time_us, &key));
     }
 }
 
@@ -102,14 +107,19 @@ impl Drop for FakeModule {
     }
 }
 
-pub(super) fn feedback_datagram(session: u32, seq: u32, time_us: u64) -> Vec<u8> {
+pub(super) fn feedback_datagram(session: u32, seq: u64, time_us: u64, key: &Key) -> Vec<u8> {
     let fb = Feedback {
         module_time_us: time_us,
         position_rad: 0.25,
         ..Feedback::default()
     };
     let mut buf = [0u8; MAX_DATAGRAM];
-    let n = encode(session, seq, &Message::Feedback(fb), &mut buf).unwrap();
+    let route = Route {
+        session,
+        seq,
+        unit: 0,
+    };
+    let n = encode(route, &Message::Feedback(fb), key, &mut buf).unwrap();
     buf[..n].to_vec()
 }
 
@@ -119,7 +129,7 @@ fn serve(socket: &UdpSocket, announce: Announce, state: &Mutex<FakeState>, stop:
         let Ok((n, src)) = socket.recv_from(&mut buf) else {
             continue;
         };
-        let Ok((h, msg)) = decode(&buf[..n]) else {
+        let Ok((h, _)) = peek(&buf[..n]) else {
             continue;
         };
         let mut st = state.lock().unwrap();
@@ -127,7 +137,17 @@ fn serve(socket: &UdpSocket, announce: Announce, state: &Mutex<FakeState>, stop:
             continue;
         }
         let owned_by_sender = h.session != NO_SESSION && h.session == st.owner;
-        let mut out: Vec<(u32, u32, Message)> = Vec::new();
+        let key = match (h.msg_type.uses_network_key(), st.key) {
+            (false, Some(k)) if owned_by_sender => k,
+            _ => Key::OPEN,
+        };
+        let Ok(msg) = open(&buf[..n], &key) else {
+            if !h.msg_type.uses_network_key() {
+                st.wrong_session += 1;
+            }
+            continue;
+        };
+        let mut out: Vec<(u32, u64, Message)> = Vec::new();
         match msg {
             Message::Lookup(filter) => {
                 let hit = match &filter {
@@ -138,22 +158,29 @@ fn serve(socket: &UdpSocket, announce: Announce, state: &Mutex<FakeState>, stop:
                 };
                 if hit {
                     let a = Announce {
-                        owner_session: st.owner,
+                        owned: st.owner != NO_SESSION,
                         ..announce
                     };
                     out.push((NO_SESSION, h.seq, Message::Announce(a)));
                 }
             }
-            Message::Acquire => {
+            Message::Acquire(host_nonce) => {
                 let granted =
                     h.session != NO_SESSION && (st.owner == NO_SESSION || owned_by_sender);
+                let module_nonce = [h.session as u8; 16];
                 if granted {
                     st.owner = h.session;
                     st.owner_addr = Some(src);
+                    st.key = Some(Key::OPEN.session_key(
+                        h.session,
+                        &announce.mac,
+                        &host_nonce,
+                        &module_nonce,
+                    ));
                 }
                 let reply = AcquireReply {
                     granted,
-                    owner_session: st.owner,
+                    module_nonce: if granted { module_nonce } else { [0; 16] },
                 };
                 out.push((h.session, h.seq, Message::AcquireReply(reply)));
             }
@@ -161,6 +188,7 @@ fn serve(socket: &UdpSocket, announce: Announce, state: &Mutex<FakeState>, stop:
             Message::Release => {
                 st.owner = NO_SESSION;
                 st.owner_addr = None;
+                st.key = None;
             }
             Message::Settings(_) if st.drop_settings > 0 => st.drop_settings -= 1,
             Message::Settings(s) => {
@@ -187,21 +215,32 @@ fn serve(socket: &UdpSocket, announce: Announce, state: &Mutex<FakeState>, stop:
         }
         // Feedback goes to the owner, replies to the sender.
         let fb_to = st.owner_addr;
+        let session_key = st.key.unwrap_or(Key::OPEN);
         drop(st);
         for (session, seq, m) in out {
             let to = match &m {
                 Message::Feedback(_) => fb_to.unwrap_or(src),
                 _ => src,
             };
+            let key = if m.msg_type().uses_network_key() {
+                Key::OPEN
+            } else {
+                session_key
+            };
             let mut tx = [0u8; MAX_DATAGRAM];
-            let len = encode(session, seq, &m, &mut tx).unwrap();
+            let route = Route {
+                session,
+                seq,
+                unit: 0,
+            };
+            let len = encode(route, &m, &key, &mut tx).unwrap();
             let _ = socket.send_to(&tx[..len], to);
         }
     }
 }
 
 /// The next streamed feedback (session, seq, message): bumps the feedback seq.
-fn next_feedback(st: &mut FakeState) -> (u32, u32, Message) {
+fn next_feedback(st: &mut FakeState) -> (u32, u64, Message) {
     st.fb_seq += 1;
     let fb = Feedback {
         module_time_us: st.time_us,

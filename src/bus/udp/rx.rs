@@ -1,18 +1,14 @@
 //! Receive-side bookkeeping of the bus: per-module newest feedback, sequence gaps,
 //! counting of rejected datagrams. Pure logic, no I/O.
 use crate::bus::BusCounters;
-use crate::protocol::{DecodeError, Feedback};
-
-/// A feedback seq this far behind the newest is taken as a module restart (accepted)
-/// rather than as a late duplicate (dropped).
-const RESTART_BACKWARD_JUMP: u32 = 1024;
+use crate::protocol::{DecodeError, Feedback, VERSION_1};
 
 /// Newest feedback of one module.
 #[derive(Debug, Clone, Copy, Default)]
 pub(super) struct Slot {
     pub newest: Feedback,
-    /// Header seq of `newest`; `None` before the first feedback.
-    pub last_seq: Option<u32>,
+    /// Header seq of `newest`; 0 before the first feedback (modules start at 1).
+    pub last_seq: u64,
     /// Arrived since it was last handed to the loop.
     pub pending: bool,
 }
@@ -20,38 +16,42 @@ pub(super) struct Slot {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(super) enum SeqVerdict {
     /// Newer than what we have; `lost` datagrams were skipped.
-    Accept { lost: u32 },
-    /// A duplicate or an older datagram that arrived late.
+    Accept { lost: u64 },
+    /// A duplicate, a replay or an older datagram that arrived late.
     Stale,
 }
 
-/// Judge feedback seq `seq` against the newest seen (`last`), modulo 2³².
-pub(super) fn judge_seq(last: Option<u32>, seq: u32) -> SeqVerdict {
-    let Some(last) = last else {
-        return SeqVerdict::Accept { lost: 0 };
-    };
-    let forward = seq.wrapping_sub(last);
-    if forward == 0 {
-        SeqVerdict::Stale
-    } else if forward < 1 << 31 {
-        SeqVerdict::Accept { lost: forward - 1 }
-    } else if last.wrapping_sub(seq) <= RESTART_BACKWARD_JUMP {
-        SeqVerdict::Stale
+/// Judge the seq of an authenticated feedback against the newest seen (`last`, 0 for
+/// none). Seqs never wrap (u64) and only the module can tag its feedback, so "newer"
+/// is plain `>`: a replay is never newer, and nothing forged gets this far to push the
+/// newest ahead (`docs/protocol.md` §5). A restarted module has lost its session key;
+/// it must be acquired again.
+pub(super) fn judge_seq(last: u64, seq: u64) -> SeqVerdict {
+    if seq > last {
+        SeqVerdict::Accept {
+            lost: seq - last - 1,
+        }
     } else {
-        SeqVerdict::Accept { lost: 0 }
+        SeqVerdict::Stale
     }
 }
 
 impl Slot {
     /// Take `fb` if it is newer than what the slot holds; returns whether it did.
-    pub(super) fn offer(&mut self, seq: u32, fb: Feedback, counters: &mut BusCounters) -> bool {
+    pub(super) fn offer(&mut self, seq: u64, fb: Feedback, counters: &mut BusCounters) -> bool {
         match judge_seq(self.last_seq, seq) {
-            SeqVerdict::Stale => false,
+            SeqVerdict::Stale => {
+                counters.feedback_replayed += 1;
+                false
+            }
             SeqVerdict::Accept { lost } => {
-                counters.feedback_lost += u64::from(lost);
+                // The first feedback of a session says nothing about loss before it.
+                if self.last_seq > 0 {
+                    counters.feedback_lost += lost;
+                }
                 counters.feedback_received += 1;
                 self.newest = fb;
-                self.last_seq = Some(seq);
+                self.last_seq = seq;
                 self.pending = true;
                 true
             }
@@ -64,10 +64,11 @@ pub(super) fn count_decode_error(c: &mut BusCounters, e: DecodeError) {
     let counter = match e {
         DecodeError::Truncated => &mut c.bad_truncated,
         DecodeError::BadMagic => &mut c.bad_magic,
+        DecodeError::WrongVersion(VERSION_1) => &mut c.v1_refused,
         DecodeError::WrongVersion(_) => &mut c.bad_version,
         DecodeError::UnknownType(_) => &mut c.bad_type,
         DecodeError::BadLength => &mut c.bad_length,
-        DecodeError::BadChecksum => &mut c.bad_checksum,
+        DecodeError::BadTag => &mut c.bad_tag,
         DecodeError::Malformed(_) => &mut c.bad_malformed,
     };
     *counter += 1;
@@ -78,17 +79,16 @@ mod tests {
     use super::*;
 
     #[test]
-    fn seq_gaps_duplicates_wrap_and_restart() {
+    fn seq_gaps_duplicates_and_replays() {
         use SeqVerdict::*;
-        assert_eq!(judge_seq(None, 77), Accept { lost: 0 });
-        assert_eq!(judge_seq(Some(5), 6), Accept { lost: 0 });
-        assert_eq!(judge_seq(Some(5), 9), Accept { lost: 3 });
-        assert_eq!(judge_seq(Some(5), 5), Stale);
-        assert_eq!(judge_seq(Some(5), 3), Stale);
-        assert_eq!(judge_seq(Some(u32::MAX), 0), Accept { lost: 0 });
-        assert_eq!(judge_seq(Some(u32::MAX - 1), 1), Accept { lost: 2 });
-        assert_eq!(judge_seq(Some(1), u32::MAX), Stale);
-        assert_eq!(judge_seq(Some(100_000), 0), Accept { lost: 0 });
+        assert_eq!(judge_seq(0, 77), Accept { lost: 76 });
+        assert_eq!(judge_seq(5, 6), Accept { lost: 0 });
+        assert_eq!(judge_seq(5, 9), Accept { lost: 3 });
+        assert_eq!(judge_seq(5, 5), Stale);
+        assert_eq!(judge_seq(5, 3), Stale);
+        // No wrap, no "restart": far behind is a replay.
+        assert_eq!(judge_seq(100_000, 0), Stale);
+        assert_eq!(judge_seq(u64::from(u32::MAX), 1 << 32), Accept { lost: 0 });
     }
 
     #[test]
@@ -104,7 +104,10 @@ mod tests {
         assert!(!s.offer(12, fb(3), &mut c));
         assert!(!s.offer(13, fb(4), &mut c));
         assert_eq!(s.newest.module_time_us, 4);
-        assert_eq!((c.feedback_received, c.feedback_lost), (2, 2));
+        assert_eq!(
+            (c.feedback_received, c.feedback_lost, c.feedback_replayed),
+            (2, 2, 2)
+        );
     }
 
     #[test]
@@ -113,10 +116,11 @@ mod tests {
         for e in [
             DecodeError::Truncated,
             DecodeError::BadMagic,
-            DecodeError::WrongVersion(2),
+            DecodeError::WrongVersion(3),
+            DecodeError::WrongVersion(1),
             DecodeError::UnknownType(0),
             DecodeError::BadLength,
-            DecodeError::BadChecksum,
+            DecodeError::BadTag,
             DecodeError::Malformed("x"),
         ] {
             count_decode_error(&mut c, e);
@@ -125,11 +129,12 @@ mod tests {
             c.bad_truncated,
             c.bad_magic,
             c.bad_version,
+            c.v1_refused,
             c.bad_type,
             c.bad_length,
-            c.bad_checksum,
+            c.bad_tag,
             c.bad_malformed,
         ];
-        assert_eq!(all, [1; 7]);
+        assert_eq!(all, [1; 8]);
     }
 }

@@ -8,7 +8,7 @@ use super::discovery::natural_cmp;
 use super::fake::{FakeModule, feedback_datagram};
 use super::*;
 use crate::bus::GroupFeedback;
-use crate::protocol::{ControlStrategy, LookupFilter, Name};
+use crate::protocol::{ControlStrategy, Key, LookupFilter, Name};
 
 /// Generous bound for things that succeed early.
 const LONG: Duration = Duration::from_secs(3);
@@ -141,11 +141,13 @@ fn discover_deduplicates_and_checks_the_count() {
 }
 
 #[test]
-fn announce_shows_the_owner() {
+fn announce_says_owned_but_not_by_whom() {
     let f = fakes(&["a"]);
+    let group = discover(&[f[0].addr], &LookupFilter::All, Some(1), lo(), LONG).unwrap();
+    assert!(!group[0].announce.owned);
     let _bus = connect(&f, 42);
     let group = discover(&[f[0].addr], &LookupFilter::All, Some(1), lo(), LONG).unwrap();
-    assert_eq!(group[0].announce.owner_session, 42);
+    assert!(group[0].announce.owned);
 }
 
 #[test]
@@ -202,11 +204,13 @@ fn acquire_refused_names_the_owner_and_releases_the_rest() {
         ConnectError::Acquire { failed, total: 2 } => {
             assert_eq!(failed.len(), 1);
             assert_eq!(failed[0].name, "b");
-            assert_eq!(failed[0].reason, FailReason::OwnedBy(1));
+            assert_eq!(failed[0].reason, FailReason::Owned);
         }
         other => panic!("{other:?}"),
     }
-    assert!(err.to_string().contains("0x00000001"), "{err}");
+    // Who owns it is never disclosed.
+    assert!(!err.to_string().contains("0x00000001"), "{err}");
+    assert!(err.to_string().contains("another session"), "{err}");
     // `a` was granted to session 2, then handed back.
     assert!(eventually(|| f[0].state().owner == 0));
     assert_eq!(f[1].state().owner, 1);
@@ -244,7 +248,7 @@ fn connect_rejects_bad_arguments() {
     let twice = [f[0].found(), f[0].found()];
     assert!(matches!(
         c(&twice, s, 1),
-        Err(ConnectError::DuplicateAddress(_))
+        Err(ConnectError::DuplicateAddress(..))
     ));
     for bad in [0.0, 2001.0, f32::NAN] {
         let s = Settings {
@@ -278,10 +282,12 @@ fn commands_reach_modules_with_the_cycle_seq() {
     assert!(eventually(|| f
         .iter()
         .all(|m| m.state().commands.len() == 2)));
-    for m in &f {
-        let seqs: Vec<u32> = m.state().commands.iter().map(|c| c.0).collect();
-        assert_eq!(seqs, [1, 2]);
-    }
+    // One seq per cycle, the same for every module, after the handshake's requests.
+    let seqs: Vec<u64> = f[0].state().commands.iter().map(|c| c.0).collect();
+    assert_eq!(seqs[1], seqs[0] + 1);
+    assert_eq!(seqs[1], bus.command_seq());
+    let other: Vec<u64> = f[1].state().commands.iter().map(|c| c.0).collect();
+    assert_eq!(seqs, other);
     assert_eq!(f[0].state().commands[1].1.position_rad, 0.5);
     assert!(f[1].state().commands[1].1.is_limp());
     assert_eq!(bus.counters().commands_sent, 4);
@@ -300,7 +306,8 @@ fn commands_reach_modules_with_the_cycle_seq() {
     bus.send(&[inf, Command::LIMP]).unwrap();
     assert!(eventually(|| f[1].state().commands.len() == 3));
     assert_eq!(f[0].state().commands.len(), 2);
-    assert_eq!((bus.counters().send_errors, bus.command_seq()), (1, 3));
+    assert_eq!(bus.counters().send_errors, 1);
+    assert_eq!(bus.command_seq(), seqs[1] + 1);
 }
 
 #[test]
@@ -336,19 +343,44 @@ fn feedback_keeps_the_newest_and_counts_lost() {
     assert_eq!(group.modules[0].feedback.module_time_us, 2000);
     let c = bus.counters();
     assert_eq!((c.feedback_received, c.feedback_lost), (6, 2));
+    assert_eq!(c.feedback_replayed, 2);
 }
 
-/// A datagram with a valid checksum around any header fields and payload.
-fn framed(version: u8, msg_type: u8, session: u32, payload: &[u8]) -> Vec<u8> {
+#[test]
+fn forged_far_ahead_feedback_never_hides_genuine_feedback() {
+    let f = fakes(&["a"]);
+    let mut bus = connect(&f, 7);
+    let mut group = GroupFeedback::new(1);
+    bus.receive(&mut group, 0, lockstep(0, LONG)).unwrap();
+    // From the module's own address, with the session in the clear and a seq a
+    // billion ahead, but tagged under a key the forger guessed (the open key).
+    f[0].send_raw(&feedback_datagram(7, 1_000_000_000, 9_000_000, &Key::OPEN));
+    f[0].send_raw(&feedback_datagram(
+        7,
+        1_000_000_001,
+        9_000_000,
+        &Key::random(),
+    ));
+    for (seq, t) in [(2, 1000), (3, 2000)] {
+        f[0].send_feedback(7, seq, t);
+    }
+    bus.receive(&mut group, 1, lockstep(2000, LONG)).unwrap();
+    let c = bus.counters();
+    assert_eq!((c.bad_tag, c.feedback_replayed, c.feedback_lost), (2, 0, 0));
+    assert_eq!(group.modules[0].feedback.module_time_us, 2000);
+}
+
+/// A frame with a valid tag under `key` around any header fields and payload.
+fn framed(version: u8, msg_type: u8, session: u32, payload: &[u8], key: &Key) -> Vec<u8> {
     let mut d = b"SN".to_vec();
     d.extend_from_slice(&[version, msg_type]);
     d.extend_from_slice(&session.to_le_bytes());
-    d.extend_from_slice(&1u32.to_le_bytes());
+    d.extend_from_slice(&1u64.to_le_bytes());
+    d.extend_from_slice(&0u16.to_le_bytes());
     d.extend_from_slice(&(payload.len() as u16).to_le_bytes());
-    d.extend_from_slice(&[0, 0]);
     d.extend_from_slice(payload);
-    let crc = crc32fast::hash(&d);
-    d.extend_from_slice(&crc.to_le_bytes());
+    let tag = key.tag(&d);
+    d.extend_from_slice(&tag);
     d
 }
 
@@ -356,11 +388,14 @@ fn framed(version: u8, msg_type: u8, session: u32, payload: &[u8]) -> Vec<u8> {
 fn bad_datagrams_are_counted_and_dropped() {
     let f = fakes(&["a"]);
     let mut bus = connect(&f, 7);
-    let good = feedback_datagram(7, 9, 1000);
+    let key = f[0].state().key.unwrap();
+    let good = feedback_datagram(7, 9, 1000, &key);
     let mut bad_magic = good.clone();
     bad_magic[0] = b'X';
-    let mut bad_checksum = good.clone();
-    *bad_checksum.last_mut().unwrap() ^= 1;
+    let mut bad_tag = good.clone();
+    *bad_tag.last_mut().unwrap() ^= 1;
+    let mut v1 = good.clone();
+    v1[2] = 1;
     let mut too_long = good.clone();
     too_long.push(0);
     let mut strategy_7 = [0u8; 12];
@@ -372,14 +407,21 @@ fn bad_datagrams_are_counted_and_dropped() {
     for d in [
         good[..10].to_vec(),
         bad_magic,
-        framed(2, 9, 7, &[]),
-        framed(1, 42, 7, &[]),
-        too_long,
+        framed(3, 9, 7, &[], &key),
+        v1,
+        framed(2, 42, 7, &[], &key),
+        framed(2, 9, 7, &[0; 12], &key), // feedback of the wrong size
         vec![b'S'; MAX_DATAGRAM + 1],
-        bad_checksum,
-        framed(1, 7, 7, &strategy_7),
-        framed(1, 1, 0, &[0, 0, 0, 0]), // a Lookup: never for the bus
-        framed(1, 4, 7, &[1, 0, 0, 0, 7, 0, 0, 0]), // a late AcquireReply
+        bad_tag,
+        framed(2, 7, 7, &strategy_7, &key),
+        framed(2, 1, 0, &[0, 0, 0, 0], &Key::OPEN), // a Lookup: never for the bus
+        framed(
+            2,
+            4,
+            7,
+            &[1, 0, 0, 0, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1],
+            &Key::OPEN,
+        ), // a late AcquireReply
         good,
     ] {
         f[0].send_raw(&d);
@@ -391,13 +433,14 @@ fn bad_datagrams_are_counted_and_dropped() {
         c.bad_truncated,
         c.bad_magic,
         c.bad_version,
+        c.v1_refused,
         c.bad_type,
         c.bad_length,
-        c.bad_checksum,
+        c.bad_tag,
         c.bad_malformed,
         c.unexpected,
     ];
-    assert_eq!(got, [1, 1, 1, 1, 2, 1, 1, 2]);
+    assert_eq!(got, [1, 1, 1, 1, 1, 2, 1, 1, 2]);
     assert_eq!(
         (c.feedback_received, c.feedback_lost, c.wrong_session),
         (2, 7, 0)
@@ -409,9 +452,14 @@ fn wrong_session_and_strangers_are_counted() {
     let f = fakes(&["a"]);
     let mut bus = connect(&f, 7);
     f[0].send_feedback(8, 2, 500);
+    // Even a stranger holding the session key is not the module.
+    let key = f[0].state().key.unwrap();
     let stranger = UdpSocket::bind("127.0.0.1:0").unwrap();
     stranger
-        .send_to(&feedback_datagram(7, 2, 600), bus.local_addr().unwrap())
+        .send_to(
+            &feedback_datagram(7, 2, 600, &key),
+            bus.local_addr().unwrap(),
+        )
         .unwrap();
     f[0].send_feedback(7, 2, 1000);
     let mut group = GroupFeedback::new(1);
@@ -434,7 +482,7 @@ fn lockstep_returns_once_every_module_reported() {
         for m in &group.modules {
             assert!(m.fresh);
             assert_eq!(m.feedback.module_time_us, k * 1000);
-            assert_eq!(m.feedback.last_command_seq, k as u32);
+            assert_eq!(m.feedback.last_command_seq, bus.command_seq());
         }
     }
     assert_eq!(bus.counters().feedback_lost, 0);
