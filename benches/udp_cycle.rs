@@ -100,6 +100,36 @@ fn median(mut v: Vec<f64>) -> f64 {
     v[v.len() / 2]
 }
 
+/// Median cost of tagging (and of checking) one Command frame, ns.
+fn tag_cost_ns() -> (f64, f64) {
+    use snaked::protocol::{Key, Message, Route, encode, open};
+    let key = Key::random();
+    let mut buf = [0u8; 64];
+    let msg = Message::Command(Command::position(0.1));
+    let reps = 20_000u32;
+    let mut enc = Vec::new();
+    let mut dec = Vec::new();
+    for _ in 0..7 {
+        let t0 = sys::monotonic_ns();
+        for seq in 0..reps {
+            let r = Route {
+                session: 1,
+                seq: u64::from(seq),
+                unit: 0,
+            };
+            std::hint::black_box(encode(r, &msg, &key, &mut buf).unwrap());
+        }
+        let t1 = sys::monotonic_ns();
+        for _ in 0..reps {
+            std::hint::black_box(open(&buf[..48], &key).unwrap());
+        }
+        let t2 = sys::monotonic_ns();
+        enc.push((t1 - t0) as f64 / f64::from(reps));
+        dec.push((t2 - t1) as f64 / f64::from(reps));
+    }
+    (median(enc), median(dec))
+}
+
 fn main() {
     // `cargo bench` passes `--bench`; the numbers are ours.
     let nums: Vec<usize> = std::env::args().filter_map(|a| a.parse().ok()).collect();
@@ -135,4 +165,6 @@ fn main() {
         "ratio of p50s (module per endpoint / gateway): {:.1}",
         medians[0] / medians[1]
     );
+    let (enc, dec) = tag_cost_ns();
+    println!("one Command frame: encode + tag {enc:.0} ns, check + decode {dec:.0} ns");
 }

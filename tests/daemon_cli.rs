@@ -2,6 +2,7 @@
 //! embedded emulator from start to safe stop.
 mod common;
 
+use std::os::unix::fs::PermissionsExt;
 use std::process::Command;
 use std::time::Duration;
 
@@ -49,7 +50,17 @@ fn a_bad_configuration_is_named_and_exits_non_zero() {
 #[test]
 fn check_config_finds_cross_field_and_named_file_errors() {
     let dir = tempfile::tempdir().unwrap();
+    let open_key = dir.path().join("open.key");
+    std::fs::write(&open_key, "ab".repeat(32)).unwrap();
+    std::fs::set_permissions(&open_key, std::fs::Permissions::from_mode(0o644)).unwrap();
+    let missing_key = format!(
+        "[network]\nkey_file = \"{}/nope.key\"\n",
+        dir.path().display()
+    );
+    let readable_key = format!("[network]\nkey_file = \"{}\"\n", open_key.display());
     for (text, key) in [
+        (missing_key.as_str(), "network.key_file"),
+        (readable_key.as_str(), "network.key_file"),
         (
             "[network]\nfeedback_rate_hz = 100.0\ncommand_lifetime_s = 0.002\n",
             "network.command_lifetime_s",

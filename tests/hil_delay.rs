@@ -22,40 +22,47 @@ fn rig(delay_ms: u32) -> Rig {
     )
 }
 
+/// Below the 0.25 s feedback timeout the daemon runs and reports the delay as the
+/// feedback's age; above it, it never runs, though feedback keeps arriving.
 #[test]
-fn a_short_delay_shows_in_the_age_and_a_long_one_trips_the_failsafe() {
-    let mut short = rig(40);
-    let s = short
-        .client
-        .wait_status(Duration::from_secs(30), "running", |s| {
-            s["mode"] == "running"
-        });
-    std::thread::sleep(Duration::from_millis(500));
-    let s2 = short.client.call("status", serde_json::json!({}));
-    let age = s2["joints"]["max_feedback_age_s"].as_f64().unwrap();
-    assert!(
-        age >= 0.035,
-        "the 40 ms delay shows in the age: {age} ({s})"
-    );
-    assert_eq!(s2["mode"], "running", "{s2}");
-    short.stop(N);
-
-    let mut long = rig(600);
-    // Feedback arrives (late) all the time, but never fresh enough to run on.
-    std::thread::sleep(Duration::from_secs(3));
-    let s = long.client.call("status", serde_json::json!({}));
-    assert_ne!(
-        s["mode"], "running",
-        "600 ms old feedback must not drive: {s}"
-    );
-    let stats = long.client.call("stats", serde_json::json!({}));
-    assert!(
-        stats["bus"]["feedback_received"].as_u64().unwrap() > 0,
-        "the feedback did arrive: {stats}"
-    );
-    let age = s["joints"]["max_feedback_age_s"]
-        .as_f64()
-        .unwrap_or(f64::INFINITY);
-    assert!(age >= 0.5, "reported as old as it is: {age} ({s})");
-    long.stop(N);
+fn delays_show_in_the_age_and_those_past_the_timeout_trip_the_failsafe() {
+    for delay_ms in [0u32, 40, 150] {
+        let mut r = rig(delay_ms);
+        let s = r
+            .client
+            .wait_status(Duration::from_secs(30), "running", |s| {
+                s["mode"] == "running"
+            });
+        std::thread::sleep(Duration::from_millis(500));
+        let s2 = r.client.call("status", serde_json::json!({}));
+        let age = s2["joints"]["max_feedback_age_s"].as_f64().unwrap();
+        let d = f64::from(delay_ms) * 1e-3;
+        assert!(
+            age >= d * 0.9 && age < d + 0.1,
+            "a {delay_ms} ms delay shows in the age: {age} ({s})"
+        );
+        assert_eq!(s2["mode"], "running", "{delay_ms} ms: {s2}");
+        r.stop(N);
+    }
+    for delay_ms in [400u32, 600] {
+        let mut r = rig(delay_ms);
+        // Feedback arrives (late) all the time, but never fresh enough to run on.
+        std::thread::sleep(Duration::from_secs(3));
+        let s = r.client.call("status", serde_json::json!({}));
+        assert_ne!(
+            s["mode"], "running",
+            "{delay_ms} ms old feedback must not drive: {s}"
+        );
+        let stats = r.client.call("stats", serde_json::json!({}));
+        assert!(
+            stats["bus"]["feedback_received"].as_u64().unwrap() > 0,
+            "the feedback did arrive: {stats}"
+        );
+        let age = s["joints"]["max_feedback_age_s"]
+            .as_f64()
+            .unwrap_or(f64::INFINITY);
+        let d = f64::from(delay_ms) * 1e-3;
+        assert!(age >= d * 0.9, "reported as old as it is: {age} ({s})");
+        r.stop(N);
+    }
 }

@@ -12,8 +12,13 @@ use crate::protocol::{Command, Feedback};
 #[derive(Debug, Clone, Copy, Default)]
 pub struct ModuleState {
     pub feedback: Feedback,
-    /// When the newest feedback arrived, ns on the loop's clock; `None` before the first.
+    /// When the newest feedback arrived, ns on the loop's clock (over UDP, the kernel's
+    /// receive stamp); `None` before the first.
     pub received_ns: Option<u64>,
+    /// How late it already was on arrival by the module's own clock: its
+    /// `module_time_us` against the host's clock, offset and drift tracked per module
+    /// (`bus::udp::clock`). `None` when not measured (lockstep, in-process buses).
+    pub clock_age_ns: Option<u64>,
     /// True when new feedback arrived during the last `receive` call.
     pub fresh: bool,
     /// How long ago, ns on the loop's clock, the daemon sent the command this feedback

@@ -118,6 +118,7 @@ impl Bus for SimBus {
                 received_ns: Some(now_ns),
                 fresh: true,
                 command_age_ns: None,
+                clock_age_ns: None,
             };
         }
         self.counters.feedback_received += n as u64;

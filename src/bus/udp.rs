@@ -9,6 +9,8 @@
 //! count as its own. The frames for modules behind one address (a gateway) travel
 //! bundled: one datagram per endpoint per cycle.
 
+mod batch;
+mod clock;
 mod connect;
 mod discovery;
 mod endpoints;
@@ -35,6 +37,7 @@ use crate::protocol::{
     Command, Key, MAGIC, MAX_DATAGRAM, Message, MsgType, Route, Settings, VERSION, encode, open,
     peek,
 };
+use batch::{BATCH, RecvBatch};
 use endpoints::Endpoints;
 use rx::Slot;
 
@@ -52,8 +55,12 @@ pub struct UdpBus {
     endpoints: Endpoints,
     settings: Settings,
     tx_buf: [u8; MAX_DATAGRAM],
-    /// One byte more than the largest datagram, to see oversized ones.
-    rx_buf: [u8; MAX_DATAGRAM + 1],
+    /// Taken out while draining (so frames can be handled with `&mut self`).
+    batch: Option<RecvBatch>,
+    /// Maps kernel receive stamps (`CLOCK_REALTIME`) to the loop's clock: the loop
+    /// time and the realtime clock read together at the start of this `receive`;
+    /// `None` in lockstep, where the loop's clock is simulated.
+    rx_clock: Option<(u64, u64)>,
     /// Header seq of every frame the bus sends, requests and commands alike: strictly
     /// increasing, so a module can refuse anything replayed. Never wraps (u64).
     tx_seq: u64,
@@ -121,18 +128,60 @@ impl UdpBus {
         self.counters.send_errors += sent.failed_frames;
     }
 
-    /// Receive until the socket is empty. Feedback goes to the slots; any other
-    /// authenticated frame from a module is offered to `reply` (index, message),
-    /// which returns whether it wanted it; unwanted ones count as unexpected.
+    /// Receive until the socket is empty, a batch of datagrams per system call.
+    /// Feedback goes to the slots; any other authenticated frame from a module is
+    /// offered to `reply` (index, message), which returns whether it wanted it;
+    /// unwanted ones count as unexpected.
     fn drain(&mut self, reply: &mut dyn FnMut(usize, Message) -> bool) -> io::Result<()> {
+        let mut batch = self
+            .batch
+            .take()
+            .expect("the batch is put back after each drain");
+        let r = self.drain_with(&mut batch, reply);
+        self.batch = Some(batch);
+        r
+    }
+
+    fn drain_with(
+        &mut self,
+        batch: &mut RecvBatch,
+        reply: &mut dyn FnMut(usize, Message) -> bool,
+    ) -> io::Result<()> {
         loop {
-            let (n, src) = match self.socket.recv_from(&mut self.rx_buf) {
-                Ok(r) => r,
-                Err(e) if e.kind() == io::ErrorKind::WouldBlock => return Ok(()),
+            let n = match batch.recv(&self.socket) {
+                Ok(n) => n,
                 Err(e) if net::is_transient(&e) => continue,
                 Err(e) => return Err(e),
             };
-            self.on_datagram(n, src, reply);
+            for i in 0..n {
+                let d = batch.get(i);
+                if d.oversized {
+                    self.counters.bad_length += 1;
+                    continue;
+                }
+                let Some(src) = d.from else {
+                    self.counters.unexpected += 1;
+                    continue;
+                };
+                let rx_ns = self.arrival_ns(d.rx_realtime_ns);
+                self.on_datagram(d.bytes, src, rx_ns, reply);
+            }
+            if n < BATCH {
+                return Ok(());
+            }
+        }
+    }
+
+    /// When a datagram stamped `rx_realtime_ns` by the kernel arrived, on the loop's
+    /// clock: never after this `receive` began, and that time itself when there is no
+    /// stamp or no real clock (lockstep).
+    fn arrival_ns(&self, rx_realtime_ns: u64) -> u64 {
+        match self.rx_clock {
+            Some((loop_ns, realtime_ns)) if rx_realtime_ns > 0 => {
+                loop_ns.saturating_sub(realtime_ns.saturating_sub(rx_realtime_ns))
+            }
+            Some((loop_ns, _)) => loop_ns,
+            None => self.last_receive_ns,
         }
     }
 
@@ -140,17 +189,14 @@ impl UdpBus {
     /// anything else that came authenticated from a module of the group.
     fn on_datagram(
         &mut self,
-        n: usize,
+        datagram: &[u8],
         src: SocketAddr,
+        rx_ns: u64,
         reply: &mut dyn FnMut(usize, Message) -> bool,
     ) {
-        if n > MAX_DATAGRAM {
-            self.counters.bad_length += 1;
-            return;
-        }
         let mut at = 0;
-        while at < n {
-            let d = &self.rx_buf[at..n];
+        while at < datagram.len() {
+            let d = &datagram[at..];
             // A Lookup is never meant for the bus, and decoding one could allocate.
             if d.len() >= 4 && d[..2] == MAGIC && d[2] == VERSION && d[3] == MsgType::Lookup as u8 {
                 self.counters.unexpected += 1;
@@ -175,7 +221,7 @@ impl UdpBus {
                 self.counters.wrong_session += 1;
                 continue;
             };
-            let msg = match open(&self.rx_buf[frame], &key) {
+            let msg = match open(&datagram[frame], &key) {
                 Ok(m) => m,
                 Err(e) => {
                     rx::count_decode_error(&mut self.counters, e);
@@ -184,7 +230,8 @@ impl UdpBus {
             };
             match msg {
                 Message::Feedback(fb) => {
-                    self.slots[i].offer(header.seq, fb, &mut self.counters);
+                    let on_clock = self.rx_clock.is_some();
+                    self.slots[i].offer(header.seq, fb, rx_ns, on_clock, &mut self.counters);
                 }
                 // Replies to our own requests only.
                 other if header.session == self.session => {
@@ -212,7 +259,8 @@ impl UdpBus {
             if slot.pending {
                 slot.pending = false;
                 state.feedback = slot.newest;
-                state.received_ns = Some(now_ns);
+                state.received_ns = Some(slot.rx_ns.min(now_ns));
+                state.clock_age_ns = slot.clock_age_ns;
                 state.fresh = true;
             }
             state.command_age_ns =
@@ -290,6 +338,9 @@ impl Bus for UdpBus {
             m.fresh = false;
         }
         self.last_receive_ns = now_ns;
+        // Real-time pacing: the loop's clock runs with the wall clock, so kernel stamps
+        // and the modules' clocks mean something against it.
+        self.rx_clock = matches!(wait, FeedbackWait::None).then(|| (now_ns, batch::realtime_ns()));
         self.drain(&mut |_, _| false)?;
         if let FeedbackWait::Lockstep {
             min_module_time_us,

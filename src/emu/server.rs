@@ -559,7 +559,12 @@ impl Server {
             self.counters.dropped_silent += 1;
             return;
         }
-        let sample = self.plant.feedback(i);
+        let mut sample = self.plant.feedback(i);
+        if self.config.mode == Mode::Realtime {
+            // A module's clock is its own crystal, not the physics: when the world
+            // stalls (an overloaded machine) the clock runs on, as on a real module.
+            sample.module_time_us = (self.wall_s() * 1e6) as u64;
+        }
         let Some(out) = self.modules[i].make_feedback(t, sample) else {
             return;
         };

@@ -20,16 +20,7 @@ impl ControlLoop {
         let mut min_module_time: Option<u64> = None;
         for (i, m) in self.group.modules.iter().enumerate() {
             match m.received_ns {
-                // The older of when it arrived and (over UDP) the round trip of the
-                // command it reports: feedback delayed on the way looks fresh by the
-                // first alone.
-                Some(r) => {
-                    let age = c
-                        .clock_ns
-                        .saturating_sub(r)
-                        .max(m.command_age_ns.unwrap_or(0));
-                    oldest_ns = oldest_ns.max(age);
-                }
+                Some(_) => oldest_ns = oldest_ns.max(feedback_age_ns(m, c.clock_ns)),
                 None => never = true,
             }
             if !m.fresh {
@@ -136,10 +127,7 @@ impl ControlLoop {
                 j.velocity_rad_s = m.feedback.velocity_rad_s as f64;
                 j.torque_nm = m.feedback.torque_nm as f64;
                 j.feedback_age_s = match m.received_ns {
-                    Some(r) => {
-                        let age = c.clock_ns.saturating_sub(r);
-                        age.max(m.command_age_ns.unwrap_or(0)) as f64 * 1e-9
-                    }
+                    Some(_) => feedback_age_ns(m, c.clock_ns) as f64 * 1e-9,
                     None => f64::INFINITY,
                 };
             }
@@ -152,4 +140,16 @@ impl ControlLoop {
             snap.record_dropped = record_dropped;
         });
     }
+}
+
+/// How old a module's newest feedback is at `now_ns` (loop clock): since it arrived,
+/// plus how late it already was by the module's own clock, and at least (over UDP) the
+/// round trip of the command it reports. Feedback delayed on the way looks fresh by its
+/// arrival alone; a delay present from the start looks like clock offset to the
+/// module's clock, and the round trip catches it.
+fn feedback_age_ns(m: &crate::bus::ModuleState, now_ns: u64) -> u64 {
+    let since_arrival = m.received_ns.map_or(u64::MAX, |r| now_ns.saturating_sub(r));
+    since_arrival
+        .saturating_add(m.clock_age_ns.unwrap_or(0))
+        .max(m.command_age_ns.unwrap_or(0))
 }

@@ -143,8 +143,11 @@ impl UdpBus {
             Endpoints::new(found).map_err(|(a, u)| ConnectError::DuplicateAddress(a, u))?;
         check_settings(&settings)?;
         let n = found.len();
+        let socket = net::open(bind, false)?;
+        // Best effort: without stamps, arrival is when the loop drains the socket.
+        let _ = super::batch::RecvBatch::enable_timestamps(&socket);
         let mut bus = UdpBus {
-            socket: net::open(bind, false)?,
+            socket,
             session,
             network_key,
             modules: found.to_vec(),
@@ -153,7 +156,8 @@ impl UdpBus {
             endpoints,
             settings,
             tx_buf: [0; MAX_DATAGRAM],
-            rx_buf: [0; MAX_DATAGRAM + 1],
+            batch: Some(super::batch::RecvBatch::new()),
+            rx_clock: None,
             tx_seq: 0,
             command_seq: 0,
             sent_ns: Box::new([0; super::SENT_RING]),

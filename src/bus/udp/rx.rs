@@ -1,5 +1,6 @@
 //! Receive-side bookkeeping of the bus: per-module newest feedback, sequence gaps,
 //! counting of rejected datagrams. Pure logic, no I/O.
+use super::clock::ModuleClock;
 use crate::bus::BusCounters;
 use crate::protocol::{DecodeError, Feedback, VERSION_1};
 
@@ -11,6 +12,11 @@ pub(super) struct Slot {
     pub last_seq: u64,
     /// Arrived since it was last handed to the loop.
     pub pending: bool,
+    /// When `newest` arrived, ns on the loop's clock.
+    pub rx_ns: u64,
+    /// How late `newest` was on arrival by the module's clock (`None`: not measured).
+    pub clock_age_ns: Option<u64>,
+    pub clock: ModuleClock,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -38,7 +44,16 @@ pub(super) fn judge_seq(last: u64, seq: u64) -> SeqVerdict {
 
 impl Slot {
     /// Take `fb` if it is newer than what the slot holds; returns whether it did.
-    pub(super) fn offer(&mut self, seq: u64, fb: Feedback, counters: &mut BusCounters) -> bool {
+    /// `rx_ns` is its arrival on the loop's clock; `on_clock` says that clock runs in
+    /// real time, so the module's clock can be compared with it.
+    pub(super) fn offer(
+        &mut self,
+        seq: u64,
+        fb: Feedback,
+        rx_ns: u64,
+        on_clock: bool,
+        counters: &mut BusCounters,
+    ) -> bool {
         match judge_seq(self.last_seq, seq) {
             SeqVerdict::Stale => {
                 counters.feedback_replayed += 1;
@@ -52,6 +67,8 @@ impl Slot {
                 counters.feedback_received += 1;
                 self.newest = fb;
                 self.last_seq = seq;
+                self.rx_ns = rx_ns;
+                self.clock_age_ns = on_clock.then(|| self.clock.observe(rx_ns, fb.module_time_us));
                 self.pending = true;
                 true
             }
@@ -99,10 +116,10 @@ mod tests {
             module_time_us: t,
             ..Feedback::default()
         };
-        assert!(s.offer(10, fb(1), &mut c));
-        assert!(s.offer(13, fb(4), &mut c));
-        assert!(!s.offer(12, fb(3), &mut c));
-        assert!(!s.offer(13, fb(4), &mut c));
+        assert!(s.offer(10, fb(1), 0, false, &mut c));
+        assert!(s.offer(13, fb(4), 0, false, &mut c));
+        assert!(!s.offer(12, fb(3), 0, false, &mut c));
+        assert!(!s.offer(13, fb(4), 0, false, &mut c));
         assert_eq!(s.newest.module_time_us, 4);
         assert_eq!(
             (c.feedback_received, c.feedback_lost, c.feedback_replayed),
