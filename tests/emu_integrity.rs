@@ -67,6 +67,8 @@ fn only_the_owner_drives_a_module_and_replays_do_nothing() {
     }
     let (_, f) = last.expect("the owner's feedback kept coming");
     assert!((f.position_rad - 0.4).abs() < 0.05, "{}", f.position_rad);
+    // And none of it went to the stranger.
+    assert!(stranger.recv(Duration::from_millis(50)).is_none());
     let c = emu.stop();
     assert_eq!(
         c.bad_tag, 3,
