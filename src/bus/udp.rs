@@ -70,6 +70,8 @@ pub struct UdpBus {
     /// `receive` before it), by seq modulo the ring's size.
     sent_ns: Box<[u64; SENT_RING]>,
     last_receive_ns: u64,
+    /// `receive` calls so far (0: still connecting).
+    receives: u64,
     counters: BusCounters,
     released: bool,
 }
@@ -174,14 +176,16 @@ impl UdpBus {
 
     /// When a datagram stamped `rx_realtime_ns` by the kernel arrived, on the loop's
     /// clock: never after this `receive` began, and that time itself when there is no
-    /// stamp or no real clock (lockstep).
-    fn arrival_ns(&self, rx_realtime_ns: u64) -> u64 {
+    /// stamp or no real clock (lockstep). `None` before the loop's first `receive`
+    /// (during connect): the loop's clock is not known yet, the first `receive` counts.
+    fn arrival_ns(&self, rx_realtime_ns: u64) -> Option<u64> {
         match self.rx_clock {
             Some((loop_ns, realtime_ns)) if rx_realtime_ns > 0 => {
-                loop_ns.saturating_sub(realtime_ns.saturating_sub(rx_realtime_ns))
+                Some(loop_ns.saturating_sub(realtime_ns.saturating_sub(rx_realtime_ns)))
             }
-            Some((loop_ns, _)) => loop_ns,
-            None => self.last_receive_ns,
+            Some((loop_ns, _)) => Some(loop_ns),
+            None if self.receives > 0 => Some(self.last_receive_ns),
+            None => None,
         }
     }
 
@@ -191,7 +195,7 @@ impl UdpBus {
         &mut self,
         datagram: &[u8],
         src: SocketAddr,
-        rx_ns: u64,
+        rx_ns: Option<u64>,
         reply: &mut dyn FnMut(usize, Message) -> bool,
     ) {
         let mut at = 0;
@@ -259,7 +263,7 @@ impl UdpBus {
             if slot.pending {
                 slot.pending = false;
                 state.feedback = slot.newest;
-                state.received_ns = Some(slot.rx_ns.min(now_ns));
+                state.received_ns = Some(slot.rx_ns.map_or(now_ns, |r| r.min(now_ns)));
                 state.clock_age_ns = slot.clock_age_ns;
                 state.fresh = true;
             }
@@ -338,6 +342,7 @@ impl Bus for UdpBus {
             m.fresh = false;
         }
         self.last_receive_ns = now_ns;
+        self.receives += 1;
         // Real-time pacing: the loop's clock runs with the wall clock, so kernel stamps
         // and the modules' clocks mean something against it.
         self.rx_clock = matches!(wait, FeedbackWait::None).then(|| (now_ns, batch::realtime_ns()));

@@ -162,6 +162,7 @@ impl UdpBus {
             command_seq: 0,
             sent_ns: Box::new([0; super::SENT_RING]),
             last_receive_ns: 0,
+            receives: 0,
             counters: BusCounters::default(),
             // Nothing to release until something is acquired.
             released: true,

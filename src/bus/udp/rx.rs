@@ -12,8 +12,9 @@ pub(super) struct Slot {
     pub last_seq: u64,
     /// Arrived since it was last handed to the loop.
     pub pending: bool,
-    /// When `newest` arrived, ns on the loop's clock.
-    pub rx_ns: u64,
+    /// When `newest` arrived, ns on the loop's clock (`None`: before the loop's clock
+    /// was known, during connect).
+    pub rx_ns: Option<u64>,
     /// How late `newest` was on arrival by the module's clock (`None`: not measured).
     pub clock_age_ns: Option<u64>,
     pub clock: ModuleClock,
@@ -50,7 +51,7 @@ impl Slot {
         &mut self,
         seq: u64,
         fb: Feedback,
-        rx_ns: u64,
+        rx_ns: Option<u64>,
         on_clock: bool,
         counters: &mut BusCounters,
     ) -> bool {
@@ -68,7 +69,10 @@ impl Slot {
                 self.newest = fb;
                 self.last_seq = seq;
                 self.rx_ns = rx_ns;
-                self.clock_age_ns = on_clock.then(|| self.clock.observe(rx_ns, fb.module_time_us));
+                self.clock_age_ns = match rx_ns {
+                    Some(rx) if on_clock => Some(self.clock.observe(rx, fb.module_time_us)),
+                    _ => None,
+                };
                 self.pending = true;
                 true
             }
@@ -116,10 +120,11 @@ mod tests {
             module_time_us: t,
             ..Feedback::default()
         };
-        assert!(s.offer(10, fb(1), 0, false, &mut c));
-        assert!(s.offer(13, fb(4), 0, false, &mut c));
-        assert!(!s.offer(12, fb(3), 0, false, &mut c));
-        assert!(!s.offer(13, fb(4), 0, false, &mut c));
+        assert!(s.offer(10, fb(1), None, false, &mut c));
+        assert!(s.offer(13, fb(4), Some(7), false, &mut c));
+        assert!(!s.offer(12, fb(3), Some(8), false, &mut c));
+        assert!(!s.offer(13, fb(4), Some(9), false, &mut c));
+        assert_eq!(s.rx_ns, Some(7));
         assert_eq!(s.newest.module_time_us, 4);
         assert_eq!(
             (c.feedback_received, c.feedback_lost, c.feedback_replayed),
