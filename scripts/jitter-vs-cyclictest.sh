@@ -3,12 +3,41 @@
 #   scripts/jitter-vs-cyclictest.sh [ROUNDS] [SECONDS] [MODULES]
 # Starts snake-emu (MODULES, default 18) over UDP on loopback, then alternates ROUNDS
 # (default 3) times: cyclictest (rt-tests; one thread, 1 ms interval, SECONDS, default
-# 30) and snaked at 1 kHz against the emulator for SECONDS. Prints both period-error
-# distributions (p50, p99, p99.9, max, µs) per round and the ratio snaked / cyclictest
-# of the medians over the rounds. RT=1 runs both under SCHED_FIFO 80 with locked memory
-# on CPU 1 (the emulator on CPU 0); needs root or CAP_SYS_NICE.
+# 30) and snaked at 1 kHz against the emulator for SECONDS (and up to two more snaked
+# variants after it, below). Prints the period-error distributions (p50, p99,
+# p99.9, max, µs) per round and, per snaked variant, the medians over the rounds and
+# their ratio to cyclictest's.
+#
+# The same load: during the cyclictest rounds a second snaked, the load daemon (same
+# binary, same configuration), drives the emulator, so the emulator does the same work
+# (commands decoded, plant stepped, feedback sent at 1 kHz) and loopback carries the same
+# datagrams as in the snaked rounds. Only the load daemon's loop is not measured, and
+# it is kept off the measured CPU: with RT=1 the whole load daemon runs on CPU 0 beside
+# the emulator (its loop under the same SCHED_FIFO as the measured one), so CPU 1 holds
+# what it holds in a snaked round minus snaked itself, which is what a floor is. Its
+# cost (2-5 % of one CPU) is the one thing CPU 0 carries on top. Without RT=1 nothing is
+# pinned, the load daemon included. LOAD=0 leaves the
+# emulator idle during cyclictest (the earlier, quieter comparison).
+#
+# RT=1: cyclictest and the measured loop under SCHED_FIFO 80 with locked memory on CPU 1,
+# the emulator on CPU 0; needs root or CAP_SYS_NICE. GATEWAY=1: the emulator serves
+# every module from one endpoint (`snake-emu --gateway`, one datagram per cycle each
+# way) instead of one endpoint per module.
+# Variants, measured in the same run, one round of each after each cyclictest round:
+#   B=PATH      a second snaked binary (e.g. built from another commit);
+#   B_LOOP=TOML extra `[loop]` lines for it (e.g. 'busy_wait_s = 0.00005'; the first
+#               binary when B is not set);
+#   C=PATH, C_LOOP=TOML a third variant, likewise;
+#   A_LOOP=TOML extra `[loop]` lines for the first variant (and the load daemon).
+# cyclictest holds /dev/cpu_dma_latency at 0 while it runs (idle CPUs poll instead of
+# halting); snaked does so with `cpu_dma_latency_s = 0.0` (e.g. in A_LOOP).
+# CT_ARGS="--laptop" runs cyclictest without it.
+# CT_IDLE=1 adds a cyclictest round with the emulator idle to each round (what the load
+# changes). BIN=DIR takes snaked, snake-emu and snakectl from DIR without building.
 # cyclictest measures wake-up latency; snaked's period error is |cycle start - deadline|
-# (docs/architecture.md): the same quantity for a loop on absolute deadlines.
+# (docs/architecture.md): the same quantity for a loop on absolute deadlines. snaked
+# reports the upper edge of a 12.5 % bucket; the ratios use cyclictest's quantiles
+# rounded up to the same bucket edges (its raw 1 µs figures are printed too).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 # shellcheck source=scripts/emu-config.sh
@@ -18,35 +47,103 @@ secs=${2:-30}
 n=${3:-18}
 command -v cyclictest >/dev/null || { apt-get install -y -qq rt-tests >/dev/null || {
     apt-get update -qq && apt-get install -y -qq rt-tests >/dev/null; }; }
-cargo build --release --bins -q
+if [ -n "${BIN:-}" ]; then
+    bins=$BIN
+else
+    cargo build --release --bins -q
+    bins=${CARGO_TARGET_DIR:-target}/release
+fi
+a_bin=$bins/snaked
+b_bin=${B:-}
+if [ -z "$b_bin" ] && [ -n "${B_LOOP:-}" ]; then b_bin=$a_bin; fi
+c_bin=${C:-}
+if [ -z "$c_bin" ] && [ -n "${C_LOOP:-}" ]; then c_bin=$a_bin; fi
+snakectl=$bins/snakectl
 dir=$(mktemp -d)
-trap 'kill $emu 2>/dev/null || true' EXIT
+emu=""
+load=""
+trap 'kill $emu $load 2>/dev/null || true' EXIT
 base=$((30000 + RANDOM % 20000))
-emu_cmd=(./target/release/snake-emu --modules "$n" --base-port "$base")
-ct_rt=()
-rt_toml=""
+emu_cmd=("$bins/snake-emu" --modules "$n" --base-port "$base")
+if [ "${GATEWAY:-0}" = 1 ]; then emu_cmd+=(--gateway); fi
+read -r -a ct_rt <<< "${CT_ARGS:-}"
+loop_toml=$'[loop]'
+load_toml=$'[loop]'
+load_cmd=()
 if [ "${RT:-0}" = 1 ]; then
     emu_cmd=(taskset -c 0 "${emu_cmd[@]}")
-    ct_rt=(-p 80 -m -a 1)
-    rt_toml=$'[loop]\nsched_fifo_priority = 80\nlock_memory = true\ncpu = 1'
+    ct_rt+=(-p 80 -m -a 1)
+    rt=$'\nsched_fifo_priority = 80\nlock_memory = true'
+    loop_toml+="$rt"$'\ncpu = 1'
+    load_toml+="$rt"$'\ncpu = 0'
+    load_cmd=(taskset -c 0)
 fi
 "${emu_cmd[@]}" 2> "$dir/emu.log" &
 emu=$!
-emu_config "$dir/snaked.toml" "$base" "$n" "$dir" "$rt_toml"
+emu_config "$dir/a.toml" "$base" "$n" "$dir/a" "$loop_toml"$'\n'"${A_LOOP:-}"
+emu_config "$dir/b.toml" "$base" "$n" "$dir/b" "$loop_toml"$'\n'"${B_LOOP:-}"
+emu_config "$dir/c.toml" "$base" "$n" "$dir/c" "$loop_toml"$'\n'"${C_LOOP:-}"
+emu_config "$dir/load.toml" "$base" "$n" "$dir/load" "$load_toml"$'\n'"${A_LOOP:-}"
+mkdir -p "$dir/a" "$dir/b" "$dir/c" "$dir/load"
 sleep 1
-for r in $(seq 1 "$rounds"); do
-    echo "round $r/$rounds: cyclictest ${secs} s" >&2
-    cyclictest -t1 -i 1000 -D "${secs}s" -q -h 100000 "${ct_rt[@]}" > "$dir/ct-$r.txt"
-    echo "round $r/$rounds: snaked ${secs} s" >&2
-    ./target/release/snaked --config "$dir/snaked.toml" 2> "$dir/snaked-$r.log" &
-    daemon=$!
+
+# Starts a snaked (BIN, CONFIG, LOG, then a command prefix) and waits until its
+# socket answers; its pid in $started.
+start_daemon() {
+    local bin=$1 cfg=$2 log=$3 sock
+    shift 3
+    sock=$(dirname "$cfg")/$(basename "$cfg" .toml)/snaked.sock
+    "$@" "$bin" --config "$cfg" > /dev/null 2> "$log" &
+    started=$!
+    for _ in $(seq 1 100); do
+        if "$snakectl" --socket "$sock" stats > /dev/null 2>&1; then break; fi
+        sleep 0.1
+    done
+}
+
+# One measured snaked round: VARIANT (a or b), BIN, ROUND.
+snaked_round() {
+    local v=$1 bin=$2 r=$3
+    echo "round $r/$rounds: snaked ($v) ${secs} s" >&2
+    start_daemon "$bin" "$dir/$v.toml" "$dir/snaked-$v-$r.log"
     sleep "$secs"
-    ./target/release/snakectl --socket "$dir/snaked.sock" --json stats > "$dir/sd-$r.json"
-    kill -TERM $daemon; wait $daemon || true
+    "$snakectl" --socket "$dir/$v/snaked.sock" --json stats > "$dir/sd-$v-$r.json"
+    kill -TERM "$started"; wait "$started" || true
+}
+
+for r in $(seq 1 "$rounds"); do
+    if [ "${CT_IDLE:-0}" = 1 ]; then
+        echo "round $r/$rounds: cyclictest ${secs} s (emulator idle)" >&2
+        cyclictest -t1 -i 1000 -D "${secs}s" -q -h 100000 "${ct_rt[@]}" > "$dir/ct-idle-$r.txt"
+    fi
+    if [ "${LOAD:-1}" = 1 ]; then
+        start_daemon "$a_bin" "$dir/load.toml" "$dir/load-$r.log" "${load_cmd[@]}"
+        load=$started
+    fi
+    echo "round $r/$rounds: cyclictest ${secs} s (load: ${LOAD:-1})" >&2
+    cyclictest -t1 -i 1000 -D "${secs}s" -q -h 100000 "${ct_rt[@]}" > "$dir/ct-$r.txt"
+    if [ -n "$load" ]; then
+        "$snakectl" --socket "$dir/load/snaked.sock" --json stats > "$dir/load-$r.json"
+        kill -TERM "$load"; wait "$load" || true
+        load=""
+    fi
+    snaked_round a "$a_bin" "$r"
+    if [ -n "$b_bin" ]; then snaked_round b "$b_bin" "$r"; fi
+    if [ -n "$c_bin" ]; then snaked_round c "$c_bin" "$r"; fi
 done
 python3 - "$dir" "$rounds" <<'PY'
-import json, statistics, sys
+import json, os, statistics, sys
 d, rounds = sys.argv[1], int(sys.argv[2])
+
+def upper_edge_us(us):
+    # snaked's histogram (rt::stats): 8 sub-buckets per power of two of ns; the upper edge.
+    v = int(round(us * 1000))
+    if v < 8:
+        return v / 1000
+    msb = v.bit_length() - 1
+    shift = msb - 3
+    return ((((v >> shift) & 7) + 8 + 1) << shift) / 1000 - 0.001
+
 def ct(path):
     hist = []
     for line in open(path):
@@ -63,18 +160,44 @@ def ct(path):
         return float(hist[-1][0])
     mx = max((us for us, c in hist if c), default=0)
     return {"p50": q(0.5), "p99": q(0.99), "p999": q(0.999), "max": float(mx), "n": total}
+
+def sd(path):
+    s = json.load(open(path))["loop"]
+    e, c = s["period_error"], s["compute"]
+    return {"p50": e["p50_us"], "p99": e["p99_us"], "p999": e["p999_us"], "max": e["max_us"],
+            "c50": c["p50_us"], "c99": c["p99_us"], "over": s["overruns"]}
+
+variants = [v for v in "abc" if os.path.exists(f"{d}/sd-{v}-1.json")]
 rows = []
-print(f"{'round':>5} | {'cyclictest p50':>14} {'p99':>8} {'p99.9':>8} {'max':>8} | {'snaked p50':>10} {'p99':>8} {'p99.9':>8} {'max':>8}  (µs)")
+head = f"{'round':>5} | {'cyclictest p50':>14} {'p99':>6} {'p99.9':>6} {'max':>6}"
+for v in variants:
+    head += f" | snaked {v} p50 {'p99':>6} {'p99.9':>6} {'max':>7} (compute p50/p99, overruns)"
+print(head + "  µs")
 for r in range(1, rounds + 1):
     c = ct(f"{d}/ct-{r}.txt")
-    s = json.load(open(f"{d}/sd-{r}.json"))["loop"]["period_error"]
-    sd = {"p50": s["p50_us"], "p99": s["p99_us"], "p999": s["p999_us"], "max": s["max_us"]}
-    rows.append((c, sd))
-    print(f"{r:>5} | {c['p50']:>14.1f} {c['p99']:>8.1f} {c['p999']:>8.1f} {c['max']:>8.1f} | "
-          f"{sd['p50']:>10.1f} {sd['p99']:>8.1f} {sd['p999']:>8.1f} {sd['max']:>8.1f}")
+    ss = {v: sd(f"{d}/sd-{v}-{r}.json") for v in variants}
+    rows.append((c, ss))
+    line = f"{r:>5} | {c['p50']:>14.1f} {c['p99']:>6.1f} {c['p999']:>6.1f} {c['max']:>6.1f}"
+    for v in variants:
+        s = ss[v]
+        line += (f" | {s['p50']:>14.1f} {s['p99']:>6.1f} {s['p999']:>6.1f} {s['max']:>7.1f}"
+                 f" ({s['c50']:.1f}/{s['c99']:.1f}, {s['over']})")
+    print(line)
+if os.path.exists(f"{d}/ct-idle-1.txt"):
+    idle = [ct(f"{d}/ct-idle-{r}.txt") for r in range(1, rounds + 1)]
+    print("cyclictest, emulator idle: " + "; ".join(
+        f"round {r + 1} {c['p50']:.0f} / {c['p99']:.0f} / {c['p999']:.0f} / {c['max']:.0f}"
+        for r, c in enumerate(idle)) + " (p50 / p99 / p99.9 / max)")
+    print("  medians: " + ", ".join(
+        f"{k} {statistics.median(c[k] for c in idle):.1f}" for k in ["p50", "p99", "p999"]))
 for k in ["p50", "p99", "p999"]:
     cm = statistics.median(c[k] for c, _ in rows)
-    sm = statistics.median(s[k] for _, s in rows)
-    ratio = sm / cm if cm > 0 else float("inf")
-    print(f"median {k}: cyclictest {cm:.1f} µs, snaked {sm:.1f} µs, ratio {ratio:.2f}")
+    cb = statistics.median(upper_edge_us(c[k]) for c, _ in rows)
+    line = f"median {k}: cyclictest {cm:.1f} µs ({cb:.1f} in snaked's buckets)"
+    for v in variants:
+        sm = statistics.median(s[v][k] for _, s in rows)
+        ratio = sm / cb if cb > 0 else float("inf")
+        line += f"; snaked {v} {sm:.1f} µs, ratio {ratio:.2f}"
+    print(line)
 PY
+echo "raw output: $dir" >&2

@@ -75,6 +75,14 @@ fn check_config_finds_cross_field_and_named_file_errors() {
         ),
         ("[emulator]\nworld = \"/nope.toml\"\n", "emulator.world"),
         (
+            "[loop]\nrate_hz = 1000.0\nbusy_wait_s = 0.0005\n",
+            "loop.busy_wait_s",
+        ),
+        (
+            "[loop]\ncpu_dma_latency_s = -1.0\n",
+            "loop.cpu_dma_latency_s",
+        ),
+        (
             "[gait.params.sidewinding]\nhelix_radius_m = 0.1\n",
             "gait.params.sidewinding",
         ),

@@ -86,9 +86,16 @@ pub struct LoopConfig {
     pub lockstep_timeout_s: f64,
     /// SCHED_FIFO priority of the loop thread, 1..=99; 0 leaves the scheduler alone.
     pub sched_fifo_priority: i32,
-    /// CPU to pin the loop thread to; absent = no pinning.
+    /// CPU to pin the loop thread to (the daemon's other threads then keep off it);
+    /// absent = no pinning.
     pub cpu: Option<usize>,
     pub lock_memory: bool,
+    /// Real time: wake this long before each deadline and spin until it, s (0: sleep
+    /// until the deadline). Less than half a period.
+    pub busy_wait_s: f64,
+    /// Keep every CPU's wake-up latency within this while the daemon runs
+    /// (`/dev/cpu_dma_latency`, needs root), s; 0 keeps idle CPUs polling; absent = no limit.
+    pub cpu_dma_latency_s: Option<f64>,
     /// Send the gait's joint velocities as feed-forward with the positions.
     pub velocity_feedforward: bool,
 }
@@ -102,6 +109,8 @@ impl Default for LoopConfig {
             sched_fifo_priority: 0,
             cpu: None,
             lock_memory: false,
+            busy_wait_s: 0.0,
+            cpu_dma_latency_s: None,
             velocity_feedforward: true,
         }
     }

@@ -37,6 +37,18 @@ impl Config {
             value,
             why,
         };
+        let half_period_s = 0.5 / self.loop_.rate_hz;
+        if !(self.loop_.busy_wait_s >= 0.0 && self.loop_.busy_wait_s < half_period_s) {
+            return Err(bad(
+                "loop.busy_wait_s",
+                self.loop_.busy_wait_s.to_string(),
+                format!(
+                    "must be at least 0 and less than half a period ({half_period_s} s at \
+                     loop.rate_hz = {}): the loop spins that long every cycle",
+                    self.loop_.rate_hz
+                ),
+            ));
+        }
         let net = &self.network;
         // A module drops a command older than its lifetime: it must outlive at least two
         // of the loop's command periods and two feedback periods, or the joints go limp
@@ -164,6 +176,9 @@ impl Config {
             0.0,
             99.0,
         )?;
+        if let Some(s) = self.loop_.cpu_dma_latency_s {
+            range("loop.cpu_dma_latency_s", s, 0.0, 0.1)?;
+        }
         range("body.module_length_m", self.body.module_length_m, 0.01, 1.0)?;
         range(
             "network.discovery_timeout_s",

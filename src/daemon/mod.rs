@@ -115,6 +115,31 @@ pub fn build_controllers(
 /// Run the daemon until SIGINT/SIGTERM (or a `Shutdown` request) has brought the
 /// robot to a safe stop.
 pub fn run(cfg: Config, emulated: bool) -> Result<()> {
+    // Before any thread starts: they all inherit a CPU set without the loop's CPU (the
+    // loop thread pins itself to it), so none of them preempts the loop or delays its
+    // wake-up there.
+    if let Some(cpu) = cfg.loop_.cpu {
+        match sys::avoid_cpu(cpu) {
+            Ok(true) => {}
+            Ok(false) => tracing::warn!(
+                "the daemon's other threads share CPU {cpu} with the loop (it is the only \
+                 one they may use, or not one of theirs)"
+            ),
+            Err(e) => tracing::warn!("keeping the other threads off CPU {cpu} refused ({e})"),
+        }
+    }
+    // Held until the daemon returns.
+    let _cpu_latency = cfg.loop_.cpu_dma_latency_s.and_then(|s| {
+        let us = (s * 1e6).round() as i32;
+        sys::limit_cpu_latency_us(us)
+            .inspect_err(|e| {
+                tracing::warn!(
+                    "limiting the CPUs' wake-up latency to {us} µs refused ({e}); idle CPUs \
+                     may take longer to wake for the loop"
+                );
+            })
+            .ok()
+    });
     let stop = Arc::new(AtomicBool::new(false));
     {
         let stop = stop.clone();
@@ -156,7 +181,10 @@ pub fn run(cfg: Config, emulated: bool) -> Result<()> {
         shutdown_hold_s: cfg.failsafe.shutdown_hold_s,
     });
     let pacer: Box<dyn Pacer> = match cfg.loop_.pacing {
-        Pacing::Realtime => Box::new(RealTimePacer::new(period_ns)),
+        Pacing::Realtime => Box::new(RealTimePacer::with_busy_wait(
+            period_ns,
+            (cfg.loop_.busy_wait_s * 1e9).round() as u64,
+        )),
         Pacing::Lockstep => Box::new(LockstepPacer::new(
             period_ns,
             (cfg.loop_.lockstep_timeout_s * 1e9) as u64,

@@ -31,19 +31,28 @@ pub trait Pacer: Send {
 
 /// Absolute deadlines with `clock_nanosleep(TIMER_ABSTIME)`. When a cycle overruns
 /// past the next deadline, the missed periods are skipped (not run back to back),
-/// as ros2_control does.
+/// as ros2_control does. With a busy-wait, the sleep ends that long before the
+/// deadline and the rest is spun on the clock, so the wake-up latency (up to that
+/// long) is spent before the deadline instead of after it.
 pub struct RealTimePacer {
     period_ns: u64,
     start_ns: u64,
     next_index: u64,
+    busy_wait_ns: u64,
 }
 
 impl RealTimePacer {
     pub fn new(period_ns: u64) -> Self {
+        Self::with_busy_wait(period_ns, 0)
+    }
+
+    /// Sleep until `busy_wait_ns` before each deadline, then spin until it.
+    pub fn with_busy_wait(period_ns: u64, busy_wait_ns: u64) -> Self {
         Self {
             period_ns,
             start_ns: sys::monotonic_ns(),
             next_index: 0,
+            busy_wait_ns: busy_wait_ns.min(period_ns),
         }
     }
 }
@@ -65,8 +74,13 @@ impl Pacer for RealTimePacer {
             index = latest;
         }
         let deadline = self.start_ns + index * self.period_ns;
-        sys::sleep_until_ns(deadline);
-        let woke = sys::monotonic_ns();
+        let woke = if self.busy_wait_ns == 0 {
+            sys::sleep_until_ns(deadline);
+            sys::monotonic_ns()
+        } else {
+            sys::sleep_until_ns(deadline.saturating_sub(self.busy_wait_ns));
+            sys::spin_until_ns(deadline)
+        };
         self.next_index = index + 1;
         Cycle {
             index,
@@ -179,5 +193,20 @@ mod tests {
         assert!(c1.index > c0.index + 1, "overrun periods are skipped");
         assert_eq!(c1.skipped, c1.index - c0.index - 1);
         assert_eq!(c1.t_ns, c1.index * 1_000_000);
+    }
+
+    #[test]
+    fn busy_waiting_cycles_start_at_or_after_their_deadline() {
+        let mut p = RealTimePacer::with_busy_wait(1_000_000, 200_000);
+        let mut last = 0;
+        for _ in 0..20 {
+            let c = p.next_cycle();
+            // Never early: lateness is measured from the deadline, and clock_ns is the
+            // real start, so it is at least the nominal time.
+            assert!(c.clock_ns >= c.t_ns);
+            assert_eq!(c.lateness_ns, c.clock_ns - c.t_ns);
+            assert!(c.index >= last);
+            last = c.index + 1;
+        }
     }
 }
