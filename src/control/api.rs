@@ -111,34 +111,20 @@ pub fn parse_request(line: &[u8]) -> Result<Request, BadRequest> {
     let mut top: RawMap = serde_json::from_str(raw.get())
         .map_err(|e| bad(null, code::INVALID_REQUEST, format!("invalid request: {e}")))?;
     // The id first, so that even a request refused for a duplicate key is answered
-    // with its id (when the id itself is readable).
-    let id_of = |top: &RawMap| match top.get("id") {
-        Some(raw_id) if matches!(json_kind(raw_id.get()), "a number" | "a string") => {
-            raw_id.to_owned()
-        }
-        _ => null.to_owned(),
-    };
+    // with its id (when the id itself can be echoed).
     if let Err(dup) = unique_keys(raw.get()) {
-        let id = id_of(&top);
-        return Err(bad(&id, code::INVALID_REQUEST, dup));
+        let id = match top.get("id") {
+            Some(raw_id) if echoable_id(raw_id).is_ok() => raw_id,
+            _ => null,
+        };
+        return Err(bad(id, code::INVALID_REQUEST, dup));
     }
 
     let id = match top.remove("id") {
         None => return Err(bad(null, code::INVALID_REQUEST, "missing `id`".into())),
-        Some(raw_id) => match json_kind(raw_id.get()) {
-            "a number" => raw_id,
-            // A string must be valid (a lone surrogate is not), else it cannot be echoed.
-            "a string" => match serde_json::from_str::<String>(raw_id.get()) {
-                Ok(_) => raw_id,
-                Err(e) => {
-                    let msg = format!("`id` is not a valid string: {e}");
-                    return Err(bad(null, code::INVALID_REQUEST, msg));
-                }
-            },
-            what => {
-                let msg = format!("`id` must be a number or a string, got {what}");
-                return Err(bad(null, code::INVALID_REQUEST, msg));
-            }
+        Some(raw_id) => match echoable_id(&raw_id) {
+            Ok(()) => raw_id,
+            Err(msg) => return Err(bad(null, code::INVALID_REQUEST, msg)),
         },
     };
     let method = match top.remove("method") {
@@ -175,6 +161,18 @@ pub fn parse_request(line: &[u8]) -> Result<Request, BadRequest> {
         method,
         params: Params { fields: params },
     })
+}
+
+/// Whether an answer can echo `raw_id`: a number, or a string that is valid (a lone
+/// surrogate is not, and would make the answer unreadable).
+fn echoable_id(raw_id: &RawValue) -> Result<(), String> {
+    match json_kind(raw_id.get()) {
+        "a number" => Ok(()),
+        "a string" => serde_json::from_str::<String>(raw_id.get())
+            .map(drop)
+            .map_err(|e| format!("`id` is not a valid string: {e}")),
+        what => Err(format!("`id` must be a number or a string, got {what}")),
+    }
 }
 
 /// What kind of JSON value a raw text is, for error messages.
@@ -563,6 +561,35 @@ mod tests {
             "{}",
             e.error.message
         );
+    }
+
+    /// Found by `fuzz/fuzz_targets/request.rs`: a request refused for a duplicate key
+    /// was answered with its last id even when that id was a lone surrogate, which the
+    /// answer cannot carry (`{"id":"\ud800",...}` is not readable JSON text).
+    #[test]
+    fn a_duplicate_key_answer_echoes_only_an_echoable_id() {
+        for (line, id) in [
+            (r#"{"id":1,"id":"\ud800","method":"ping"}"#, "null"),
+            (r#"{"id":1,"id":[2],"method":"ping"}"#, "null"),
+            (
+                r#"{"id":"\u00fc","method":"a","method":"b"}"#,
+                r#""\u00fc""#,
+            ),
+        ] {
+            let e = err(line);
+            assert_eq!(
+                (e.error.code, e.id.get()),
+                (code::INVALID_REQUEST, id),
+                "{line}"
+            );
+            assert!(
+                e.error.message.contains("duplicate key"),
+                "{line}: {:?}",
+                e.error
+            );
+            let answer: Value = serde_json::from_str(&error_line(&e.id, &e.error)).unwrap();
+            assert_eq!(answer["id"], serde_json::from_str::<Value>(id).unwrap());
+        }
     }
 
     #[test]
