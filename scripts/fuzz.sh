@@ -47,7 +47,10 @@ for t in "${targets[@]}"; do
     cov=$(sed -nE 's/.*cov: ([0-9]+).*/\1/p' <<<"$last")
     ft=$(sed -nE 's/.* ft: ([0-9]+).*/\1/p' <<<"$last")
     corp=$(sed -nE 's/.* corp: ([0-9]+\/[0-9a-zA-Z]+).*/\1/p' <<<"$last")
-    line="$t: ${execs:-?} executions (${rate:-?}/s) in ${secs} s, cov ${cov:-?} edges, ft ${ft:-?} features, corpus ${corp:-?}"
+    # A run that stopped at a crash ran for less than it was given.
+    ran=$(sed -nE 's/^Done [0-9]+ runs in ([0-9]+) second.*/\1/p' "$log" | tail -n 1)
+    [ -n "$ran" ] || ran=$(( ${execs:-0} / (${rate:-0} > 0 ? ${rate:-1} : 1) ))
+    line="$t: ${execs:-?} executions (${rate:-?}/s) in ${ran} s, cov ${cov:-?} edges, ft ${ft:-?} features, corpus ${corp:-?}"
     if [ "$status" -ne 0 ]; then
         line="$line: FAILED (exit $status), see $log and fuzz/artifacts/$t/"
         failed+=("$t")
