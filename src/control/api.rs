@@ -111,34 +111,20 @@ pub fn parse_request(line: &[u8]) -> Result<Request, BadRequest> {
     let mut top: RawMap = serde_json::from_str(raw.get())
         .map_err(|e| bad(null, code::INVALID_REQUEST, format!("invalid request: {e}")))?;
     // The id first, so that even a request refused for a duplicate key is answered
-    // with its id (when the id itself is readable).
-    let id_of = |top: &RawMap| match top.get("id") {
-        Some(raw_id) if matches!(json_kind(raw_id.get()), "a number" | "a string") => {
-            raw_id.to_owned()
-        }
-        _ => null.to_owned(),
-    };
+    // with its id (when the id itself can be echoed).
     if let Err(dup) = unique_keys(raw.get()) {
-        let id = id_of(&top);
-        return Err(bad(&id, code::INVALID_REQUEST, dup));
+        let id = match top.get("id") {
+            Some(raw_id) if echoable_id(raw_id).is_ok() => raw_id,
+            _ => null,
+        };
+        return Err(bad(id, code::INVALID_REQUEST, dup));
     }
 
     let id = match top.remove("id") {
         None => return Err(bad(null, code::INVALID_REQUEST, "missing `id`".into())),
-        Some(raw_id) => match json_kind(raw_id.get()) {
-            "a number" => raw_id,
-            // A string must be valid (a lone surrogate is not), else it cannot be echoed.
-            "a string" => match serde_json::from_str::<String>(raw_id.get()) {
-                Ok(_) => raw_id,
-                Err(e) => {
-                    let msg = format!("`id` is not a valid string: {e}");
-                    return Err(bad(null, code::INVALID_REQUEST, msg));
-                }
-            },
-            what => {
-                let msg = format!("`id` must be a number or a string, got {what}");
-                return Err(bad(null, code::INVALID_REQUEST, msg));
-            }
+        Some(raw_id) => match echoable_id(&raw_id) {
+            Ok(()) => raw_id,
+            Err(msg) => return Err(bad(null, code::INVALID_REQUEST, msg)),
         },
     };
     let method = match top.remove("method") {
@@ -175,6 +161,18 @@ pub fn parse_request(line: &[u8]) -> Result<Request, BadRequest> {
         method,
         params: Params { fields: params },
     })
+}
+
+/// Whether an answer can echo `raw_id`: a number, or a string that is valid (a lone
+/// surrogate is not, and would make the answer unreadable).
+fn echoable_id(raw_id: &RawValue) -> Result<(), String> {
+    match json_kind(raw_id.get()) {
+        "a number" => Ok(()),
+        "a string" => serde_json::from_str::<String>(raw_id.get())
+            .map(drop)
+            .map_err(|e| format!("`id` is not a valid string: {e}")),
+        what => Err(format!("`id` must be a number or a string, got {what}")),
+    }
 }
 
 /// What kind of JSON value a raw text is, for error messages.
@@ -342,66 +340,62 @@ fn patch_slot<'a>(p: &'a mut ParamPatch, name: &str) -> Option<&'a mut Option<f6
 }
 
 /// Refuses a JSON text in which some object has a key twice (serde would keep the last
-/// silently): the error names the key.
+/// silently): the error names the key. `text` is valid JSON (checked before). One pass
+/// over the text that converts no value, so nothing before a duplicate (`1e999`, a lone
+/// surrogate, deep nesting) can end the check early.
 fn unique_keys(text: &str) -> Result<(), String> {
-    use serde::de::{self, DeserializeSeed, Deserializer, MapAccess, SeqAccess, Visitor};
-    struct Walk;
-    impl<'de> DeserializeSeed<'de> for Walk {
-        type Value = ();
-        fn deserialize<D: Deserializer<'de>>(self, d: D) -> Result<(), D::Error> {
-            d.deserialize_any(Walk)
-        }
-    }
-    impl<'de> Visitor<'de> for Walk {
-        type Value = ();
-        fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
-            f.write_str("any JSON value")
-        }
-        fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<(), A::Error> {
-            let mut seen = std::collections::BTreeSet::new();
-            while let Some(key) = map.next_key::<std::borrow::Cow<'de, str>>()? {
-                if !seen.insert(key.to_string()) {
-                    return Err(de::Error::custom(format!("duplicate key `{key}`")));
-                }
-                map.next_value_seed(Walk)?;
+    use std::collections::BTreeSet;
+    let bytes = text.as_bytes();
+    // The keys seen in each open object; `None` for an open array.
+    let mut open: Vec<Option<BTreeSet<String>>> = Vec::new();
+    let mut expect_key = false;
+    let mut i = 0;
+    while i < bytes.len() {
+        match bytes[i] {
+            b'{' => {
+                open.push(Some(BTreeSet::new()));
+                expect_key = true;
             }
-            Ok(())
+            b'[' => open.push(None),
+            b'}' | b']' => {
+                open.pop();
+                expect_key = false;
+            }
+            b',' => expect_key = matches!(open.last(), Some(Some(_))),
+            b'"' => {
+                let end = string_end(bytes, i);
+                if std::mem::take(&mut expect_key) {
+                    let raw = &text[i..end];
+                    // Keys compare as decoded ("a" and "\u0061" are one key).
+                    let key = serde_json::from_str::<String>(raw)
+                        .unwrap_or_else(|_| raw.get(1..raw.len() - 1).unwrap_or(raw).to_owned());
+                    if let Some(Some(seen)) = open.last_mut()
+                        && !seen.insert(key.clone())
+                    {
+                        return Err(format!("duplicate key `{key}`"));
+                    }
+                }
+                i = end;
+                continue;
+            }
+            _ => {}
         }
-        fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<(), A::Error> {
-            while seq.next_element_seed(Walk)?.is_some() {}
-            Ok(())
-        }
-        fn visit_bool<E>(self, _: bool) -> Result<(), E> {
-            Ok(())
-        }
-        fn visit_i64<E>(self, _: i64) -> Result<(), E> {
-            Ok(())
-        }
-        fn visit_u64<E>(self, _: u64) -> Result<(), E> {
-            Ok(())
-        }
-        fn visit_f64<E>(self, _: f64) -> Result<(), E> {
-            Ok(())
-        }
-        fn visit_str<E>(self, _: &str) -> Result<(), E> {
-            Ok(())
-        }
-        fn visit_unit<E>(self) -> Result<(), E> {
-            Ok(())
+        i += 1;
+    }
+    Ok(())
+}
+
+/// Just past the closing quote of the JSON string that opens at `start`.
+fn string_end(bytes: &[u8], start: usize) -> usize {
+    let mut i = start + 1;
+    while i < bytes.len() {
+        match bytes[i] {
+            b'\\' => i += 2,
+            b'"' => return i + 1,
+            _ => i += 1,
         }
     }
-    let mut de = serde_json::Deserializer::from_str(text);
-    // Numbers are not the point here (1e999 is refused where it is read).
-    match Walk.deserialize(&mut de) {
-        Ok(()) => Ok(()),
-        Err(e) if e.to_string().starts_with("duplicate key") => Err(e
-            .to_string()
-            .split(" at line")
-            .next()
-            .unwrap_or_default()
-            .to_owned()),
-        Err(_) => Ok(()),
-    }
+    bytes.len()
 }
 
 /// The answer line for a result.
@@ -563,6 +557,73 @@ mod tests {
             "{}",
             e.error.message
         );
+    }
+
+    /// Found by `fuzz/fuzz_targets/request.rs`: a request refused for a duplicate key
+    /// was answered with its last id even when that id was a lone surrogate, which the
+    /// answer cannot carry (`{"id":"\ud800",...}` is not readable JSON text).
+    #[test]
+    fn a_duplicate_key_answer_echoes_only_an_echoable_id() {
+        for (line, id) in [
+            (r#"{"id":1,"id":"\ud800","method":"ping"}"#, "null"),
+            (r#"{"id":1,"id":[2],"method":"ping"}"#, "null"),
+            (
+                r#"{"id":"\u00fc","method":"a","method":"b"}"#,
+                r#""\u00fc""#,
+            ),
+        ] {
+            let e = err(line);
+            assert_eq!(
+                (e.error.code, e.id.get()),
+                (code::INVALID_REQUEST, id),
+                "{line}"
+            );
+            assert!(
+                e.error.message.contains("duplicate key"),
+                "{line}: {:?}",
+                e.error
+            );
+            let answer: Value = serde_json::from_str(&error_line(&e.id, &e.error)).unwrap();
+            assert_eq!(answer["id"], serde_json::from_str::<Value>(id).unwrap());
+        }
+    }
+
+    /// Found while writing `fuzz/fuzz_targets/request.rs`: the duplicate-key check gave
+    /// up at the first value serde could not convert (`1e999`, a lone surrogate, nesting
+    /// past serde's recursion limit), so a key twice after such a value went through
+    /// when that value was never read (the id, `jsonrpc`, a duplicate's first value).
+    #[test]
+    fn no_value_stops_the_duplicate_key_check() {
+        let deep = format!("{}{}", "[".repeat(200), "]".repeat(200));
+        for (line, key, id) in [
+            (r#"{"id":1e999,"method":"ping","method":"ping"}"#.to_owned(), "method", "1e999"),
+            (
+                r#"{"jsonrpc":"\ud800","id":1,"method":"gait.set","params":{"gait":"rolling","gait":"slithering"}}"#.to_owned(),
+                "gait",
+                "1",
+            ),
+            (
+                format!(r#"{{"jsonrpc":{deep},"id":2,"method":"ping","method":"ping"}}"#),
+                "method",
+                "2",
+            ),
+            (r#"{"id":"\ud800","method":"a","method":"b"}"#.to_owned(), "method", "null"),
+            (
+                r#"{"id":3,"method":"x","params":{"config":{"a":1e999,"a":2}}}"#.to_owned(),
+                "a",
+                "3",
+            ),
+            (r#"{"id":4,"method":"m","params":{"a":1,"\u0061":2}}"#.to_owned(), "a", "4"),
+        ] {
+            let e = err(&line);
+            assert_eq!((e.error.code, e.id.get()), (code::INVALID_REQUEST, id), "{line}");
+            assert_eq!(e.error.message, format!("duplicate key `{key}`"), "{line}");
+        }
+        // The same key in different objects, and keys' look-alikes inside strings, are not
+        // duplicates.
+        let line = r#"{"id":1,"method":"m","params":{"s":"a\",\"s\":","t":{"s":1},"u":[{"a":1},{"a":2}],"v":{}}}"#;
+        let r = parse_request(line.as_bytes()).unwrap();
+        assert_eq!(r.method, "m");
     }
 
     #[test]

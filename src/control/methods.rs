@@ -109,18 +109,7 @@ pub(crate) async fn dispatch(
             Ok(controllers::get(shared, gait))
         }
         "controller.set" => {
-            let gait = p.take_gait("gait")?.ok_or_else(|| missing("gait"))?;
-            let controller = p
-                .take_str("controller")?
-                .ok_or_else(|| missing("controller"))?;
-            let preset = p.take_str("preset")?;
-            let config = p.take_json("config")?;
-            p.finish(&["gait", "controller", "preset", "config"])?;
-            let sel = Selection {
-                controller,
-                preset,
-                config,
-            };
+            let (gait, sel) = controller_set_params(p)?;
             controllers::set(shared, gait, sel).await
         }
         "hold" => act(shared, p, LoopRequest::Hold).await,
@@ -151,6 +140,24 @@ pub(crate) async fn dispatch(
             format!("unknown method `{method}` (known: {})", METHODS.join(", ")),
         )),
     }
+}
+
+/// `controller.set`'s params read and checked: the gait and the selection to build for
+/// it (building it, which checks the configuration, needs no loop: `registry::build`).
+pub fn controller_set_params(mut p: Params) -> Result<(GaitKind, Selection), RpcError> {
+    let gait = p.take_gait("gait")?.ok_or_else(|| missing("gait"))?;
+    let controller = p
+        .take_str("controller")?
+        .ok_or_else(|| missing("controller"))?;
+    let preset = p.take_str("preset")?;
+    let config = p.take_json("config")?;
+    p.finish(&["gait", "controller", "preset", "config"])?;
+    let sel = Selection {
+        controller,
+        preset,
+        config,
+    };
+    Ok((gait, sel))
 }
 
 fn missing(field: &str) -> RpcError {

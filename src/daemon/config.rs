@@ -485,6 +485,25 @@ mod tests {
         }
     }
 
+    /// Found by `fuzz/fuzz_targets/config.rs`: with a longer module the default
+    /// rolling_helix parameters are out of the joints' range; the configuration passed
+    /// its checks (`snaked --check-config`) and the daemon refused it when it started.
+    #[test]
+    fn the_gaits_left_at_their_defaults_are_checked_for_the_module_length() {
+        let text = "[body]\nmodule_length_m = 0.1\n";
+        let msg = Config::parse(text, Path::new("x.toml"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            msg.contains("x.toml") && msg.contains("[gait.params.rolling_helix]"),
+            "{msg}"
+        );
+        // What passes is what the daemon starts with.
+        let cfg = Config::parse("[body]\nmodule_length_m = 0.07\n", Path::new("x")).unwrap();
+        let table = cfg.gait_table(Path::new("x")).unwrap();
+        table.validate_for(cfg.body.module_length_m).unwrap();
+    }
+
     #[test]
     fn macs_parse_strictly() {
         assert_eq!(

@@ -7,8 +7,8 @@ use super::{Config, ConfigError, LookupBy, parse_mac};
 use crate::gait::GaitKind;
 
 impl Config {
-    /// The default gait parameters with `[gait.params.*]` applied, each checked for
-    /// this body's module length.
+    /// The default gait parameters with `[gait.params.*]` applied, every gait checked
+    /// for this body's module length (as the daemon checks the table when it starts).
     pub fn gait_table(&self, path: &Path) -> Result<crate::gait::GaitTable, ConfigError> {
         let l = self.body.module_length_m;
         let mut table = crate::gait::GaitTable::default();
@@ -25,6 +25,15 @@ impl Config {
                 })?;
             *table.get_mut(kind) = p;
         }
+        // The gaits left at their defaults too: the defaults suit the SEA module, and a
+        // longer module can take one out of range (rolling_helix's from about 0.1 m).
+        table
+            .validate_for(l)
+            .map_err(|(kind, source)| ConfigError::GaitParams {
+                path: path.to_owned(),
+                gait: kind.name(),
+                source,
+            })?;
         Ok(table)
     }
 
