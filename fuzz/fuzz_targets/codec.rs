@@ -1,27 +1,39 @@
-//! The datagram decoder: never panics, and whatever decodes re-encodes to the very
-//! same bytes (the encoding is canonical, docs/protocol.md).
+//! The frame decoder, protocol v2: never panics, and whatever opens re-encodes to the
+//! very same bytes (the encoding is canonical, docs/protocol.md). Frames are tagged
+//! under a fixed key; every input is also tried with each of its frames re-tagged under
+//! that key, so that the payload parsers behind the tag are reached.
 #![no_main]
 use libfuzzer_sys::fuzz_target;
-use snaked::protocol::{MAX_DATAGRAM, decode, encode};
+use snaked::protocol::{Frames, Key, MAX_DATAGRAM, Route, TAG_LEN, encode, open, peek};
+
+/// The key the seeds are tagged with (`cargo run --example fuzz_seeds`).
+const KEY: Key = Key::from_bytes([0x5a; 32]);
 
 fuzz_target!(|data: &[u8]| {
     check(data);
-    // The same bytes with a valid trailer, so that the payload parsers behind the
-    // checksum are reached. Protocol v1 only: its trailer is a CRC-32 of the rest.
-    if let Some(body_len) = data.len().checked_sub(4) {
-        let mut d = data.to_vec();
-        let crc = crc32fast::hash(&d[..body_len]);
-        d[body_len..].copy_from_slice(&crc.to_le_bytes());
-        check(&d);
+    let mut d = data.to_vec();
+    let mut at = 0;
+    while let Ok((_, len)) = peek(&d[at..]) {
+        let body = at + len - TAG_LEN;
+        let tag = KEY.tag(&d[at..body]);
+        d[body..at + len].copy_from_slice(&tag);
+        at += len;
     }
+    check(&d);
 });
 
 fn check(datagram: &[u8]) {
-    let Ok((header, msg)) = decode(datagram) else {
-        return;
-    };
-    assert_eq!(header.msg_type, msg.msg_type());
-    let mut buf = [0u8; MAX_DATAGRAM];
-    let n = encode(header.session, header.seq, &msg, &mut buf).expect("decoded re-encodes");
-    assert_eq!(&buf[..n], datagram, "not canonical: {msg:?}");
+    for frame in Frames::new(datagram) {
+        let Ok((h, frame)) = frame else { return };
+        let Ok(msg) = open(frame, &KEY) else { continue };
+        assert_eq!(h.msg_type, msg.msg_type());
+        let mut buf = [0u8; MAX_DATAGRAM];
+        let route = Route {
+            session: h.session,
+            seq: h.seq,
+            unit: h.unit,
+        };
+        let n = encode(route, &msg, &KEY, &mut buf).expect("decoded re-encodes");
+        assert_eq!(&buf[..n], frame, "not canonical: {msg:?}");
+    }
 }
