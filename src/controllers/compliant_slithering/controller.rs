@@ -12,7 +12,7 @@ use crate::shape::admittance::ParamState;
 use crate::shape::slithering_shape::{Param, SlitheringShape};
 use crate::shape::torque::TorqueFilter;
 use crate::shape::window::{Window, steepness_for_width};
-use crate::shape::window_manager::{WindowEvents, WindowManager};
+use crate::shape::window_manager::{Slope, WindowEvents, WindowManager};
 
 /// Most travelling windows on the body (ωS ≤ 4π gives at most 5).
 const MAX_WINDOWS: usize = 16;
@@ -110,8 +110,13 @@ impl CompliantSlithering {
             self.nominal.params.spatial_freq_rad,
             self.nominal_phase(self.t),
         );
+        let slope = if ws0 > 0.0 {
+            Slope::Increasing
+        } else {
+            Slope::Unknown
+        };
         self.manager
-            .update(|s| ws0 * s - omega0, [ParamState::default(); 3]);
+            .update(|s| ws0 * s - omega0, [ParamState::default(); 3], slope);
         self.assemble();
     }
 
@@ -188,6 +193,24 @@ impl CompliantSlithering {
             for (j, w) in self.shape.windows(Param::Phase).iter().enumerate() {
                 self.forces[offsets[2] + j] -= a * cos * w.weight(s, m) * tau;
             }
+        }
+    }
+
+    /// What the window manager may assume of φ along the body: with windows that tile
+    /// it (weights ≥ 0 summing to 1), `φ′ = Σ ωS_j·w_j − Σ Ω_j·w_j′` is positive when
+    /// the phase is one value and every ωS is positive.
+    fn slope(&self) -> Slope {
+        let ws = self.shape.windows(Param::SpatialFreq);
+        let at = self.shape.offset(Param::SpatialFreq);
+        let ready = self.sigma.len() == self.shape.param_count();
+        let increasing = ready
+            && self.shape.windows(Param::Phase).len() == 1
+            && ws.iter().all(|w| w.a <= w.b)
+            && self.sigma[at..at + ws.len()].iter().all(|&v| v > 0.0);
+        if increasing {
+            Slope::Increasing
+        } else {
+            Slope::Unknown
         }
     }
 
@@ -270,6 +293,7 @@ impl CompliantSlithering {
         self.filter.update(dt, &self.reported, &mut self.tau_ext);
         if Param::ALL.iter().any(|&p| self.windowed(p)) {
             // Anchor the windows to the wave as it stands (last step's fields).
+            let slope = self.slope();
             let shape = &self.shape;
             let sigma = &self.sigma;
             let ready = sigma.len() == shape.param_count();
@@ -286,6 +310,7 @@ impl CompliantSlithering {
                     }
                 },
                 [ParamState::default(); 3],
+                slope,
             );
             let ev = self.last_events;
             self.windows_born += (ev.born_at_head + ev.born_at_tail) as u64;

@@ -84,7 +84,9 @@ impl Reference {
             dropped: 0,
         };
         let (ws, omega) = (nominal.params.spatial_freq_rad, nominal.phase_at(r.t));
-        r.manager.update(|s| ws * s - omega, Default::default());
+        let nominal = Default::default();
+        r.manager
+            .update(|s| ws * s - omega, nominal, Slope::Unknown);
         r.place();
         r
     }
@@ -124,7 +126,9 @@ impl Reference {
         if Param::ALL.iter().any(|&p| self.windowed(p)) {
             let (fields, m) = (&self.fields, self.m);
             let phase = |s| phase(fields, m, s);
-            let ev = self.manager.update(phase, Default::default());
+            let ev = self
+                .manager
+                .update(phase, Default::default(), Slope::Unknown);
             self.born += ev.born_at_head + ev.born_at_tail;
             self.dropped += ev.dropped_at_head + ev.dropped_at_tail;
         }
