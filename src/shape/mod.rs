@@ -4,6 +4,7 @@
 
 pub mod admittance;
 pub mod function;
+mod joint_samples;
 pub mod slithering_shape;
 pub mod torque;
 pub mod window;

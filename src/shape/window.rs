@@ -82,6 +82,156 @@ impl Window {
     }
 }
 
+/// Logistic and softplus terms at a point. Of one finite edge at `x`, with
+/// `y = m(s − x)`: `rise` and `softplus_rise` of `y` (for the window that starts there),
+/// `fall` and `softplus_fall` of `−y` (for the one that ends there), from one `exp` and
+/// one `ln_1p` (none when saturated), to the bit what [`Window::weight`] and
+/// [`Window::integral`] compute. Of a window: its left edge's rise, its right edge's fall.
+#[derive(Debug, Clone, Copy)]
+struct Terms {
+    rise: f64,
+    fall: f64,
+    softplus_rise: f64,
+    softplus_fall: f64,
+}
+
+impl Terms {
+    /// An open side: logistic 1 (its softplus is not used).
+    const OPEN: Terms = Terms::new(1.0, 1.0, 0.0, 0.0);
+
+    /// With `softplus` false only the logistics are computed (the softplus terms are 0).
+    #[inline]
+    fn edge(y: f64, softplus: bool) -> Self {
+        let sp = |x: f64| if softplus { x } else { 0.0 };
+        if y > SATURATED {
+            Terms::new(1.0, 0.0, sp(y), 0.0)
+        } else if y < -SATURATED {
+            Terms::new(0.0, 1.0, 0.0, sp(-y))
+        } else {
+            let e = (-y.abs()).exp();
+            let (near, far) = (1.0 / (1.0 + e), e / (1.0 + e));
+            let (rise, fall) = if y >= 0.0 { (near, far) } else { (far, near) };
+            let l = sp(e.ln_1p());
+            Terms::new(rise, fall, sp(y.max(0.0)) + l, sp((-y).max(0.0)) + l)
+        }
+    }
+
+    const fn new(rise: f64, fall: f64, softplus_rise: f64, softplus_fall: f64) -> Self {
+        Self {
+            rise,
+            fall,
+            softplus_rise,
+            softplus_fall,
+        }
+    }
+}
+
+/// Windows made ready for evaluation at one steepness: the integrals' constants (each
+/// edge's softplus at the head) are computed once, and an edge two neighbours share is
+/// evaluated once per point.
+#[derive(Debug, Clone)]
+pub struct WindowSet {
+    windows: Vec<Window>,
+    /// Per window, `softplus(−m·a)` and `softplus(m·b)` (unused on an open side).
+    head: Vec<(f64, f64)>,
+    m: f64,
+}
+
+impl WindowSet {
+    /// The whole body, room for `capacity` windows.
+    pub fn new(m: f64, capacity: usize) -> Self {
+        let mut set = Self {
+            windows: Vec::with_capacity(capacity),
+            head: Vec::with_capacity(capacity),
+            m,
+        };
+        set.set([Window::EVERYWHERE]);
+        set
+    }
+
+    /// Replaces the windows (no allocation within the capacity).
+    pub fn set(&mut self, windows: impl IntoIterator<Item = Window>) {
+        self.windows.clear();
+        self.windows.extend(windows);
+        let mut head = std::mem::take(&mut self.head);
+        head.clear();
+        self.each(0.0, true, |_, _, t| {
+            head.push((t.softplus_rise, t.softplus_fall))
+        });
+        self.head = head;
+    }
+
+    /// Becomes a copy of `other` (no allocation within the capacity).
+    pub fn copy_from(&mut self, other: &WindowSet) {
+        self.windows.clear();
+        self.windows.extend_from_slice(&other.windows);
+        self.head.clear();
+        self.head.extend_from_slice(&other.head);
+        self.m = other.m;
+    }
+
+    pub fn windows(&self) -> &[Window] {
+        &self.windows
+    }
+
+    /// `f(j, w_j(s), ∫₀^s w_j)` for each window in order.
+    #[inline]
+    pub fn sample(&self, s: f64, mut f: impl FnMut(usize, f64, f64)) {
+        let m = self.m;
+        self.each(s, true, |j, w, t| {
+            let (head_a, head_b) = self.head[j];
+            let left = if w.a.is_finite() {
+                (t.softplus_rise - head_a) / m
+            } else {
+                s
+            };
+            let right = if w.b.is_finite() {
+                (head_b - t.softplus_fall) / m
+            } else {
+                s
+            };
+            f(j, t.rise + t.fall - 1.0, left + right - s);
+        });
+    }
+
+    /// `Σ_j values_j·w_j(s)`.
+    #[inline]
+    pub fn weighted_sum(&self, values: &[f64], s: f64) -> f64 {
+        let mut sum = 0.0;
+        self.each(s, false, |j, _, t| {
+            sum += values[j] * (t.rise + t.fall - 1.0)
+        });
+        sum
+    }
+
+    /// `f(j, window, terms)` of each window at `s`; an edge shared with the previous
+    /// window is evaluated once.
+    #[inline]
+    fn each(&self, s: f64, softplus: bool, mut f: impl FnMut(usize, &Window, Terms)) {
+        let m = self.m;
+        let edge = |x: f64| {
+            if x.is_finite() {
+                Terms::edge(m * (s - x), softplus)
+            } else {
+                Terms::OPEN
+            }
+        };
+        // The previous window's right edge.
+        let (mut shared, mut prev) = (f64::NAN, Terms::OPEN);
+        for (j, w) in self.windows.iter().enumerate() {
+            let left = if w.a == shared { prev } else { edge(w.a) };
+            let right = edge(w.b);
+            (shared, prev) = (w.b, right);
+            let t = Terms {
+                fall: right.fall,
+                softplus_fall: right.softplus_fall,
+                ..left
+            };
+            f(j, w, t);
+        }
+    }
+}
+
 /// Steepness for an edge about `width` wide (10 % to 90 % of the step) in normalised
 /// arc length: `m = 2·ln 9 / width`.
 pub fn steepness_for_width(width: f64) -> f64 {
