@@ -4,13 +4,16 @@
 
 use nalgebra::DMatrixView;
 
-use super::window::WindowSet;
+use super::window::{EdgeColumns, WindowSet};
 
 /// Rows: lateral joints; columns: windows (column-major).
 #[derive(Debug, Clone)]
 pub(super) struct JointSamples {
+    /// The joints' arc lengths.
+    s: Vec<f64>,
     rows: usize,
     cols: usize,
+    edges: EdgeColumns,
     weight: Vec<f64>,
     integral: Vec<f64>,
     /// Each window's mean weight over the joints.
@@ -18,33 +21,29 @@ pub(super) struct JointSamples {
 }
 
 impl JointSamples {
-    /// For `rows` joints and up to `windows` windows.
-    pub fn new(rows: usize, windows: usize) -> Self {
-        let cells = rows * windows;
+    /// For joints at arc lengths `s` and up to `windows` windows.
+    pub fn new(s: &[f64], windows: usize) -> Self {
+        let (rows, cells) = (s.len(), s.len() * windows);
         Self {
+            s: s.to_vec(),
             rows,
             cols: 0,
+            edges: EdgeColumns::new(rows),
             weight: Vec::with_capacity(cells),
             integral: Vec::with_capacity(cells),
             mean: Vec::with_capacity(windows),
         }
     }
 
-    /// Samples `set` at the joints' arc lengths `s` (no allocation within the capacity).
-    pub fn fill(&mut self, set: &WindowSet, s: impl ExactSizeIterator<Item = f64>) {
-        debug_assert_eq!(s.len(), self.rows);
+    /// Samples `set` at the joints (no allocation within the capacity).
+    pub fn fill(&mut self, set: &WindowSet) {
         let (rows, cols) = (self.rows, set.windows().len());
         self.cols = cols;
         // Every cell is written below.
         self.weight.resize(rows * cols, 0.0);
         self.integral.resize(rows * cols, 0.0);
-        for (i, s) in s.enumerate() {
-            set.sample(s, |j, w, int| {
-                let at = j * rows + i;
-                self.weight[at] = w;
-                self.integral[at] = int;
-            });
-        }
+        let (weight, integral) = (&mut self.weight, &mut self.integral);
+        set.sample_columns(&self.s, &mut self.edges, weight, integral);
         self.mean.clear();
         let n = rows.max(1) as f64;
         let columns = self.weight.chunks_exact(rows.max(1)).take(cols);

@@ -57,6 +57,8 @@ pub struct SlitheringShape {
     /// Field `p` reads the windows and samples of field `source[p]` (itself, or the
     /// first of the fields it was set with). A source is its own source.
     source: [usize; 3],
+    /// Where each field's values start in σ, and σ's length.
+    bounds: [usize; 4],
     windows: [WindowSet; 3],
     samples: [JointSamples; 3],
     /// At the lateral joints: amplitude, phase field Ω(s), wave phase φ, sin φ, cos φ
@@ -82,13 +84,15 @@ impl SlitheringShape {
             .map(|(i, (_, &s))| (i, s))
             .collect();
         let rows = lateral.len();
+        let s: Vec<f64> = lateral.iter().map(|&(_, s)| s).collect();
         let max_windows = max_windows.map(|w| w.max(1));
         let mut shape = Self {
             joints: layout.len(),
             steepness,
             source: [0; 3],
+            bounds: [0; 4],
             windows: max_windows.map(|w| WindowSet::new(steepness, w)),
-            samples: max_windows.map(|w| JointSamples::new(rows, w)),
+            samples: max_windows.map(|w| JointSamples::new(&s, w)),
             amp: DVector::zeros(rows),
             omega: DVector::zeros(rows),
             phase: DVector::zeros(rows),
@@ -140,11 +144,14 @@ impl SlitheringShape {
         for p in params {
             self.source[p.index()] = k;
         }
+        for p in Param::ALL {
+            let i = p.index();
+            self.bounds[i + 1] = self.bounds[i] + self.windows(p).len();
+        }
     }
 
     fn resample(&mut self, k: usize) {
-        let s = self.lateral.iter().map(|&(_, s)| s);
-        self.samples[k].fill(&self.windows[k], s);
+        self.samples[k].fill(&self.windows[k]);
     }
 
     fn set(&self, param: Param) -> &WindowSet {
@@ -161,13 +168,12 @@ impl SlitheringShape {
 
     /// Offset of `param`'s values in σ.
     pub fn offset(&self, param: Param) -> usize {
-        let before = &Param::ALL[..param.index()];
-        before.iter().map(|&p| self.windows(p).len()).sum()
+        self.bounds[param.index()]
     }
 
     fn field<'a>(&self, sigma: &'a [f64], param: Param) -> &'a [f64] {
-        let at = self.offset(param);
-        &sigma[at..at + self.windows(param).len()]
+        let i = param.index();
+        &sigma[self.bounds[i]..self.bounds[i + 1]]
     }
 
     /// Field value at `s`: `Σ_j σ_j·w_j(s)`.
@@ -218,34 +224,39 @@ impl SlitheringShape {
     /// Shape forces with the SPEC's window-local Jacobian for the joint torques `tau`
     /// (length N) into `forces_out` (one per value of σ): a window collects torques only
     /// from the joints it covers (for the spatial frequency the exact column would also
-    /// reach every joint behind the window, whose phase it shifts). Joints without
-    /// torque are skipped.
+    /// reach every joint behind the window, whose phase it shifts).
     pub fn local_forces(&mut self, sigma: &[f64], tau: &[f64], forces_out: &mut [f64]) {
         self.wave(sigma);
         for (k, &(i, _)) in self.lateral.iter().enumerate() {
+            // A joint without torque adds exact zeros (and costs no sin, cos).
             self.tau[k] = tau[i];
-            if tau[i] != 0.0 {
-                (self.sin[k], self.cos[k]) = self.phase[k].sin_cos();
-            }
+            (self.sin[k], self.cos[k]) = if tau[i] == 0.0 {
+                (0.0, 0.0)
+            } else {
+                self.phase[k].sin_cos()
+            };
         }
-        let (ws_at, omega_at) = (self.offset(Param::SpatialFreq), self.offset(Param::Phase));
+        let [_, ws_at, omega_at, _] = self.bounds;
         let (fa, rest) = forces_out.split_at_mut(ws_at);
         let (fws, fomega) = rest.split_at_mut(omega_at - ws_at);
         let [sa, sws, somega] = self.source.map(|k| &self.samples[k]);
-        let joints = || (0..self.tau.len()).filter(|&k| self.tau[k] != 0.0);
-        let (a, sin, cos, tau) = (&self.amp, &self.sin, &self.cos, &self.tau);
+        let (a, sin, cos, tau) = (self.amp.as_slice(), &self.sin, &self.cos, &self.tau);
+        let joints = || a.iter().zip(sin).zip(cos).zip(tau);
         for (j, f) in fa.iter_mut().enumerate() {
-            let (w, _) = sa.column(j);
-            *f = joints().fold(0.0, |f, k| f + w[k] * sin[k] * tau[k]);
+            let w = sa.column(j).0.iter();
+            let terms = w.zip(joints()).map(|(w, (((_, s), _), t))| w * s * t);
+            *f = terms.fold(0.0, |f, x| f + x);
         }
         for (j, f) in fws.iter_mut().enumerate() {
             let (w, int) = sws.column(j);
-            let term = |k: usize| w[k] * a[k] * cos[k] * int[k] * tau[k];
-            *f = joints().fold(0.0, |f, k| f + term(k));
+            let cells = w.iter().zip(int).zip(joints());
+            let terms = cells.map(|((w, i), (((a, _), c), t))| w * a * c * i * t);
+            *f = terms.fold(0.0, |f, x| f + x);
         }
         for (j, f) in fomega.iter_mut().enumerate() {
-            let (w, _) = somega.column(j);
-            *f = joints().fold(0.0, |f, k| f - a[k] * cos[k] * w[k] * tau[k]);
+            let w = somega.column(j).0.iter();
+            let terms = w.zip(joints()).map(|(w, (((a, _), c), t))| a * c * w * t);
+            *f = terms.fold(0.0, |f, x| f - x);
         }
     }
 }
@@ -270,7 +281,7 @@ impl ShapeFunction for SlitheringShape {
     }
 
     fn param_count(&self) -> usize {
-        Param::ALL.iter().map(|&p| self.windows(p).len()).sum()
+        self.bounds[3]
     }
 
     fn value(&self, sigma: &[f64], joints_out: &mut [f64]) {

@@ -116,6 +116,42 @@ impl Terms {
         }
     }
 
+    /// A window's weight and integral from its terms and its edges' softplus at the head.
+    #[inline]
+    fn values(self, w: &Window, (head_a, head_b): (f64, f64), m: f64, s: f64) -> (f64, f64) {
+        let left = if w.a.is_finite() {
+            (self.softplus_rise - head_a) / m
+        } else {
+            s
+        };
+        let right = if w.b.is_finite() {
+            (head_b - self.softplus_fall) / m
+        } else {
+            s
+        };
+        (self.rise + self.fall - 1.0, left + right - s)
+    }
+
+    /// The edge at `x` (open when infinite) seen from `s`.
+    #[inline]
+    fn at(x: f64, s: f64, m: f64, softplus: bool) -> Self {
+        if x.is_finite() {
+            Terms::edge(m * (s - x), softplus)
+        } else {
+            Terms::OPEN
+        }
+    }
+
+    /// Of a window: its left edge's rise, its right edge's fall.
+    #[inline]
+    fn window(left: &Terms, right: &Terms) -> Terms {
+        Terms {
+            fall: right.fall,
+            softplus_fall: right.softplus_fall,
+            ..*left
+        }
+    }
+
     const fn new(rise: f64, fall: f64, softplus_rise: f64, softplus_fall: f64) -> Self {
         Self {
             rise,
@@ -177,21 +213,42 @@ impl WindowSet {
     /// `f(j, w_j(s), ∫₀^s w_j)` for each window in order.
     #[inline]
     pub fn sample(&self, s: f64, mut f: impl FnMut(usize, f64, f64)) {
-        let m = self.m;
         self.each(s, true, |j, w, t| {
-            let (head_a, head_b) = self.head[j];
-            let left = if w.a.is_finite() {
-                (t.softplus_rise - head_a) / m
-            } else {
-                s
-            };
-            let right = if w.b.is_finite() {
-                (head_b - t.softplus_fall) / m
-            } else {
-                s
-            };
-            f(j, t.rise + t.fall - 1.0, left + right - s);
+            let (weight, integral) = t.values(w, self.head[j], self.m, s);
+            f(j, weight, integral);
         });
+    }
+
+    /// [`Self::sample`] at every point of `s` at once, window by window: window `j` at
+    /// `s[i]` into `weight[j·n + i]` and `integral[j·n + i]` (`n` points). Each edge is
+    /// evaluated once over all points; the values are the same to the bit.
+    pub fn sample_columns(
+        &self,
+        s: &[f64],
+        edges: &mut EdgeColumns,
+        weight: &mut [f64],
+        integral: &mut [f64],
+    ) {
+        let (m, n) = (self.m, s.len());
+        let EdgeColumns { left, right } = edges;
+        let mut shared = f64::NAN; // the previous window's right edge, now in `left`
+        let columns = weight
+            .chunks_exact_mut(n.max(1))
+            .zip(integral.chunks_exact_mut(n.max(1)));
+        for ((w, &head), (weight, integral)) in self.windows.iter().zip(&self.head).zip(columns) {
+            if w.a != shared {
+                edge_column(left, s, w.a, m);
+            }
+            edge_column(right, s, w.b, m);
+            let cells = weight.iter_mut().zip(integral.iter_mut());
+            for (((weight, integral), (l, r)), &s) in
+                cells.zip(left.iter().zip(right.iter())).zip(s)
+            {
+                (*weight, *integral) = Terms::window(l, r).values(w, head, m, s);
+            }
+            std::mem::swap(left, right);
+            shared = w.b;
+        }
     }
 
     /// `Σ_j values_j·w_j(s)`.
@@ -209,26 +266,42 @@ impl WindowSet {
     #[inline]
     fn each(&self, s: f64, softplus: bool, mut f: impl FnMut(usize, &Window, Terms)) {
         let m = self.m;
-        let edge = |x: f64| {
-            if x.is_finite() {
-                Terms::edge(m * (s - x), softplus)
-            } else {
-                Terms::OPEN
-            }
-        };
         // The previous window's right edge.
         let (mut shared, mut prev) = (f64::NAN, Terms::OPEN);
         for (j, w) in self.windows.iter().enumerate() {
-            let left = if w.a == shared { prev } else { edge(w.a) };
-            let right = edge(w.b);
-            (shared, prev) = (w.b, right);
-            let t = Terms {
-                fall: right.fall,
-                softplus_fall: right.softplus_fall,
-                ..left
+            let left = if w.a == shared {
+                prev
+            } else {
+                Terms::at(w.a, s, m, softplus)
             };
-            f(j, w, t);
+            let right = Terms::at(w.b, s, m, softplus);
+            (shared, prev) = (w.b, right);
+            f(j, w, Terms::window(&left, &right));
         }
+    }
+}
+
+/// Room for one edge's terms at each of a fixed number of points, twice (the left and
+/// right edges of a window), for [`WindowSet::sample_columns`].
+#[derive(Debug, Clone)]
+pub struct EdgeColumns {
+    left: Vec<Terms>,
+    right: Vec<Terms>,
+}
+
+impl EdgeColumns {
+    pub fn new(points: usize) -> Self {
+        Self {
+            left: vec![Terms::OPEN; points],
+            right: vec![Terms::OPEN; points],
+        }
+    }
+}
+
+/// The terms of the edge at `x` at each point of `s`.
+fn edge_column(out: &mut [Terms], s: &[f64], x: f64, m: f64) {
+    for (t, &s) in out.iter_mut().zip(s) {
+        *t = Terms::at(x, s, m, true);
     }
 }
 
