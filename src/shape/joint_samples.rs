@@ -4,7 +4,7 @@
 
 use nalgebra::DMatrixView;
 
-use super::window::{EdgeColumns, WindowSet};
+use super::window_set::{EdgeColumns, WindowSet};
 
 /// Rows: lateral joints; columns: windows (column-major).
 #[derive(Debug, Clone)]

@@ -9,5 +9,6 @@ pub mod slithering_shape;
 pub mod torque;
 pub mod window;
 pub mod window_manager;
+mod window_set;
 
 pub use function::ShapeFunction;

@@ -9,7 +9,8 @@ use nalgebra::{DVector, DVectorView};
 
 use super::function::ShapeFunction;
 use super::joint_samples::JointSamples;
-use super::window::{Window, WindowSet};
+use super::window::Window;
+use super::window_set::WindowSet;
 use crate::gait::{BodyLayout, Plane};
 
 /// The three slithering parameters, in the order of σ.
