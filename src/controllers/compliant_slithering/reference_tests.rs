@@ -313,6 +313,8 @@ fn every_preset_follows_the_reference_for_thousands_of_steps() {
         (18, Plane::Lateral, sinusoid, &params),
         (5, Plane::Lateral, pushes, &params),
         (19, Plane::Dorsal, sinusoid, &other),
+        (2, Plane::Dorsal, steady, &params), // one lateral joint
+        (1, Plane::Dorsal, steady, &params), // none
     ];
     for (preset, _) in CompliantSlitheringConfig::PRESETS {
         for (n, first, torque, params) in cases {
