@@ -125,7 +125,8 @@ impl SlitheringShape {
     }
 
     /// Gives every field in `params` the same `windows` and samples them at the joints,
-    /// once for all of them (no allocation within the capacities given at `new`).
+    /// once for all of them (no allocation when each listed field has room for them, by
+    /// the capacities given at `new`).
     pub fn set_windows(&mut self, params: &[Param], windows: impl IntoIterator<Item = Window>) {
         let Some(first) = params.first() else {
             return;

@@ -69,8 +69,7 @@ impl CompliantSlithering {
             Centralization::Windowed => MAX_WINDOWS,
             Centralization::PerJoint => lateral,
         });
-        let m = steepness_for_width(width);
-        let mut shape = SlitheringShape::new(layout, m, max_windows);
+        let mut shape = SlitheringShape::new(layout, steepness_for_width(width), max_windows);
         let lat: Vec<f64> = shape.lateral_s().collect();
         let mut per_joint_windows = Vec::with_capacity(lat.len());
         for (k, _) in lat.iter().enumerate() {
@@ -95,7 +94,7 @@ impl CompliantSlithering {
             };
             vec![ParamState::default(); count]
         });
-        let m = max_windows.iter().sum();
+        let values = max_windows.iter().sum();
         let mut c = Self {
             config,
             layout: layout.clone(),
@@ -109,8 +108,8 @@ impl CompliantSlithering {
             filter: TorqueFilter::new(n, config.torque_cutoff_hz, config.torque_deadband_nm),
             reported: vec![0.0; n],
             tau_ext: vec![0.0; n],
-            sigma: Vec::with_capacity(m),
-            forces: Vec::with_capacity(m),
+            sigma: Vec::with_capacity(values),
+            forces: Vec::with_capacity(values),
             last_t: None,
             t: 0.0,
             last_events: WindowEvents::default(),
