@@ -4,9 +4,11 @@
 
 pub mod admittance;
 pub mod function;
+mod joint_samples;
 pub mod slithering_shape;
 pub mod torque;
 pub mod window;
 pub mod window_manager;
+mod window_set;
 
 pub use function::ShapeFunction;

@@ -13,7 +13,7 @@ pub struct Window {
 
 /// Beyond this |x| the logistic is 0 or 1 and softplus 0 or x to within 2e-16: far
 /// windows then cost no transcendental functions.
-const SATURATED: f64 = 36.0;
+pub(super) const SATURATED: f64 = 36.0;
 
 /// `ln(1 + e^x)` without overflow.
 #[inline]

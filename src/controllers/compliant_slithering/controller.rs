@@ -6,13 +6,13 @@ use super::config::{Centralization, CompliantSlitheringConfig};
 use crate::controller::nominal::{Nominal, lateral_room, within};
 use crate::controller::report::{ControllerReport, MAX_WINDOWS as REPORT_WINDOWS, WindowField};
 use crate::controller::{Controller, Handover, NominalMismatch, Observation};
-use crate::gait::{BodyLayout, GaitParams};
+use crate::gait::{BodyLayout, GaitParams, Plane};
 use crate::shape::ShapeFunction;
 use crate::shape::admittance::ParamState;
 use crate::shape::slithering_shape::{Param, SlitheringShape};
 use crate::shape::torque::TorqueFilter;
 use crate::shape::window::{Window, steepness_for_width};
-use crate::shape::window_manager::{WindowEvents, WindowManager};
+use crate::shape::window_manager::{Slope, WindowEvents, WindowManager};
 
 /// Most travelling windows on the body (ωS ≤ 4π gives at most 5).
 const MAX_WINDOWS: usize = 16;
@@ -33,7 +33,8 @@ pub struct CompliantSlithering {
     /// States of the fields that are not windowed (1 when central, one per lateral
     /// joint when per joint), by parameter.
     fixed: [Vec<ParamState>; 3],
-    per_joint_windows: Vec<Window>,
+    /// The windowed fields: they share the manager's windows.
+    windowed: Vec<Param>,
     filter: TorqueFilter,
     reported: Vec<f64>,
     tau_ext: Vec<f64>,
@@ -54,8 +55,21 @@ impl CompliantSlithering {
     ) -> Self {
         let n = layout.len();
         let width = config.edge_width_modules / (n as f64 + 1.0);
-        let cap = MAX_WINDOWS.max(n);
-        let shape = SlitheringShape::new(layout, steepness_for_width(width), cap);
+        let lateral = layout
+            .planes
+            .iter()
+            .filter(|&&p| p == Plane::Lateral)
+            .count();
+        let with = |c| -> Vec<Param> {
+            let is = |p: &Param| config.param(*p).centralization == c;
+            Param::ALL.into_iter().filter(is).collect()
+        };
+        let max_windows = Param::ALL.map(|p| match config.param(p).centralization {
+            Centralization::Central => 1,
+            Centralization::Windowed => MAX_WINDOWS,
+            Centralization::PerJoint => lateral,
+        });
+        let mut shape = SlitheringShape::new(layout, steepness_for_width(width), max_windows);
         let lat: Vec<f64> = shape.lateral_s().collect();
         let mut per_joint_windows = Vec::with_capacity(lat.len());
         for (k, _) in lat.iter().enumerate() {
@@ -71,6 +85,7 @@ impl CompliantSlithering {
             };
             per_joint_windows.push(Window { a, b });
         }
+        shape.set_windows(&with(Centralization::PerJoint), per_joint_windows);
         let fixed = [Param::Amplitude, Param::SpatialFreq, Param::Phase].map(|p| {
             let count = match config.param(p).centralization {
                 Centralization::Central => 1,
@@ -79,7 +94,7 @@ impl CompliantSlithering {
             };
             vec![ParamState::default(); count]
         });
-        let m = 3 * cap;
+        let values = max_windows.iter().sum();
         let mut c = Self {
             config,
             layout: layout.clone(),
@@ -89,12 +104,12 @@ impl CompliantSlithering {
             manager: WindowManager::new(n + 9, MAX_WINDOWS),
             shape,
             fixed,
-            per_joint_windows,
+            windowed: with(Centralization::Windowed),
             filter: TorqueFilter::new(n, config.torque_cutoff_hz, config.torque_deadband_nm),
             reported: vec![0.0; n],
             tau_ext: vec![0.0; n],
-            sigma: Vec::with_capacity(m),
-            forces: Vec::with_capacity(m),
+            sigma: Vec::with_capacity(values),
+            forces: Vec::with_capacity(values),
             last_t: None,
             t: 0.0,
             last_events: WindowEvents::default(),
@@ -110,9 +125,15 @@ impl CompliantSlithering {
             self.nominal.params.spatial_freq_rad,
             self.nominal_phase(self.t),
         );
+        let slope = if ws0 > 0.0 {
+            Slope::Increasing
+        } else {
+            Slope::Unknown
+        };
         self.manager
-            .update(|s| ws0 * s - omega0, [ParamState::default(); 3]);
-        self.assemble();
+            .update(|s| ws0 * s - omega0, [ParamState::default(); 3], slope);
+        self.place_windows();
+        self.fill_sigma();
     }
 
     pub fn config(&self) -> &CompliantSlitheringConfig {
@@ -137,19 +158,14 @@ impl CompliantSlithering {
         self.config.param(p).centralization == Centralization::Windowed
     }
 
-    /// Writes every field's windows into the shape and σ from the states.
-    fn assemble(&mut self) {
-        for p in Param::ALL {
-            match self.config.param(p).centralization {
-                Centralization::Central => self.shape.set_windows(p, [Window::EVERYWHERE]),
-                Centralization::PerJoint => self
-                    .shape
-                    .set_windows(p, self.per_joint_windows.iter().copied()),
-                Centralization::Windowed => self
-                    .shape
-                    .set_windows(p, self.manager.windows().map(|w| w.window)),
-            }
-        }
+    /// Gives the windowed fields the manager's windows (the others' never change).
+    fn place_windows(&mut self) {
+        let windows = self.manager.windows().map(|w| w.window);
+        self.shape.set_windows(&self.windowed, windows);
+    }
+
+    /// σ from the states.
+    fn fill_sigma(&mut self) {
         self.sigma.clear();
         for p in Param::ALL {
             let nominal = self.nominal(p);
@@ -164,30 +180,28 @@ impl CompliantSlithering {
         }
     }
 
-    /// Shape forces with the SPEC's window-local Jacobian: a window collects torques only
-    /// from the joints it covers (for the spatial frequency the exact column would also
-    /// reach every joint behind the window, whose phase it shifts).
+    /// Shape forces on σ from the external torques (see
+    /// [`SlitheringShape::local_forces`]).
     fn compute_forces(&mut self) {
-        let m = self.shape.steepness();
         self.forces.clear();
         self.forces.resize(self.sigma.len(), 0.0);
-        let offsets = Param::ALL.map(|p| self.shape.offset(p));
-        for (i, s) in self.shape.lateral_joints() {
-            let tau = self.tau_ext[i];
-            if tau == 0.0 {
-                continue;
-            }
-            let a = self.shape.field_at(&self.sigma, Param::Amplitude, s);
-            let (sin, cos) = self.shape.phase_at(&self.sigma, s).sin_cos();
-            for (j, w) in self.shape.windows(Param::Amplitude).iter().enumerate() {
-                self.forces[offsets[0] + j] += w.weight(s, m) * sin * tau;
-            }
-            for (j, w) in self.shape.windows(Param::SpatialFreq).iter().enumerate() {
-                self.forces[offsets[1] + j] += w.weight(s, m) * a * cos * w.integral(s, m) * tau;
-            }
-            for (j, w) in self.shape.windows(Param::Phase).iter().enumerate() {
-                self.forces[offsets[2] + j] -= a * cos * w.weight(s, m) * tau;
-            }
+        let (sigma, tau) = (&self.sigma, &self.tau_ext);
+        self.shape.local_forces(sigma, tau, &mut self.forces);
+    }
+
+    /// What the window manager may assume of φ along the body: with windows that tile
+    /// it (weights ≥ 0 summing to 1), `φ′ = Σ ωS_j·w_j − Σ Ω_j·w_j′` is positive when
+    /// the phase is one value and every ωS is positive.
+    fn slope(&self) -> Slope {
+        let ws = self.shape.windows(Param::SpatialFreq);
+        let at = self.shape.offset(Param::SpatialFreq);
+        let increasing = self.shape.windows(Param::Phase).len() == 1
+            && ws.iter().all(|w| w.a <= w.b)
+            && self.sigma[at..at + ws.len()].iter().all(|&v| v > 0.0);
+        if increasing {
+            Slope::Increasing
+        } else {
+            Slope::Unknown
         }
     }
 
@@ -227,12 +241,7 @@ impl CompliantSlithering {
 
     /// `p`'s mean over the lateral joints.
     pub fn lateral_mean(&self, p: Param) -> f64 {
-        let lat = self.shape.lateral_count().max(1) as f64;
-        self.shape
-            .lateral_s()
-            .map(|s| self.value_at(p, s))
-            .sum::<f64>()
-            / lat
+        self.shape.lateral_mean(&self.sigma, p)
     }
 
     /// `p`'s value at normalised arc length `s`.
@@ -268,34 +277,25 @@ impl CompliantSlithering {
             *r = m;
         }
         self.filter.update(dt, &self.reported, &mut self.tau_ext);
-        if Param::ALL.iter().any(|&p| self.windowed(p)) {
-            // Anchor the windows to the wave as it stands (last step's fields).
-            let shape = &self.shape;
-            let sigma = &self.sigma;
-            let ready = sigma.len() == shape.param_count();
-            let (ws0, omega0) = (
-                self.nominal.params.spatial_freq_rad,
-                self.nominal_phase(t_s),
-            );
-            self.last_events = self.manager.update(
-                |s| {
-                    if ready {
-                        shape.phase_at(sigma, s)
-                    } else {
-                        ws0 * s - omega0
-                    }
-                },
-                [ParamState::default(); 3],
-            );
+        if !self.windowed.is_empty() {
+            // Anchor the windows to the wave as it stands (last step's fields; σ always
+            // matches the shape: construction and reset fill it).
+            let slope = self.slope();
+            let (shape, sigma) = (&self.shape, &self.sigma);
+            let phase_at = |s| shape.phase_at(sigma, s);
+            self.last_events = self
+                .manager
+                .update(phase_at, [ParamState::default(); 3], slope);
             let ev = self.last_events;
             self.windows_born += (ev.born_at_head + ev.born_at_tail) as u64;
             self.windows_dropped += (ev.dropped_at_tail + ev.dropped_at_head) as u64;
+            self.place_windows();
         }
-        self.assemble();
+        self.fill_sigma();
         self.compute_forces();
         self.integrate(dt);
-        self.assemble();
-        self.shape.value(&self.sigma, set_points_rad);
+        self.fill_sigma();
+        self.shape.set_points(&self.sigma, set_points_rad);
     }
 
     fn fill_field(&self, p: Param, out: &mut WindowField) {
@@ -384,3 +384,7 @@ impl Controller for CompliantSlithering {
 #[cfg(test)]
 #[path = "controller_tests.rs"]
 mod tests;
+
+#[cfg(test)]
+#[path = "reference_tests.rs"]
+mod reference;
