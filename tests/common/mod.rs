@@ -232,7 +232,7 @@ pub fn tmp_path(dir: &tempfile::TempDir, name: &str) -> PathBuf {
     dir.path().join(name)
 }
 
-/// `snake-emu` and `snaked` as processes on loopback, talking protocol v1, with the
+/// `snake-emu` and `snaked` as processes on loopback, talking protocol v2, with the
 /// daemon's socket connected and the emulator recording its ground truth.
 pub struct Rig {
     pub dir: tempfile::TempDir,

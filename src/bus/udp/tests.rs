@@ -511,3 +511,33 @@ fn lockstep_times_out_when_a_module_is_silent() {
         })
     ));
 }
+
+#[test]
+fn discovery_names_peers_that_speak_protocol_v1() {
+    // An old module: answers every lookup with a v1 Announce-shaped datagram.
+    let old = UdpSocket::bind("127.0.0.1:0").unwrap();
+    old.set_read_timeout(Some(Duration::from_millis(5)))
+        .unwrap();
+    let addr = old.local_addr().unwrap();
+    let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let flag = stop.clone();
+    let t = std::thread::spawn(move || {
+        let mut buf = [0u8; 2048];
+        while !flag.load(std::sync::atomic::Ordering::Relaxed) {
+            if let Ok((_, from)) = old.recv_from(&mut buf) {
+                let mut v1 = b"SN\x01\x02\0\0\0\0\x01\0\0\0\0\0\0\0".to_vec();
+                v1.extend_from_slice(&[0; 4]);
+                old.send_to(&v1, from).unwrap();
+            }
+        }
+    });
+    let err = discover(&[addr], &LookupFilter::All, Some(1), lo(), SHORT).unwrap_err();
+    stop.store(true, std::sync::atomic::Ordering::Relaxed);
+    t.join().unwrap();
+    let DiscoveryError::OldProtocol { from, count } = &err else {
+        panic!("{err:?}")
+    };
+    assert_eq!(from, &[addr]);
+    assert!(*count >= 1);
+    assert!(err.to_string().contains("protocol v1"), "{err}");
+}
