@@ -4,9 +4,10 @@
 //! or more frames back to back ([`Frames`]). The encoding is canonical: every frame
 //! `open` accepts re-encodes to the same bytes (reserved bytes and name padding must be
 //! zero), and the tag covers every byte before it.
+use super::wire::{Reader, Writer};
 use super::{
     AcquireReply, Announce, Command, ControlStrategy, Feedback, Header, Key, LookupFilter, MAGIC,
-    Mac, Message, MsgType, NAME_CAPACITY, NONCE_LEN, Name, Route, Settings, TAG_LEN, VERSION,
+    Mac, Message, MsgType, NONCE_LEN, Route, Settings, TAG_LEN, VERSION,
 };
 
 /// Largest datagram this protocol produces or accepts, bytes.
@@ -498,119 +499,6 @@ fn decode_lookup(r: &mut Reader<'_>) -> Result<LookupFilter, DecodeError> {
         _ => return Err(DecodeError::Malformed("unknown lookup filter kind")),
     };
     Ok(filter)
-}
-
-/// Writes into a buffer whose size `encode` has already checked.
-struct Writer<'a> {
-    buf: &'a mut [u8],
-    pos: usize,
-}
-
-impl Writer<'_> {
-    fn bytes(&mut self, b: &[u8]) {
-        self.buf[self.pos..self.pos + b.len()].copy_from_slice(b);
-        self.pos += b.len();
-    }
-    fn u8(&mut self, v: u8) {
-        self.bytes(&[v]);
-    }
-    fn u16(&mut self, v: u16) {
-        self.bytes(&v.to_le_bytes());
-    }
-    fn u32(&mut self, v: u32) {
-        self.bytes(&v.to_le_bytes());
-    }
-    fn u64(&mut self, v: u64) {
-        self.bytes(&v.to_le_bytes());
-    }
-    /// Bit-exact, so NaN payloads survive.
-    fn f32(&mut self, v: f32) {
-        self.u32(v.to_bits());
-    }
-    /// Length byte, then the bytes.
-    fn short_name(&mut self, n: &Name) {
-        self.u8(n.as_bytes().len() as u8);
-        self.bytes(n.as_bytes());
-    }
-    /// `NAME_CAPACITY` bytes, zero padded (the length travels separately).
-    fn padded_name(&mut self, n: &Name) {
-        let b = n.as_bytes();
-        self.bytes(b);
-        self.bytes(&[0; NAME_CAPACITY][b.len()..]);
-    }
-}
-
-/// Reads a payload; running out of bytes is a malformed payload.
-struct Reader<'a> {
-    buf: &'a [u8],
-    pos: usize,
-}
-
-impl<'a> Reader<'a> {
-    fn remaining(&self) -> usize {
-        self.buf.len() - self.pos
-    }
-    fn take(&mut self, n: usize) -> Result<&'a [u8], DecodeError> {
-        if n > self.remaining() {
-            return Err(DecodeError::Malformed("payload ends inside a field"));
-        }
-        let s = &self.buf[self.pos..self.pos + n];
-        self.pos += n;
-        Ok(s)
-    }
-    fn array<const N: usize>(&mut self) -> Result<[u8; N], DecodeError> {
-        Ok(self.take(N)?.try_into().expect("take returns N bytes"))
-    }
-    fn u8(&mut self) -> Result<u8, DecodeError> {
-        Ok(self.take(1)?[0])
-    }
-    fn u16(&mut self) -> Result<u16, DecodeError> {
-        self.array().map(u16::from_le_bytes)
-    }
-    fn u32(&mut self) -> Result<u32, DecodeError> {
-        self.array().map(u32::from_le_bytes)
-    }
-    fn u64(&mut self) -> Result<u64, DecodeError> {
-        self.array().map(u64::from_le_bytes)
-    }
-    fn f32(&mut self) -> Result<f32, DecodeError> {
-        self.u32().map(f32::from_bits)
-    }
-    fn f32s<const N: usize>(&mut self) -> Result<[f32; N], DecodeError> {
-        let mut out = [0.0; N];
-        for v in &mut out {
-            *v = self.f32()?;
-        }
-        Ok(out)
-    }
-    fn zero(&mut self, n: usize) -> Result<(), DecodeError> {
-        if self.take(n)?.iter().any(|&b| b != 0) {
-            return Err(DecodeError::Malformed("reserved bytes not zero"));
-        }
-        Ok(())
-    }
-    fn name(bytes: &[u8]) -> Result<Name, DecodeError> {
-        let s = std::str::from_utf8(bytes).map_err(|_| DecodeError::Malformed("name not UTF-8"))?;
-        Name::new(s).map_err(|_| DecodeError::Malformed("name too long"))
-    }
-    fn short_name(&mut self) -> Result<Name, DecodeError> {
-        let len = self.u8()? as usize;
-        if len > NAME_CAPACITY {
-            return Err(DecodeError::Malformed("name too long"));
-        }
-        Self::name(self.take(len)?)
-    }
-    fn padded_name(&mut self, len: u8) -> Result<Name, DecodeError> {
-        let field = self.take(NAME_CAPACITY)?;
-        let len = len as usize;
-        if len > NAME_CAPACITY {
-            return Err(DecodeError::Malformed("name too long"));
-        }
-        if field[len..].iter().any(|&b| b != 0) {
-            return Err(DecodeError::Malformed("name padding not zero"));
-        }
-        Self::name(&field[..len])
-    }
 }
 
 /// The full suite (round trips, every error, corruption) is `tests/protocol_codec.rs`.

@@ -13,6 +13,7 @@
 mod codec;
 mod key;
 mod name;
+mod wire;
 
 pub use codec::{
     DecodeError, EncodeError, FRAME_OVERHEAD, Frames, HEADER_LEN, MAX_DATAGRAM, MAX_PAYLOAD,
