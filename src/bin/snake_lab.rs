@@ -141,6 +141,7 @@ fn pegboard(args: Pegboard) -> Result<(), LabError> {
         controllers,
         layouts,
         starts: args.starts,
+        repeats: 1,
         trial: TrialConfig {
             limit_s: args.seconds,
             ..TrialConfig::default()

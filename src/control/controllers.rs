@@ -5,13 +5,15 @@
 //! slithering, translated into a selection.
 use serde_json::{Map, Value, json};
 
-use super::api::RpcError;
+use super::api::{RpcError, code};
 use super::shared::Shared;
+use crate::controller::ControllerCommand;
 use crate::controller::catalog::{Catalog, ControllerInfo, NO_CONTROLLER};
 use crate::controller::config::merge;
 use crate::controller::registry::{self, BuildContext, Selection};
 use crate::controllers::REGISTRY;
 use crate::gait::{BodyLayout, GaitKind, GaitParams, ParamPatch};
+use crate::rt::controller_slots::Engagement;
 use crate::rt::controller_slots::{ControllerTelemetry, Installed};
 use crate::rt::messages::LoopRequest;
 
@@ -129,6 +131,108 @@ pub(crate) async fn set(
     shared.free_retired();
     result?;
     Ok(json!({ "gait": gait, "controller": info_view(&info) }))
+}
+
+/// Longest calibration the socket starts, s.
+pub const CALIBRATION_MAX_S: f64 = 600.0;
+/// Default calibration length, in the gait's nominal cycles (SPEC §8: "a few").
+pub const CALIBRATION_DEFAULT_CYCLES: f64 = 3.0;
+
+/// What `controller.calibrate` asks for.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum Calibration {
+    /// Measure over this many seconds (`None`: over the default cycles of the gait).
+    Run(Option<f64>),
+    Clear,
+}
+
+/// `controller.calibrate`: starts `gait`'s controller's calibration and answers when it
+/// has finished (its `calibration` signal reads 2) with the controller's signals, or
+/// clears it. The controller measures only while it drives, so the gait must be the
+/// one running; the answer says so when it is not.
+pub(crate) async fn calibrate(
+    shared: &Shared,
+    gait: Option<GaitKind>,
+    what: Calibration,
+) -> Result<Value, RpcError> {
+    let snap = shared.telemetry.latest();
+    let gait = gait.unwrap_or(snap.gait);
+    let id = snap.controller.installed[gait.index()];
+    let info = shared.catalog.get(id).ok_or_else(|| {
+        RpcError::invalid_params(format!(
+            "{} has no controller installed: controller.set one first",
+            gait.name()
+        ))
+    })?;
+    let seconds = match what {
+        Calibration::Clear => {
+            let cmd = LoopRequest::ControllerCommand(gait, ControllerCommand::ClearCalibration);
+            shared.router.call(cmd).await?;
+            return Ok(
+                json!({ "gait": gait, "controller": info.controller, "calibration": "none" }),
+            );
+        }
+        Calibration::Run(Some(s)) => s,
+        Calibration::Run(None) => {
+            let w = snap.params.get(gait).temporal_freq_rad_s.abs();
+            if w < 1e-6 {
+                return Err(RpcError::invalid_params(
+                    "the gait does not move (temporal_freq_rad_s = 0): give `seconds`",
+                ));
+            }
+            (CALIBRATION_DEFAULT_CYCLES * std::f64::consts::TAU / w).min(CALIBRATION_MAX_S)
+        }
+    };
+    let cmd = ControllerCommand::Calibrate {
+        duration_s: seconds,
+    };
+    shared
+        .router
+        .call(LoopRequest::ControllerCommand(gait, cmd))
+        .await?;
+    let Some(at) = info
+        .report
+        .signals
+        .iter()
+        .position(|s| s.name == "calibration")
+    else {
+        return Ok(json!({ "gait": gait, "controller": info.controller, "seconds": seconds }));
+    };
+    // Wall time: the loop runs in real time; a held loop or another gait makes no progress.
+    let deadline =
+        tokio::time::Instant::now() + std::time::Duration::from_secs_f64(seconds * 1.5 + 5.0);
+    loop {
+        tokio::time::sleep(std::time::Duration::from_millis(50)).await;
+        let snap = shared.telemetry.latest();
+        let c = &snap.controller;
+        if c.installed[gait.index()] != id {
+            return Err(RpcError::new(
+                code::REFUSED,
+                "the controller was replaced during its calibration",
+            ));
+        }
+        let driving = c.active_id == id && c.engagement == Engagement::Engaged;
+        if driving && c.report.signals[at] == 2.0 {
+            let view = telemetry_view(c, &shared.catalog);
+            return Ok(json!({
+                "gait": gait,
+                "controller": info.controller,
+                "seconds": seconds,
+                "signals": view["signals"],
+            }));
+        }
+        if tokio::time::Instant::now() > deadline {
+            let why = if driving {
+                "it did not finish in time"
+            } else {
+                "the controller is not driving (its gait must be running, not held)"
+            };
+            return Err(RpcError::new(
+                code::LOOP_TIMEOUT,
+                format!("calibration of {} not finished: {why}", gait.name()),
+            ));
+        }
+    }
 }
 
 /// `params.set` of slithering with the old `compliance` object (docs/control-socket.md,

@@ -14,7 +14,7 @@ use crate::gait::{GaitKind, ParamPatch};
 use crate::rt::messages::LoopRequest;
 
 /// Every method the server knows (listed in the unknown-method error).
-pub const METHODS: [&str; 17] = [
+pub const METHODS: [&str; 18] = [
     "auth",
     "status",
     "gait.list",
@@ -24,6 +24,7 @@ pub const METHODS: [&str; 17] = [
     "controller.list",
     "controller.get",
     "controller.set",
+    "controller.calibrate",
     "hold",
     "limp",
     "estop",
@@ -111,6 +112,27 @@ pub(crate) async fn dispatch(
         "controller.set" => {
             let (gait, sel) = controller_set_params(p)?;
             controllers::set(shared, gait, sel).await
+        }
+        "controller.calibrate" => {
+            let gait = p.take_gait("gait")?;
+            let (min, max) = (0.1, controllers::CALIBRATION_MAX_S);
+            let seconds = p.take_f64_in("seconds", min, max)?;
+            let clear = match p.take_json("clear")? {
+                None | Some(Value::Bool(false)) => false,
+                Some(Value::Bool(true)) => true,
+                Some(_) => return Err(RpcError::invalid_params("`clear` must be true or false")),
+            };
+            p.finish(&["gait", "seconds", "clear"])?;
+            let what = match (clear, seconds) {
+                (true, Some(_)) => {
+                    return Err(RpcError::invalid_params(
+                        "give `seconds` to calibrate or `clear`, not both",
+                    ));
+                }
+                (true, None) => controllers::Calibration::Clear,
+                (false, s) => controllers::Calibration::Run(s),
+            };
+            controllers::calibrate(shared, gait, what).await
         }
         "hold" => act(shared, p, LoopRequest::Hold).await,
         "limp" => act(shared, p, LoopRequest::Limp).await,

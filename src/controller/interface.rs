@@ -80,6 +80,28 @@ pub struct NominalMismatch {
     pub max: f64,
 }
 
+/// An operator's command to a running controller (`controller.calibrate` on the
+/// socket). `Copy`: it crosses the loop's channel without allocating.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ControllerCommand {
+    /// Measure what the controller calibrates (e.g. the ground's friction offset of
+    /// directional compliance) over the next `duration_s` of its own steps. A
+    /// controller that accepts it reports a signal named `calibration`:
+    /// 0 none, 1 running, 2 calibrated.
+    Calibrate { duration_s: f64 },
+    /// Forget the calibration (back to none).
+    ClearCalibration,
+}
+
+/// Why a controller refused a command (built without allocating).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+pub enum CommandRefused {
+    #[error("this controller has nothing to calibrate")]
+    Unsupported,
+    #[error("the calibration time must be positive and finite, at most an hour")]
+    BadDuration,
+}
+
 /// A controller the loop can run. Every method but construction runs in the loop
 /// thread: none may allocate, lock, block or read a clock.
 pub trait Controller: Send {
@@ -94,6 +116,12 @@ pub trait Controller: Send {
     /// The report after the last step, in the order of the controller's
     /// [`super::report::ReportSpec`].
     fn report(&self, out: &mut ControllerReport);
+    /// An operator's command; it takes effect at the controller's next step. Most
+    /// controllers have none.
+    fn command(&mut self, command: ControllerCommand) -> Result<(), CommandRefused> {
+        let _ = command;
+        Err(CommandRefused::Unsupported)
+    }
 }
 
 /// Fills the body estimate before the controllers run (e.g. the virtual chassis).

@@ -13,7 +13,8 @@ pub mod report;
 
 pub use config::ConfigError;
 pub use interface::{
-    BodyEstimate, Controller, Estimator, Handover, Imu, NominalMismatch, Observation,
+    BodyEstimate, CommandRefused, Controller, ControllerCommand, Estimator, Handover, Imu,
+    NominalMismatch, Observation,
 };
 pub use registry::{BuildContext, Built, ControllerKind, Family, Selection};
 pub mod testing;

@@ -4,6 +4,7 @@
 
 pub mod compliant_slithering;
 pub mod cpg;
+pub mod directional_compliance;
 pub mod open_loop;
 pub mod serpenoid_admittance;
 
@@ -15,4 +16,5 @@ pub static REGISTRY: &[&dyn Family] = &[
     &Entry::<compliant_slithering::CompliantSlitheringKind>::NEW,
     &Entry::<cpg::CpgKind>::NEW,
     &Entry::<serpenoid_admittance::SerpenoidAdmittanceKind>::NEW,
+    &Entry::<directional_compliance::DirectionalComplianceKind>::NEW,
 ];

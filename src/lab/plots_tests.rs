@@ -68,6 +68,7 @@ fn every_figure_is_a_png() {
             controller: if k < 3 { "a" } else { "b" }.into(),
             layout: "seed1".into(),
             start: k,
+            repeat: 0,
             metrics: TrialMetrics {
                 success: k % 2 == 0,
                 seconds: 50.0,

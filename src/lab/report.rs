@@ -177,6 +177,7 @@ mod tests {
             controller: controller.into(),
             layout: "seed1000".into(),
             start,
+            repeat: 0,
             metrics: TrialMetrics {
                 success,
                 seconds: 10.0,

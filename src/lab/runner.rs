@@ -25,8 +25,10 @@ pub struct Experiment {
     /// The compared controllers, in report order.
     pub controllers: Vec<LabController>,
     pub layouts: Vec<Layout>,
-    /// Starts per layout.
+    /// Starts (poses) per layout.
     pub starts: usize,
+    /// Trials per pose, differing only in their sensor-noise seed (1: one per pose).
+    pub repeats: usize,
     pub trial: TrialConfig,
     /// Record every trial to `DIR/<controller>-<layout>-s<start>.mcap` (must exist).
     pub record_dir: Option<std::path::PathBuf>,
@@ -37,6 +39,8 @@ pub struct Experiment {
 pub struct PlannedWorld<G> {
     pub layout: usize,
     pub start: usize,
+    /// Which of the pose's repeats (0 when there is one).
+    pub repeat: usize,
     pub world: Arc<WorldSpec>,
     /// What ends its trials.
     pub goal: G,
@@ -50,6 +54,7 @@ pub struct TrialResult<E: ExperimentModule = Pegboard> {
     pub controller: String,
     pub layout: String,
     pub start: usize,
+    pub repeat: usize,
     pub metrics: E::Metrics,
     /// The world and the full record, kept for the trial the report plots (each
     /// controller's first layout and start).
@@ -94,6 +99,9 @@ pub fn plan<E: ExperimentModule>(
     if exp.starts == 0 {
         return Err(LabError::NoStarts);
     }
+    if exp.repeats == 0 {
+        return Err(LabError::BadValue("--repeats must be at least 1".into()));
+    }
     let t = &exp.trial;
     if !(t.limit_s.is_finite() && t.limit_s > 0.0) {
         return Err(LabError::BadValue(format!(
@@ -101,20 +109,35 @@ pub fn plan<E: ExperimentModule>(
             t.limit_s
         )));
     }
-    let mut worlds = Vec::with_capacity(exp.layouts.len() * exp.starts);
+    let mut worlds = Vec::with_capacity(exp.layouts.len() * exp.starts * exp.repeats);
     for (li, l) in exp.layouts.iter().enumerate() {
         for start in 0..exp.starts {
             let (world, goal) = module.world(l, t.modules, start as u64)?;
-            worlds.push(PlannedWorld {
-                layout: li,
-                start,
-                world: Arc::new(world),
-                goal,
-                noise_seed: trial_seed(l.seed(), start as u64),
-            });
+            let world = Arc::new(world);
+            for repeat in 0..exp.repeats {
+                worlds.push(PlannedWorld {
+                    layout: li,
+                    start,
+                    repeat,
+                    world: Arc::clone(&world),
+                    goal: goal.clone(),
+                    noise_seed: noise_seed(l.seed(), start, repeat),
+                });
+            }
         }
     }
     Ok(worlds)
+}
+
+/// The sensor-noise seed of a pose's repeat: repeat 0 keeps the seed a pose had before
+/// repeats existed, so one-repeat experiments reproduce.
+pub fn noise_seed(layout_seed: u64, start: usize, repeat: usize) -> u64 {
+    let seed = trial_seed(layout_seed, start as u64);
+    if repeat == 0 {
+        seed
+    } else {
+        trial_seed(seed, repeat as u64)
+    }
 }
 
 /// Runs every trial of `exp` and returns them sorted by (controller, layout, start).
@@ -140,18 +163,29 @@ pub fn run<E: ExperimentModule>(
         let controller = &exp.controllers[c];
         let layout = &exp.layouts[w.layout].name;
         let recording = exp.record_dir.as_ref().map(|dir| TrialRecording {
-            path: dir.join(format!(
-                "{}-{}-s{}.mcap",
-                file_stem(&controller.label),
-                file_stem(layout),
-                w.start
-            )),
+            path: dir.join(if exp.repeats > 1 {
+                format!(
+                    "{}-{}-s{}-r{}.mcap",
+                    file_stem(&controller.label),
+                    file_stem(layout),
+                    w.start,
+                    w.repeat
+                )
+            } else {
+                format!(
+                    "{}-{}-s{}.mcap",
+                    file_stem(&controller.label),
+                    file_stem(layout),
+                    w.start
+                )
+            }),
             world: &w.world,
             metadata: vec![
                 ("experiment".into(), module.name().into()),
                 ("controller".into(), controller.label.clone()),
                 ("layout".into(), layout.clone()),
                 ("start".into(), w.start.to_string()),
+                ("repeat".into(), w.repeat.to_string()),
                 ("noise_seed".into(), w.noise_seed.to_string()),
             ],
         });
@@ -164,11 +198,12 @@ pub fn run<E: ExperimentModule>(
             recording,
         )?;
         let metrics = module.metrics(&rec);
-        let first = w.layout == 0 && w.start == 0;
+        let first = w.layout == 0 && w.start == 0 && w.repeat == 0;
         Ok(TrialResult {
             controller: controller.label.clone(),
             layout: exp.layouts[w.layout].name.clone(),
             start: w.start,
+            repeat: w.repeat,
             metrics,
             plotted: first.then(|| (Arc::clone(&w.world), w.goal.clone(), rec)),
         })
@@ -244,6 +279,7 @@ mod tests {
                 .map(|k| Layout::seeded(&base, 1000 + k))
                 .collect(),
             starts: 2,
+            repeats: 1,
             trial: TrialConfig {
                 limit_s: 0.2,
                 ..TrialConfig::default()

@@ -282,6 +282,12 @@ pub fn request_name(r: &LoopRequest) -> &'static str {
         LoopRequest::SetGait(_) => "set_gait",
         LoopRequest::SetParams(..) => "set_params",
         LoopRequest::SetController(_) => "set_controller",
+        LoopRequest::ControllerCommand(_, c) => match c {
+            crate::controller::ControllerCommand::Calibrate { .. } => "controller_calibrate",
+            crate::controller::ControllerCommand::ClearCalibration => {
+                "controller_clear_calibration"
+            }
+        },
         LoopRequest::SetBlendTime(_) => "set_blend_time",
         LoopRequest::Hold => "hold",
         LoopRequest::Limp => "limp",
@@ -306,6 +312,10 @@ enum RequestArgs<'a> {
     BlendTime {
         blend_time_s: f64,
     },
+    Calibrate {
+        gait: crate::gait::GaitKind,
+        seconds: f64,
+    },
 }
 
 fn request_args(r: &LoopRequest) -> RequestArgs<'_> {
@@ -315,6 +325,17 @@ fn request_args(r: &LoopRequest) -> RequestArgs<'_> {
         }
         LoopRequest::SetParams(gait, patch) => RequestArgs::Params { gait: *gait, patch },
         LoopRequest::SetBlendTime(s) => RequestArgs::BlendTime { blend_time_s: *s },
+        LoopRequest::ControllerCommand(gait, cmd) => match cmd {
+            crate::controller::ControllerCommand::Calibrate { duration_s } => {
+                RequestArgs::Calibrate {
+                    gait: *gait,
+                    seconds: *duration_s,
+                }
+            }
+            crate::controller::ControllerCommand::ClearCalibration => {
+                RequestArgs::Gait { gait: *gait }
+            }
+        },
         _ => RequestArgs::None {},
     }
 }

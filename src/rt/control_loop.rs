@@ -320,6 +320,7 @@ impl ControlLoop {
                 }
                 Ok(())
             }
+            LoopRequest::ControllerCommand(kind, command) => self.slots.command(kind, command),
             LoopRequest::SetBlendTime(s) => self
                 .p
                 .selector

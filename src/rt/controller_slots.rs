@@ -16,8 +16,9 @@ use serde::Serialize;
 
 use crate::controller::catalog::NO_CONTROLLER;
 use crate::controller::report::ControllerReport;
-use crate::controller::{Controller, Handover, NominalMismatch, Observation};
+use crate::controller::{Controller, ControllerCommand, Handover, NominalMismatch, Observation};
 use crate::gait::{GaitKind, GaitParams, GaitSelector};
+use crate::rt::messages::Rejection;
 
 const KINDS: usize = GaitKind::ALL.len();
 
@@ -127,6 +128,16 @@ impl ControllerSlots {
         if let Some(old) = self.slots[gait.index()].replace(new) {
             self.retire(old);
         }
+    }
+
+    /// Passes an operator's command to `gait`'s controller (installed, driving or not).
+    pub fn command(&mut self, gait: GaitKind, command: ControllerCommand) -> Result<(), Rejection> {
+        let slot = self.slots[gait.index()]
+            .as_mut()
+            .ok_or(Rejection::NoControllerInstalled)?;
+        slot.controller
+            .command(command)
+            .map_err(Rejection::CommandRefused)
     }
 
     /// Sends a controller that was not installed back unused.

@@ -2,7 +2,7 @@
 //! `Copy`; the only heap object is a controller attached to an envelope, built on the
 //! control side and moved (a pointer) through the bounded channel, so nothing
 //! allocates per message.
-use crate::controller::NominalMismatch;
+use crate::controller::{CommandRefused, ControllerCommand, NominalMismatch};
 use crate::gait::{GaitKind, ParamPatch};
 use crate::rt::controller_slots::Installed;
 
@@ -17,6 +17,8 @@ pub enum LoopRequest {
     SetParams(GaitKind, ParamPatch),
     /// Install the controller the envelope carries for this gait.
     SetController(GaitKind),
+    /// A command to this gait's installed controller (e.g. calibrate).
+    ControllerCommand(GaitKind, ControllerCommand),
     /// Change the gait blend time, s.
     SetBlendTime(f64),
     /// Freeze the set-points where they are.
@@ -69,6 +71,10 @@ pub enum Rejection {
     ControllerRefuses(NominalMismatch),
     #[error("no controller attached")]
     NoController,
+    #[error("the gait has no controller installed")]
+    NoControllerInstalled,
+    #[error("the controller refuses: {0}")]
+    CommandRefused(CommandRefused),
 }
 
 /// The loop's answer to one envelope.

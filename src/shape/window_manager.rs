@@ -59,6 +59,10 @@ impl<T: Copy> WindowManager<T> {
         self.windows.iter()
     }
 
+    pub fn windows_mut(&mut self) -> impl Iterator<Item = &mut Travelling<T>> + '_ {
+        self.windows.iter_mut()
+    }
+
     pub fn payloads_mut(&mut self) -> impl Iterator<Item = &mut T> + '_ {
         self.windows.iter_mut().map(|w| &mut w.payload)
     }

@@ -121,7 +121,7 @@ fn apply(s: &mut Snapshot, r: &LoopRequest) {
         LoopRequest::Limp | LoopRequest::Shutdown => s.mode = Mode::Limp,
         LoopRequest::EStop => s.mode = Mode::EStop,
         LoopRequest::Arm => s.mode = Mode::Running,
-        LoopRequest::SetController(_) => {}
+        LoopRequest::SetController(_) | LoopRequest::ControllerCommand(..) => {}
     }
     s.reason = Reason::Operator;
 }

@@ -1,0 +1,237 @@
+//! Configuration of directional compliance (reference 001, SPEC §8): which amplitude
+//! rates each window admits, the absition's thresholds and mean, the ground's friction
+//! offset, and the two planes' waves and admittances.
+
+use std::f64::consts::{FRAC_PI_2, PI};
+
+use serde::{Deserialize, Serialize};
+
+use crate::controller::config::{ConfigError, check_range};
+use crate::gait::JOINT_LIMIT_RAD;
+use crate::shape::admittance::AdmittanceGains;
+
+/// Body thirds the friction offset is calibrated in (head, middle, tail), by the
+/// window's centre.
+pub const OFFSET_BINS: usize = 3;
+
+/// Which amplitude rates the admittance admits (SPEC §8).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Strategy {
+    /// Nominal compliance: every rate (shape-based compliance as it was).
+    Nc,
+    /// Positive directional compliance in every window: the amplitude only grows.
+    Pdc,
+    /// Negative directional compliance in every window: the amplitude only shrinks.
+    Ndc,
+    /// Each window switches between NC, PDC and NDC by its absition.
+    Switching,
+}
+
+impl Strategy {
+    pub fn name(self) -> &'static str {
+        match self {
+            Strategy::Nc => "nc",
+            Strategy::Pdc => "pdc",
+            Strategy::Ndc => "ndc",
+            Strategy::Switching => "switching",
+        }
+    }
+}
+
+/// What the absition is measured from while a window is in PDC or NDC.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Reference {
+    /// The threshold it crossed is the absition's new zero ("these thresholds serve as
+    /// new nominal ... when calculating the amplitude absition", reference §III-C):
+    /// the window returns to NC when it has undone what it gathered beyond it.
+    Threshold,
+    /// The absition runs on from where it was; the window returns to NC at zero.
+    Zero,
+}
+
+/// The switching thresholds on the absition, rad·s.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Thresholds {
+    /// PDC below it (the window was squeezed flatter than nominal for long), < 0.
+    pub low_rad_s: f64,
+    /// NDC above it (the window was bent further than nominal for long), > 0.
+    pub high_rad_s: f64,
+    pub reference: Reference,
+}
+
+/// The dorsal wave of the three-dimensional controller (reference eq. 10):
+/// `θ = A_d(s)·sin(k_S·ωS·s − k_T·Ω(t) + δ)` on the dorsal joints.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DorsalWave {
+    /// Off: the dorsal joints stay straight (planar).
+    pub enabled: bool,
+    /// Nominal amplitude A_d0, rad.
+    pub amplitude_rad: f64,
+    /// k_S: its spatial frequency over the lateral one.
+    pub spatial_ratio: f64,
+    /// k_T: its temporal frequency over the lateral one.
+    pub temporal_ratio: f64,
+    /// δ, rad.
+    pub phase_shift_rad: f64,
+    /// The gait's selector runs planar slithering: the dorsal wave fades in over this
+    /// long after the takeover so nothing jumps, s.
+    pub ramp_s: f64,
+    /// Admittance of each window's dorsal amplitude (absolute range).
+    pub gains: AdmittanceGains,
+}
+
+/// The central temporal phase's compliance (a jam delays the wave).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PhaseCompliance {
+    pub enabled: bool,
+    pub gains: AdmittanceGains,
+}
+
+/// The ground's friction offset `c` of the absition per plane and body third, rad:
+/// how far the windows' mean amplitude sits from nominal on open ground.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FrictionOffset {
+    pub lateral_rad: [f64; OFFSET_BINS],
+    pub dorsal_rad: [f64; OFFSET_BINS],
+}
+
+/// Everything that defines a directional-compliance controller besides the gait's
+/// nominal parameters (the lateral wave's amplitude, spatial and temporal frequency).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DirectionalComplianceConfig {
+    pub strategy: Strategy,
+    /// Admittance of each window's lateral amplitude (absolute range).
+    pub lateral: AdmittanceGains,
+    pub dorsal: DorsalWave,
+    pub phase: PhaseCompliance,
+    pub thresholds: Thresholds,
+    /// Time constant of the windows' mean amplitude Ā (an exponential mean over about
+    /// one half-wave's passage), s.
+    pub mean_time_s: f64,
+    /// A calibration from an earlier run (`controller.calibrate` reports one); `null`:
+    /// uncalibrated (offset 0) until calibrated.
+    #[serde(default)]
+    pub friction_offset: Option<FrictionOffset>,
+    /// Low-pass cutoff of the joint torques, Hz.
+    pub torque_cutoff_hz: f64,
+    /// Torques below this (after filtering) are ignored, N·m.
+    pub torque_deadband_nm: f64,
+    /// Width of a window's edge, in modules (SPEC: about half a module).
+    pub edge_width_modules: f64,
+}
+
+/// Largest friction offset a calibration may hold, rad.
+const OFFSET_MAX_RAD: f64 = 0.5;
+
+impl DirectionalComplianceConfig {
+    /// The preset: planar (lateral wave only) or 3-D, with `strategy`. Gains as
+    /// compliant slithering's amplitude; thresholds tuned in the lab
+    /// (docs/measurements.md, "Directional compliance").
+    pub fn preset(strategy: Strategy, three_d: bool) -> Self {
+        let amplitude = |min, max| AdmittanceGains {
+            mass: 1.0,
+            damping: 6.0,
+            stiffness: 4.0,
+            min,
+            max,
+            bias_force: 0.0,
+        };
+        Self {
+            strategy,
+            lateral: amplitude(0.1, 1.2),
+            dorsal: DorsalWave {
+                enabled: three_d,
+                amplitude_rad: 0.3,
+                spatial_ratio: 2.0,
+                temporal_ratio: 2.0,
+                phase_shift_rad: -FRAC_PI_2,
+                ramp_s: 2.0,
+                gains: amplitude(0.0, 0.7),
+            },
+            phase: PhaseCompliance {
+                enabled: true,
+                gains: AdmittanceGains {
+                    mass: 1.0,
+                    damping: 6.0,
+                    stiffness: 4.0,
+                    min: f64::NEG_INFINITY,
+                    max: f64::INFINITY,
+                    bias_force: 0.0,
+                },
+            },
+            thresholds: Thresholds {
+                low_rad_s: -0.6,
+                high_rad_s: 0.6,
+                reference: Reference::Threshold,
+            },
+            mean_time_s: 1.5,
+            friction_offset: None,
+            torque_cutoff_hz: 5.0,
+            torque_deadband_nm: 0.3,
+            edge_width_modules: 0.5,
+        }
+    }
+
+    /// Every bound (field paths relative to the configuration).
+    pub fn check(&self) -> Result<(), ConfigError> {
+        let (lo, hi) = (0.0, JOINT_LIMIT_RAD);
+        self.lateral
+            .check(lo, hi, 0.0)
+            .map_err(|e| e.under("lateral"))?;
+        let d = &self.dorsal;
+        d.gains
+            .check(lo, hi, 0.0)
+            .map_err(|e| e.under("dorsal.gains"))?;
+        if d.enabled {
+            check_range(
+                "dorsal.amplitude_rad",
+                d.amplitude_rad,
+                d.gains.min,
+                d.gains.max,
+            )?;
+        }
+        check_range("dorsal.spatial_ratio", d.spatial_ratio, 0.0, 4.0)?;
+        check_range("dorsal.temporal_ratio", d.temporal_ratio, 0.0, 4.0)?;
+        check_range(
+            "dorsal.phase_shift_rad",
+            d.phase_shift_rad,
+            -2.0 * PI,
+            2.0 * PI,
+        )?;
+        check_range("dorsal.ramp_s", d.ramp_s, 0.0, 60.0)?;
+        self.phase
+            .gains
+            .check(f64::NEG_INFINITY, f64::INFINITY, PI)
+            .map_err(|e| e.under("phase.gains"))?;
+        let t = &self.thresholds;
+        check_range("thresholds.low_rad_s", t.low_rad_s, -100.0, -1e-3)?;
+        check_range("thresholds.high_rad_s", t.high_rad_s, 1e-3, 100.0)?;
+        check_range("mean_time_s", self.mean_time_s, 0.01, 60.0)?;
+        if let Some(o) = &self.friction_offset {
+            for (plane, values) in [
+                ("lateral_rad", &o.lateral_rad),
+                ("dorsal_rad", &o.dorsal_rad),
+            ] {
+                for (k, &v) in values.iter().enumerate() {
+                    let field = format!("friction_offset.{plane}[{k}]");
+                    check_range(&field, v, -OFFSET_MAX_RAD, OFFSET_MAX_RAD)?;
+                }
+            }
+        }
+        check_range("torque_cutoff_hz", self.torque_cutoff_hz, 0.01, 200.0)?;
+        check_range("torque_deadband_nm", self.torque_deadband_nm, 0.0, 7.0)?;
+        check_range("edge_width_modules", self.edge_width_modules, 0.05, 4.0)
+    }
+}
+
+/// Clamps a measured offset into what a configuration may hold.
+pub fn clamp_offset(v: f64) -> f64 {
+    v.clamp(-OFFSET_MAX_RAD, OFFSET_MAX_RAD)
+}

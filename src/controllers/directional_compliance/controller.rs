@@ -1,0 +1,455 @@
+//! Directional compliance (reference 001, SPEC §8): the lateral serpenoid (and in 3-D
+//! a dorsal one on the other joints, eq. 10) whose amplitudes are windowed per plane
+//! on travelling half-wave windows, each following shape-space admittance through its
+//! mode's filter (NC, PDC, NDC), with the temporal phase compliant and central.
+
+use super::absition::{Mode, PlaneWindow};
+use super::calibration::Calibration;
+use super::config::{DirectionalComplianceConfig, FrictionOffset, OFFSET_BINS, Strategy};
+use crate::controller::nominal::{Nominal, lateral_room, within};
+use crate::controller::report::{ControllerReport, MAX_WINDOWS as REPORT_WINDOWS, WindowField};
+use crate::controller::{
+    CommandRefused, Controller, ControllerCommand, Handover, NominalMismatch, Observation,
+};
+use crate::gait::{BodyLayout, GaitParams, JOINT_LIMIT_RAD, Plane};
+use crate::shape::admittance::{AdmittanceSign, ParamState};
+use crate::shape::torque::TorqueFilter;
+use crate::shape::window::steepness_for_width;
+use crate::shape::window_manager::{Slope, WindowEvents, WindowManager};
+
+/// Most travelling windows on the body.
+pub(super) const MAX_WINDOWS: usize = 16;
+/// Planes by index.
+pub(super) const LAT: usize = 0;
+pub(super) const DOR: usize = 1;
+/// Signals reported (names in `super::report_spec`).
+pub(super) const SIGNALS: usize = 30;
+/// Where along the body the head, middle and tail windows are read for the signals.
+const PROBES: [f64; OFFSET_BINS] = [1.0 / 6.0, 0.5, 5.0 / 6.0];
+
+/// A travelling window's state: its amplitude in each plane.
+type Payload = [PlaneWindow; 2];
+
+/// The controller. Construction allocates; nothing else does.
+pub struct DirectionalCompliance {
+    config: DirectionalComplianceConfig,
+    layout: BodyLayout,
+    nominal: Nominal,
+    /// Windows anchored to the lateral wave's zero crossings; both planes share them.
+    manager: WindowManager<Payload>,
+    /// Edge steepness of the windows.
+    m: f64,
+    phase: ParamState,
+    filter: TorqueFilter,
+    tau_ext: Vec<f64>,
+    /// `w_j(s_i)`, window-major (`MAX_WINDOWS × joints`).
+    weights: Vec<f64>,
+    forces: [[f64; MAX_WINDOWS]; 2],
+    phase_force: f64,
+    calibration: Calibration,
+    switches: u64,
+    /// Dorsal fade-in factor now (0..1).
+    ramp: f64,
+    last_t: Option<f64>,
+    t: f64,
+    last_events: WindowEvents,
+}
+
+impl DirectionalCompliance {
+    /// For `layout`, following `params` from phase 0 at t = 0 until engaged. The
+    /// configuration has passed its checks.
+    pub fn new(
+        layout: &BodyLayout,
+        params: &GaitParams,
+        config: DirectionalComplianceConfig,
+    ) -> Self {
+        let n = layout.len();
+        let width = config.edge_width_modules / (n as f64 + 1.0);
+        let mut c = Self {
+            config,
+            layout: layout.clone(),
+            nominal: Nominal::new(params),
+            manager: WindowManager::new(n + 9, MAX_WINDOWS),
+            m: steepness_for_width(width),
+            phase: ParamState::default(),
+            filter: TorqueFilter::new(n, config.torque_cutoff_hz, config.torque_deadband_nm),
+            tau_ext: vec![0.0; n],
+            weights: vec![0.0; MAX_WINDOWS * n],
+            forces: [[0.0; MAX_WINDOWS]; 2],
+            phase_force: 0.0,
+            calibration: Calibration::new(config.friction_offset),
+            switches: 0,
+            ramp: 0.0,
+            last_t: None,
+            t: 0.0,
+            last_events: WindowEvents::default(),
+        };
+        c.reset();
+        c
+    }
+
+    pub fn config(&self) -> &DirectionalComplianceConfig {
+        &self.config
+    }
+
+    /// What a window is born with.
+    fn born(&self) -> Payload {
+        let mode = match self.config.strategy {
+            Strategy::Nc | Strategy::Switching => Mode::Nc,
+            Strategy::Pdc => Mode::Pdc,
+            Strategy::Ndc => Mode::Ndc,
+        };
+        [PlaneWindow::nominal(mode); 2]
+    }
+
+    /// Forgets everything learnt but the calibration.
+    fn reset(&mut self) {
+        self.manager.clear();
+        self.phase = ParamState::default();
+        self.filter.reset();
+        self.forces = [[0.0; MAX_WINDOWS]; 2];
+        self.phase_force = 0.0;
+        self.switches = 0;
+        self.ramp = 0.0;
+        self.last_t = None;
+        self.t = self.nominal.t0_s;
+        self.calibration.restart();
+        self.anchor_windows();
+    }
+
+    /// The temporal phase Ω now (nominal plus its compliant lag).
+    fn omega(&self) -> f64 {
+        self.nominal.phase_at(self.t) + self.phase.deviation
+    }
+
+    fn spatial_freq(&self) -> f64 {
+        self.nominal.params.spatial_freq_rad
+    }
+
+    /// Nominal amplitude of a plane.
+    fn amplitude0(&self, plane: usize) -> f64 {
+        if plane == LAT {
+            self.nominal.params.amplitude_lat_rad
+        } else {
+            self.config.dorsal.amplitude_rad
+        }
+    }
+
+    /// Planes that comply: lateral, and dorsal in 3-D.
+    fn planes(&self) -> usize {
+        if self.config.dorsal.enabled { 2 } else { 1 }
+    }
+
+    /// Re-anchors the windows to the lateral wave `φ(s) = ωS·s − Ω` and samples their
+    /// weights at the joints.
+    fn anchor_windows(&mut self) {
+        let (ws, omega, born) = (self.spatial_freq(), self.omega(), self.born());
+        self.last_events = self
+            .manager
+            .update(|s| ws * s - omega, born, Slope::Increasing);
+        let n = self.layout.len();
+        for (j, w) in self.manager.windows().enumerate() {
+            for (i, &s) in self.layout.s.iter().enumerate() {
+                self.weights[j * n + i] = w.window.weight(s, self.m);
+            }
+        }
+    }
+
+    /// Phase and amplitude of joint `i` in its plane: `(φ_i, A_i, ∂θ/∂A factor)`.
+    fn joint_wave(&self, i: usize) -> (usize, f64, f64, f64) {
+        let n = self.layout.len();
+        let s = self.layout.s[i];
+        let omega = self.omega();
+        let (plane, phi, gain) = match self.layout.planes[i] {
+            Plane::Lateral => (LAT, self.spatial_freq() * s - omega, 1.0),
+            Plane::Dorsal => {
+                let d = &self.config.dorsal;
+                let phi = d.spatial_ratio * self.spatial_freq() * s - d.temporal_ratio * omega
+                    + d.phase_shift_rad;
+                (DOR, phi, if d.enabled { self.ramp } else { 0.0 })
+            }
+        };
+        let mut deviation = 0.0;
+        for (j, w) in self.manager.windows().enumerate() {
+            deviation += self.weights[j * n + i] * w.payload[plane].deviation;
+        }
+        (plane, phi, self.amplitude0(plane) + deviation, gain)
+    }
+
+    /// Shape forces from the external torques: per window and plane
+    /// `F = Σ_i w_j(s_i)·∂θ_i/∂A·τ_i`, and on the phase `Σ_i ∂θ_i/∂Ω·τ_i`.
+    fn compute_forces(&mut self) {
+        let n = self.layout.len();
+        self.forces = [[0.0; MAX_WINDOWS]; 2];
+        self.phase_force = 0.0;
+        let windows = self.manager.len();
+        for i in 0..n {
+            let (plane, phi, amplitude, gain) = self.joint_wave(i);
+            let tau = self.tau_ext[i];
+            if gain == 0.0 || tau == 0.0 {
+                continue;
+            }
+            let (sin, cos) = phi.sin_cos();
+            for j in 0..windows {
+                self.forces[plane][j] += self.weights[j * n + i] * gain * sin * tau;
+            }
+            let dphi_domega = if plane == LAT {
+                -1.0
+            } else {
+                -self.config.dorsal.temporal_ratio
+            };
+            self.phase_force += gain * amplitude * cos * dphi_domega * tau;
+        }
+    }
+
+    fn integrate(&mut self, dt: f64) {
+        let planes = self.planes();
+        let calibrating = self.calibration.running();
+        let switching = (self.config.strategy == Strategy::Switching && !calibrating)
+            .then_some(&self.config.thresholds);
+        let gains = [self.config.lateral, self.config.dorsal.gains];
+        let nominal = [self.amplitude0(LAT), self.amplitude0(DOR)];
+        let offsets = self.calibration.offsets();
+        let mean_time = self.config.mean_time_s;
+        let mut switches = 0;
+        for (j, w) in self.manager.windows_mut().enumerate() {
+            let bin = bin_of(w.window.a, w.window.b);
+            for p in 0..planes {
+                let pw = &mut w.payload[p];
+                if calibrating {
+                    pw.mode = Mode::Nc;
+                }
+                pw.step_amplitude(&gains[p], self.forces[p][j], nominal[p], dt);
+                let offset = offset_of(&offsets, p, bin);
+                switches += u64::from(pw.observe(offset, dt, mean_time, switching));
+            }
+        }
+        self.switches += switches;
+        if self.config.phase.enabled {
+            let g = &self.config.phase.gains;
+            let nominal = self.nominal.phase_at(self.t);
+            self.phase
+                .step(g, AdmittanceSign::Compliant, self.phase_force, nominal, dt);
+        }
+    }
+
+    /// Feeds the calibration this step's deviations; when it ends, every window
+    /// starts afresh from NC with zero absition.
+    fn calibrate_step(&mut self, dt: f64) {
+        if !self.calibration.running() {
+            return;
+        }
+        let planes = self.planes();
+        for w in self.manager.windows() {
+            let bin = bin_of(w.window.a, w.window.b);
+            for p in 0..planes {
+                self.calibration.add(p, bin, w.payload[p].deviation, dt);
+            }
+        }
+        if self.calibration.advance(dt) {
+            let born = self.born();
+            for w in self.manager.payloads_mut() {
+                for (pw, b) in w.iter_mut().zip(born) {
+                    pw.absition = 0.0;
+                    pw.mode = b.mode;
+                }
+            }
+        }
+    }
+
+    fn set_points(&self, out: &mut [f64]) {
+        for (i, x) in out.iter_mut().enumerate() {
+            let (_, phi, amplitude, gain) = self.joint_wave(i);
+            *x = gain * amplitude * phi.sin();
+        }
+    }
+
+    /// The window whose weight at `s` is largest.
+    fn window_at(&self, s: f64) -> Option<&Payload> {
+        let mut best: Option<(&Payload, f64)> = None;
+        for w in self.manager.windows() {
+            let weight = w.window.weight(s, self.m);
+            if best.is_none_or(|(_, b)| weight > b) {
+                best = Some((&w.payload, weight));
+            }
+        }
+        best.map(|(p, _)| p)
+    }
+
+    /// Each plane's amplitude averaged over its joints (NaN for a plane without joints
+    /// or a planar controller's dorsal plane).
+    pub fn mean_amplitude(&self, plane: usize) -> f64 {
+        if plane >= self.planes() {
+            return f64::NAN;
+        }
+        let (mut sum, mut count) = (0.0, 0);
+        for i in 0..self.layout.len() {
+            let (p, _, a, _) = self.joint_wave(i);
+            if p == plane {
+                sum += a;
+                count += 1;
+            }
+        }
+        if count == 0 {
+            f64::NAN
+        } else {
+            sum / count as f64
+        }
+    }
+
+    /// The windows head to tail: edges and each plane's state.
+    pub fn windows(&self) -> impl Iterator<Item = (crate::shape::window::Window, &Payload)> {
+        self.manager.windows().map(|w| (w.window, &w.payload))
+    }
+
+    pub fn window_events(&self) -> WindowEvents {
+        self.last_events
+    }
+
+    pub fn calibration(&self) -> &Calibration {
+        &self.calibration
+    }
+
+    /// Mode switches since the takeover.
+    pub fn switches(&self) -> u64 {
+        self.switches
+    }
+
+    fn fill_field(&self, plane: usize, out: &mut WindowField) {
+        out.count = self.manager.len();
+        for (k, w) in self.manager.windows().take(REPORT_WINDOWS).enumerate() {
+            let pw = &w.payload[plane];
+            out.a[k] = w.window.a;
+            out.b[k] = w.window.b;
+            out.columns[0][k] = self.amplitude0(plane) + pw.deviation;
+            out.columns[1][k] = pw.absition;
+            out.columns[2][k] = pw.mode.code();
+            out.columns[3][k] = self.forces[plane][k];
+        }
+    }
+}
+
+/// The body third of a window's centre (open ends clipped to the body).
+fn bin_of(a: f64, b: f64) -> usize {
+    let centre = 0.5 * (a.max(0.0) + b.min(1.0));
+    ((centre * OFFSET_BINS as f64).floor().max(0.0) as usize).min(OFFSET_BINS - 1)
+}
+
+fn offset_of(o: &FrictionOffset, plane: usize, bin: usize) -> f64 {
+    if plane == LAT {
+        o.lateral_rad[bin]
+    } else {
+        o.dorsal_rad[bin]
+    }
+}
+
+impl Controller for DirectionalCompliance {
+    /// The nominal lateral amplitude lies in the windows' range, the spatial frequency
+    /// is positive (the windows are anchored to a wave running head to tail), and the
+    /// amplitudes' ranges with the offsets stay within the joints' range.
+    fn accepts(&self, params: &GaitParams) -> Result<(), NominalMismatch> {
+        let g = &self.config.lateral;
+        within("amplitude_lat_rad", params.amplitude_lat_rad, g.min, g.max)?;
+        within(
+            "spatial_freq_rad",
+            params.spatial_freq_rad,
+            0.25 * std::f64::consts::PI,
+            8.0 * std::f64::consts::PI,
+        )?;
+        lateral_room(params, g.max)?;
+        if self.config.dorsal.enabled {
+            let room = JOINT_LIMIT_RAD - self.config.dorsal.gains.max + 1e-12;
+            within("offset_dor_rad", params.offset_dor_rad, -room, room)?;
+        }
+        Ok(())
+    }
+
+    fn engage(&mut self, h: &Handover<'_>) {
+        self.nominal = Nominal::engaged(h);
+        self.reset();
+    }
+
+    fn step(&mut self, t_s: f64, obs: &Observation<'_>, set_points_rad: &mut [f64]) {
+        let dt = self.last_t.map_or(0.0, |last| (t_s - last).max(0.0));
+        self.last_t = Some(t_s);
+        self.t = t_s;
+        let d = &self.config.dorsal;
+        let since = t_s - self.nominal.t0_s;
+        self.ramp = if d.ramp_s > 0.0 {
+            let x = (since / d.ramp_s).clamp(0.0, 1.0);
+            x * x * (3.0 - 2.0 * x)
+        } else {
+            1.0
+        };
+        self.filter.update(dt, obs.torque_nm, &mut self.tau_ext);
+        self.anchor_windows();
+        self.compute_forces();
+        self.integrate(dt);
+        self.calibrate_step(dt);
+        self.set_points(set_points_rad);
+        self.nominal.add_offsets(&self.layout, set_points_rad);
+    }
+
+    fn report(&self, out: &mut ControllerReport) {
+        out.clear();
+        let planes = self.planes();
+        let probe = |plane: usize, k: usize, f: fn(&PlaneWindow) -> f64| {
+            if plane >= planes {
+                return f64::NAN;
+            }
+            self.window_at(PROBES[k]).map_or(f64::NAN, |w| f(&w[plane]))
+        };
+        let count = |mode: Mode| {
+            self.manager
+                .windows()
+                .flat_map(|w| w.payload[..planes].iter())
+                .filter(|p| p.mode == mode)
+                .count() as f64
+        };
+        let offsets = self.calibration.offsets();
+        let t = &self.config.thresholds;
+        let mut s = [f64::NAN; SIGNALS];
+        s[0] = self.mean_amplitude(LAT);
+        s[1] = self.mean_amplitude(DOR);
+        s[2] = self.phase.deviation;
+        s[3] = self.manager.len() as f64;
+        s[4] = t.low_rad_s;
+        s[5] = t.high_rad_s;
+        s[6] = self.calibration.state_code();
+        s[7] = self.calibration.progress();
+        for k in 0..OFFSET_BINS {
+            s[8 + k] = offsets.lateral_rad[k];
+            s[11 + k] = if planes > 1 {
+                offsets.dorsal_rad[k]
+            } else {
+                f64::NAN
+            };
+            s[14 + k] = probe(LAT, k, |w| w.absition);
+            s[17 + k] = probe(DOR, k, |w| w.absition);
+            s[20 + k] = probe(LAT, k, |w| w.mode.code());
+            s[23 + k] = probe(DOR, k, |w| w.mode.code());
+        }
+        s[26] = count(Mode::Pdc);
+        s[27] = count(Mode::Ndc);
+        s[28] = self.switches as f64;
+        s[29] = if planes > 1 { self.ramp } else { f64::NAN };
+        out.signals[..SIGNALS].copy_from_slice(&s);
+        for p in 0..planes {
+            self.fill_field(p, &mut out.fields[p]);
+        }
+    }
+
+    fn command(&mut self, command: ControllerCommand) -> Result<(), CommandRefused> {
+        match command {
+            ControllerCommand::Calibrate { duration_s } => self.calibration.start(duration_s),
+            ControllerCommand::ClearCalibration => {
+                self.calibration.clear();
+                Ok(())
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+#[path = "controller_tests.rs"]
+mod tests;

@@ -1,0 +1,308 @@
+use super::*;
+use crate::controller::ControllerKind;
+use crate::controller::testing::{ObservationBuf, engage_at};
+use crate::controllers::directional_compliance::DirectionalComplianceKind;
+use crate::controllers::open_loop::OpenLoop;
+use crate::gait::GaitKind;
+
+const N: usize = 16;
+
+fn setup() -> (BodyLayout, GaitParams) {
+    (
+        BodyLayout::alternating(N, Plane::Lateral, 0.064),
+        GaitParams::default_for(GaitKind::Slithering),
+    )
+}
+
+fn preset(name: &str) -> DirectionalComplianceConfig {
+    DirectionalComplianceKind::preset(name).expect("a preset")
+}
+
+fn engaged(name: &str) -> (DirectionalCompliance, BodyLayout, GaitParams) {
+    let (layout, params) = setup();
+    let mut c = DirectionalCompliance::new(&layout, &params, preset(name));
+    engage_at(&mut c, &layout, &params, 0.0);
+    (c, layout, params)
+}
+
+/// Runs `c` from `t0` for `seconds`; the reported torques are `torque(t, set_points)`;
+/// `each` sees the controller after every step.
+fn run(
+    c: &mut DirectionalCompliance,
+    t0: f64,
+    seconds: f64,
+    torque: impl Fn(f64, &[f64]) -> [f64; N],
+    mut each: impl FnMut(&DirectionalCompliance),
+) -> Vec<f64> {
+    let buf = ObservationBuf::new(N);
+    let (pos, mut tau, mut out) = ([0.0; N], [0.0; N], vec![0.0; N]);
+    for k in 0..(seconds * 1000.0).round() as usize {
+        let t = t0 + k as f64 * 1e-3;
+        c.step(t, &buf.observe(&pos, &tau), &mut out);
+        each(c);
+        tau = torque(t, &out);
+    }
+    out
+}
+
+fn none(_: f64, _: &[f64]) -> [f64; N] {
+    [0.0; N]
+}
+
+/// Reported torque that bends every lateral joint further than commanded by the
+/// environment (the reported spring torque opposes the bend: `τ_ext = −τ_reported`).
+fn bend_further(sp: &[f64]) -> [f64; N] {
+    let mut tau = [0.0; N];
+    for (i, t) in tau.iter_mut().enumerate() {
+        if i % 2 == 0 && sp[i].abs() > 0.05 {
+            *t = -1.5 * sp[i].signum();
+        }
+    }
+    tau
+}
+
+#[test]
+fn without_torque_the_planar_controllers_are_open_loop_slithering() {
+    for name in ["dc_switching", "dc_nc", "dc_pdc", "dc_ndc"] {
+        let (mut c, layout, params) = engaged(name);
+        let mut open = OpenLoop::new(GaitKind::Slithering, &layout, &params);
+        engage_at(&mut open, &layout, &params, 0.0);
+        let buf = ObservationBuf::new(N);
+        let (pos, tau) = ([0.0; N], [0.0; N]);
+        let (mut a, mut b) = (vec![0.0; N], vec![0.0; N]);
+        for k in 0..5000 {
+            let t = k as f64 * 1e-3;
+            open.step(t, &buf.observe(&pos, &tau), &mut a);
+            c.step(t, &buf.observe(&pos, &tau), &mut b);
+            for (x, y) in a.iter().zip(&b) {
+                assert!((x - y).abs() < 1e-9, "{name} at {t}: {x} vs {y}");
+            }
+        }
+        assert_eq!(c.switches(), 0);
+    }
+}
+
+#[test]
+fn a_push_along_the_bend_opens_nc_and_pdc_windows_but_not_ndc_ones() {
+    let mean = |name: &str| {
+        let (mut c, ..) = engaged(name);
+        run(&mut c, 0.0, 3.0, |_, sp| bend_further(sp), |_| {});
+        c.mean_amplitude(LAT)
+    };
+    let a0 = GaitParams::default_for(GaitKind::Slithering).amplitude_lat_rad;
+    let (nc, pdc, ndc) = (mean("dc_nc"), mean("dc_pdc"), mean("dc_ndc"));
+    assert!(nc > a0 + 0.1, "NC complies: {nc}");
+    assert!(pdc > a0 + 0.1, "PDC admits increases: {pdc}");
+    assert!((ndc - a0).abs() < 1e-9, "NDC refuses them: {ndc}");
+}
+
+#[test]
+fn windows_are_born_at_the_head_in_nc_at_nominal_with_zero_absition() {
+    let (mut c, ..) = engaged("dc_switching");
+    let mut born = 0;
+    let mut switched = 0;
+    // Pegs in the middle third push the body flatter there, steadily.
+    let flatten_mid = |_: f64, sp: &[f64]| {
+        let mut tau = [0.0; N];
+        for (i, t) in tau.iter_mut().enumerate() {
+            let s = (i as f64 + 1.0) / (N as f64 + 1.0);
+            if i % 2 == 0 && (0.33..0.67).contains(&s) {
+                *t = 2.0 * sp[i].signum();
+            }
+        }
+        tau
+    };
+    run(&mut c, 0.0, 30.0, flatten_mid, |c| {
+        if c.window_events().born_at_head > 0 {
+            born += 1;
+            let (_, head) = c.windows().next().unwrap();
+            for p in head {
+                assert_eq!(*p, PlaneWindow::nominal(Mode::Nc), "a new head window");
+            }
+        }
+        switched = c.switches();
+    });
+    assert!(born >= 3, "windows travel: {born} born");
+    assert!(switched > 0, "the flattened windows switch");
+    let mut report = ControllerReport::default();
+    c.report(&mut report);
+    assert!(report.signals[26] + report.signals[27] >= 0.0);
+}
+
+#[test]
+fn a_window_flattened_for_long_switches_to_pdc() {
+    let (mut c, ..) = engaged("dc_switching");
+    let mut modes = Vec::new();
+    // Every lateral joint is pushed flatter: every window's absition falls.
+    let flatten = |_: f64, sp: &[f64]| bend_further(sp).map(|t| -t);
+    run(&mut c, 0.0, 6.0, flatten, |c| {
+        for (_, p) in c.windows() {
+            if !modes.contains(&p[LAT].mode) {
+                modes.push(p[LAT].mode);
+            }
+        }
+    });
+    assert!(modes.contains(&Mode::Pdc), "{modes:?}");
+    assert!(!modes.contains(&Mode::Ndc), "{modes:?}");
+    // And bent further for long: NDC.
+    let (mut c, ..) = engaged("dc_switching");
+    let mut modes = Vec::new();
+    run(
+        &mut c,
+        0.0,
+        6.0,
+        |_, sp| bend_further(sp),
+        |c| {
+            for (_, p) in c.windows() {
+                if !modes.contains(&p[LAT].mode) {
+                    modes.push(p[LAT].mode);
+                }
+            }
+        },
+    );
+    assert!(modes.contains(&Mode::Ndc), "{modes:?}");
+    assert!(!modes.contains(&Mode::Pdc), "{modes:?}");
+}
+
+#[test]
+fn planar_keeps_the_dorsal_joints_straight_and_3d_fades_its_dorsal_wave_in() {
+    let (mut c, ..) = engaged("dc_nc");
+    let out = run(&mut c, 0.0, 3.0, none, |_| {});
+    assert!(out.iter().skip(1).step_by(2).all(|&x| x == 0.0), "{out:?}");
+    let (mut c, ..) = engaged("dc3d_nc");
+    let mut first = None;
+    let mut max_step: f64 = 0.0;
+    let mut last = vec![0.0; N];
+    let buf = ObservationBuf::new(N);
+    let (pos, tau) = ([0.0; N], [0.0; N]);
+    let mut out = vec![0.0; N];
+    for k in 0..4000 {
+        c.step(k as f64 * 1e-3, &buf.observe(&pos, &tau), &mut out);
+        let dorsal: Vec<f64> = out.iter().skip(1).step_by(2).copied().collect();
+        first.get_or_insert(dorsal.clone());
+        if k > 0 {
+            for (x, y) in out.iter().zip(&last) {
+                max_step = max_step.max((x - y).abs());
+            }
+        }
+        last.clone_from(&out);
+    }
+    assert!(
+        first.unwrap().iter().all(|&x| x == 0.0),
+        "no jump at the takeover"
+    );
+    let dorsal_peak = out
+        .iter()
+        .skip(1)
+        .step_by(2)
+        .fold(0.0_f64, |m, x| m.max(x.abs()));
+    assert!(dorsal_peak > 0.15, "the dorsal wave runs: {dorsal_peak}");
+    assert!(
+        max_step < 3.46e-3,
+        "within the joints' speed per 1 ms: {max_step}"
+    );
+}
+
+#[test]
+fn the_3d_planes_comply_independently() {
+    // Only the dorsal joints are pushed along their bend.
+    let dorsal_push = |_: f64, sp: &[f64]| {
+        let mut tau = [0.0; N];
+        for (i, t) in tau.iter_mut().enumerate() {
+            if i % 2 == 1 && sp[i].abs() > 0.02 {
+                *t = -1.5 * sp[i].signum();
+            }
+        }
+        tau
+    };
+    let (mut c, ..) = engaged("dc3d_nc");
+    run(&mut c, 0.0, 6.0, dorsal_push, |_| {});
+    let a0 = GaitParams::default_for(GaitKind::Slithering).amplitude_lat_rad;
+    assert!(
+        (c.mean_amplitude(LAT) - a0).abs() < 1e-9,
+        "lateral untouched"
+    );
+    assert!(c.mean_amplitude(DOR) > c.config().dorsal.amplitude_rad + 0.05);
+}
+
+#[test]
+fn calibration_measures_the_open_ground_offset_and_then_the_absition_stays_near_zero() {
+    // "Open ground": a steady drag that bends every lateral joint a little further.
+    let drag = |_: f64, sp: &[f64]| bend_further(sp).map(|t| t * 0.5);
+    let signal = |c: &DirectionalCompliance, k: usize| {
+        let mut r = ControllerReport::default();
+        c.report(&mut r);
+        r.signals[k]
+    };
+    let (mut c, ..) = engaged("dc_switching");
+    assert_eq!(signal(&c, 6), 0.0, "uncalibrated");
+    assert_eq!(
+        c.command(ControllerCommand::Calibrate { duration_s: -1.0 }),
+        Err(CommandRefused::BadDuration)
+    );
+    c.command(ControllerCommand::Calibrate { duration_s: 12.0 })
+        .unwrap();
+    run(&mut c, 0.0, 6.0, drag, |_| {});
+    assert_eq!(signal(&c, 6), 1.0, "running");
+    assert!((signal(&c, 7) - 0.5).abs() < 0.01);
+    run(&mut c, 6.0, 6.5, drag, |_| {});
+    assert_eq!(signal(&c, 6), 2.0, "calibrated");
+    let o = c.calibration().offsets();
+    assert!(
+        o.lateral_rad.iter().all(|&x| x > 0.02),
+        "the drag opens the wave: {o:?}"
+    );
+    // The same ground afterwards: the absitions stay well inside the thresholds.
+    let mut worst: f64 = 0.0;
+    run(&mut c, 12.5, 20.0, drag, |c| {
+        for (_, p) in c.windows() {
+            worst = worst.max(p[LAT].absition.abs());
+        }
+    });
+    assert!(worst < 0.3, "{worst}");
+    assert_eq!(c.switches(), 0);
+    // Uncalibrated, the same drag reads as an obstruction.
+    let (mut c, ..) = engaged("dc_switching");
+    run(&mut c, 0.0, 20.0, drag, |_| {});
+    assert!(c.switches() > 0);
+    // Cleared: back to none.
+    c.command(ControllerCommand::ClearCalibration).unwrap();
+    assert_eq!(signal(&c, 6), 0.0);
+}
+
+#[test]
+fn the_configuration_is_checked_field_by_field() {
+    let err = |f: &dyn Fn(&mut DirectionalComplianceConfig)| {
+        let mut c = preset("dc_switching");
+        f(&mut c);
+        c.check().unwrap_err().to_string()
+    };
+    assert!(err(&|c| c.thresholds.low_rad_s = 0.5).contains("thresholds.low_rad_s"));
+    assert!(err(&|c| c.thresholds.high_rad_s = f64::NAN).contains("thresholds.high_rad_s"));
+    assert!(err(&|c| c.lateral.max = 3.0).contains("lateral.max"));
+    assert!(err(&|c| c.dorsal.gains.stiffness = 1e9).contains("dorsal.gains.stiffness"));
+    assert!(err(&|c| c.mean_time_s = 0.0).contains("mean_time_s"));
+    assert!(
+        err(&|c| {
+            c.dorsal.enabled = true;
+            c.dorsal.amplitude_rad = 1.0;
+        })
+        .contains("dorsal.amplitude_rad")
+    );
+    assert!(
+        err(&|c| {
+            c.friction_offset = Some(FrictionOffset {
+                lateral_rad: [0.0, 9.0, 0.0],
+                dorsal_rad: [0.0; 3],
+            })
+        })
+        .contains("friction_offset.lateral_rad[1]")
+    );
+    for (name, _) in DirectionalComplianceKind::PRESETS {
+        preset(name).check().unwrap();
+    }
+    // A nominal amplitude outside the windows' range is refused.
+    let (c, _, mut params) = engaged("dc_nc");
+    params.amplitude_lat_rad = 1.4;
+    assert_eq!(c.accepts(&params).unwrap_err().field, "amplitude_lat_rad");
+}

@@ -1,0 +1,139 @@
+//! Directional compliance (reference 001, SPEC §8): windowed amplitudes that comply
+//! in one direction only while a window is obstructed, chosen per window by its
+//! absition, planar (the lateral wave) or in 3-D (a dorsal wave on the other joints,
+//! each plane's windows complying independently). See docs/compliance.md.
+
+mod absition;
+mod calibration;
+mod config;
+mod controller;
+
+pub use absition::{Mode, PlaneWindow};
+pub use calibration::Calibration;
+pub use config::{
+    DirectionalComplianceConfig, DorsalWave, FrictionOffset, OFFSET_BINS, PhaseCompliance,
+    Reference, Strategy, Thresholds,
+};
+pub use controller::DirectionalCompliance;
+
+use crate::controller::report::{FieldSpec, ReportSpec, SignalSpec};
+use crate::controller::{BuildContext, ConfigError, Controller, ControllerKind};
+use crate::gait::GaitKind;
+
+/// The registry's entry.
+pub struct DirectionalComplianceKind;
+
+/// Presets: (name, strategy, 3-D).
+const PRESETS: [(&str, Strategy, bool); 8] = [
+    ("dc_switching", Strategy::Switching, false),
+    ("dc_nc", Strategy::Nc, false),
+    ("dc_pdc", Strategy::Pdc, false),
+    ("dc_ndc", Strategy::Ndc, false),
+    ("dc3d_switching", Strategy::Switching, true),
+    ("dc3d_nc", Strategy::Nc, true),
+    ("dc3d_pdc", Strategy::Pdc, true),
+    ("dc3d_ndc", Strategy::Ndc, true),
+];
+
+impl ControllerKind for DirectionalComplianceKind {
+    type Config = DirectionalComplianceConfig;
+    const NAME: &'static str = "directional_compliance";
+    const SUMMARY: &'static str =
+        "windowed amplitudes that comply one way when obstructed, switched by their absition";
+    const GAITS: &'static [GaitKind] = &[GaitKind::Slithering];
+    const PRESETS: &'static [(&'static str, &'static str)] = &[
+        (
+            "dc_switching",
+            "planar; each window switches NC / PDC / NDC by its absition",
+        ),
+        (
+            "dc_nc",
+            "planar; nominal compliance (every amplitude rate admitted)",
+        ),
+        (
+            "dc_pdc",
+            "planar; every window only lets its amplitude grow",
+        ),
+        (
+            "dc_ndc",
+            "planar; every window only lets its amplitude shrink",
+        ),
+        (
+            "dc3d_switching",
+            "3-D (dorsal wave too); switching in each plane",
+        ),
+        ("dc3d_nc", "3-D; nominal compliance in each plane"),
+        ("dc3d_pdc", "3-D; amplitudes only grow"),
+        ("dc3d_ndc", "3-D; amplitudes only shrink"),
+    ];
+
+    fn preset(name: &str) -> Option<Self::Config> {
+        PRESETS
+            .iter()
+            .find(|(n, ..)| *n == name)
+            .map(|&(_, strategy, three_d)| DirectionalComplianceConfig::preset(strategy, three_d))
+    }
+
+    fn check(config: &Self::Config, _ctx: &BuildContext<'_>) -> Result<(), ConfigError> {
+        config.check()
+    }
+
+    fn report_spec(config: &Self::Config, _ctx: &BuildContext<'_>) -> ReportSpec {
+        let s = SignalSpec::new;
+        let mut signals = vec![
+            s("amplitude_lat_mean_rad", "rad"),
+            s("amplitude_dor_mean_rad", "rad"),
+            s("phase_lag_rad", "rad"),
+            s("windows", "count"),
+            s("threshold_low_rad_s", "rad·s"),
+            s("threshold_high_rad_s", "rad·s"),
+            s("calibration", ""),
+            s("calibration_progress", ""),
+        ];
+        let thirds = ["head", "mid", "tail"];
+        for (what, unit) in [
+            ("offset_lat", "rad"),
+            ("offset_dor", "rad"),
+            ("absition_lat", "rad·s"),
+            ("absition_dor", "rad·s"),
+            ("mode_lat", ""),
+            ("mode_dor", ""),
+        ] {
+            for t in thirds {
+                signals.push(SignalSpec::new(format!("{what}_{t}"), unit));
+            }
+        }
+        signals.extend([
+            s("windows_pdc", "count"),
+            s("windows_ndc", "count"),
+            s("mode_switches", "count"),
+            s("dorsal_ramp", ""),
+        ]);
+        debug_assert_eq!(signals.len(), controller::SIGNALS);
+        let columns = vec![
+            s("amplitude", "rad"),
+            s("absition", "rad·s"),
+            s("mode", ""),
+            s("force", "N·m"),
+        ];
+        let mut fields = vec![FieldSpec {
+            name: "amplitude_lateral".into(),
+            centralization: "windowed".into(),
+            enabled: true,
+            columns: columns.clone(),
+        }];
+        if config.dorsal.enabled {
+            fields.push(FieldSpec {
+                name: "amplitude_dorsal".into(),
+                centralization: "windowed".into(),
+                enabled: true,
+                columns,
+            });
+        }
+        ReportSpec { signals, fields }
+    }
+
+    fn build(config: &Self::Config, ctx: &BuildContext<'_>) -> Box<dyn Controller> {
+        Box::new(DirectionalCompliance::new(ctx.layout, ctx.params, *config))
+    }
+}
