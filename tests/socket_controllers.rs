@@ -494,3 +494,70 @@ fn a_controller_of_another_gait_through_the_socket_and_snakectl() {
         "{err}"
     );
 }
+
+#[test]
+fn a_controller_is_calibrated_through_the_socket_and_snakectl() {
+    let l = real_loop();
+    let mut c = Client::connect(
+        &Endpoint::Unix(l.path.clone()),
+        Some(Duration::from_secs(20)),
+    )
+    .unwrap();
+    status_when(&mut c, |s| s["controller"]["state"] == "engaged");
+    // Open loop has nothing to calibrate: refused by the loop, saying why.
+    let r = call(&mut c, "controller.calibrate", json!({"seconds": 1.0}));
+    assert_eq!(error_code(&r), code::REFUSED, "{r}");
+    assert!(error_message(&r).contains("nothing to calibrate"), "{r}");
+    // Bad input never reaches the loop.
+    for bad in [
+        json!({"seconds": -1.0}),
+        json!({"seconds": 1e9}),
+        json!({"seconds": 1.0, "clear": true}),
+        json!({"clear": "yes"}),
+        json!({"gait": "crawling"}),
+        json!({"cycles": 3}),
+    ] {
+        let r = call(&mut c, "controller.calibrate", bad.clone());
+        assert_eq!(error_code(&r), code::INVALID_PARAMS, "{bad}: {r}");
+    }
+    // Another gait's open-loop controller: the same refusal.
+    let r = call(&mut c, "controller.calibrate", json!({"gait": "rolling"}));
+    assert_eq!(error_code(&r), code::REFUSED, "{r}");
+
+    c.call(
+        "controller.set",
+        Some(json!({"gait": "slithering", "controller": "dc_switching"})),
+    )
+    .unwrap();
+    let s = status_when(&mut c, |s| {
+        s["controller"]["preset"] == "dc_switching" && s["controller"]["state"] == "engaged"
+    });
+    assert_eq!(
+        s["controller"]["signals"]["calibration"], 0.0,
+        "uncalibrated: {s}"
+    );
+    let text = snakectl(&l, &["controller", "calibrate", "--seconds", "1"]);
+    assert!(text.contains("calibrated over 1.0 s"), "{text}");
+    assert!(text.contains("offset lateral_rad"), "{text}");
+    assert!(text.contains("friction_offset"), "{text}");
+    let s = c.call("status", None).unwrap();
+    let sig = &s["controller"]["signals"];
+    assert_eq!(sig["calibration"], 2.0, "{s}");
+    // The scripted pegs press the body: the measured offsets are not zero.
+    let offsets = ["offset_lat_head", "offset_lat_mid", "offset_lat_tail"];
+    assert!(
+        offsets
+            .iter()
+            .any(|k| sig[*k].as_f64().unwrap().abs() > 1e-4),
+        "{sig}"
+    );
+    // The default is three gait cycles (2.1 s each at ωT = 3 rad/s).
+    let r = c
+        .call("controller.calibrate", Some(json!({"gait": "slithering"})))
+        .unwrap();
+    assert!((r["seconds"].as_f64().unwrap() - 3.0 * std::f64::consts::TAU / 3.0).abs() < 1e-9);
+    let text = snakectl(&l, &["controller", "calibrate", "--clear"]);
+    assert!(text.contains("cleared"), "{text}");
+    let s = status_when(&mut c, |s| s["controller"]["signals"]["calibration"] == 0.0);
+    assert_eq!(s["controller"]["signals"]["calibration"], 0.0, "{s}");
+}

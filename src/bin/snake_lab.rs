@@ -6,6 +6,10 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
+use snaked::lab::displacement::Terrain;
+
+#[path = "snake_lab/displacement.rs"]
+mod displacement;
 use snaked::emu::world::scenario::WorldScenario;
 use snaked::gait::GaitKind;
 use snaked::lab::PEGBOARD_CONTROLLERS;
@@ -31,6 +35,10 @@ enum Cmd {
     List,
     /// The slithering peg-board experiment (SPEC §5).
     Pegboard(Pegboard),
+    /// Directional compliance on the reference's planar peg array (SPEC §8).
+    PegArray(displacement::Args),
+    /// Directional compliance in 3-D over the reference's rock pile (SPEC §8).
+    RockPile(displacement::Args),
 }
 
 #[derive(Debug, clap::Args)]
@@ -78,6 +86,10 @@ struct Pegboard {
     /// No progress bar, no list of written files.
     #[arg(long)]
     quiet: bool,
+    /// Run controllers that calibrate (directional compliance) uncalibrated, instead
+    /// of calibrating them on open ground first.
+    #[arg(long)]
+    no_calibrate: bool,
 }
 
 fn main() -> ExitCode {
@@ -90,6 +102,8 @@ fn main() -> ExitCode {
             Ok(())
         }
         Cmd::Pegboard(args) => pegboard(args),
+        Cmd::PegArray(args) => displacement::run(Terrain::PegArray, args),
+        Cmd::RockPile(args) => displacement::run(Terrain::RockPile, args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -107,11 +121,7 @@ fn main() -> ExitCode {
 }
 
 fn pegboard(args: Pegboard) -> Result<(), LabError> {
-    let threads = match args.threads {
-        Some(0) => return Err(LabError::BadValue("--threads must be at least 1".into())),
-        Some(n) => n,
-        None => std::thread::available_parallelism().map_or(1, usize::from),
-    };
+    let threads = threads(args.threads)?;
     let base = match &args.board {
         Some(path) => WorldScenario::load(path)?,
         None => WorldScenario::parse(PEG_BOARD_TOML)?,
@@ -137,15 +147,21 @@ fn pegboard(args: Pegboard) -> Result<(), LabError> {
     for spec in &args.variants {
         controllers.push(LabController::variant(GaitKind::Slithering, spec)?);
     }
+    let trial = TrialConfig {
+        limit_s: args.seconds,
+        ..TrialConfig::default()
+    };
+    let calibrations = if args.no_calibrate {
+        Vec::new()
+    } else {
+        calibrate_all(&mut controllers, &layouts, &trial, args.quiet)?
+    };
     let exp = Experiment {
         controllers,
         layouts,
         starts: args.starts,
         repeats: 1,
-        trial: TrialConfig {
-            limit_s: args.seconds,
-            ..TrialConfig::default()
-        },
+        trial,
         record_dir: args.record.clone(),
     };
     if let Some(dir) = &exp.record_dir {
@@ -166,8 +182,10 @@ fn pegboard(args: Pegboard) -> Result<(), LabError> {
         command: command_line(),
         layouts: exp.layouts.iter().map(|l| l.name.clone()).collect(),
         starts: exp.starts,
+        repeats: exp.repeats,
         limit_s: exp.trial.limit_s,
         plots: Vec::new(),
+        calibrations,
     };
     let written = write_report(&args.out, &results, &ctx)?;
     if !args.quiet {
@@ -180,8 +198,45 @@ fn pegboard(args: Pegboard) -> Result<(), LabError> {
     Ok(())
 }
 
+/// `--threads`, or the available parallelism.
+fn threads(given: Option<usize>) -> Result<usize, LabError> {
+    match given {
+        Some(0) => Err(LabError::BadValue("--threads must be at least 1".into())),
+        Some(n) => Ok(n),
+        None => Ok(std::thread::available_parallelism().map_or(1, usize::from)),
+    }
+}
+
+/// Calibrates every controller that calibrates on the first layout's open ground and
+/// replaces it by its calibrated self; returns what each measured.
+fn calibrate_all(
+    controllers: &mut [LabController],
+    layouts: &[Layout],
+    trial: &TrialConfig,
+    quiet: bool,
+) -> Result<Vec<(String, String)>, LabError> {
+    let Some(first) = layouts.first() else {
+        return Ok(Vec::new());
+    };
+    let ground = first.scenario.generate_trial(trial.modules, 0)?;
+    let mut out = Vec::new();
+    for c in controllers.iter_mut() {
+        if let Some(done) = snaked::lab::calibration::calibrate(c, &ground, trial)? {
+            if !quiet {
+                eprintln!(
+                    "calibrated {} on open ground over {:.1} s: {}",
+                    c.label, done.seconds, done.offsets
+                );
+            }
+            out.push((c.label.clone(), done.offsets.to_string()));
+            *c = done.controller;
+        }
+    }
+    Ok(out)
+}
+
 /// The command line as typed, each argument shell-quoted where needed.
-fn command_line() -> String {
+pub(crate) fn command_line() -> String {
     std::iter::once("snake-lab".to_owned())
         .chain(std::env::args().skip(1).map(|a| {
             if !a.is_empty()

@@ -113,6 +113,18 @@ enum ControllerCmd {
         #[arg(value_name = "KEY=VALUE", allow_hyphen_values = true)]
         assignments: Vec<String>,
     },
+    /// Calibrate GAIT's controller (default: the running gait's) on open ground:
+    /// directional compliance measures the ground's friction offset over a few gait
+    /// cycles. Waits until it is done and prints what was measured.
+    Calibrate {
+        gait: Option<String>,
+        /// Measure this long (default: 3 gait cycles).
+        #[arg(long, value_name = "S")]
+        seconds: Option<f64>,
+        /// Forget the calibration instead.
+        #[arg(long, conflicts_with = "seconds")]
+        clear: bool,
+    },
 }
 
 #[derive(Subcommand, Debug)]
@@ -189,7 +201,16 @@ fn run(cli: &Cli) -> Result<(), Failure> {
     }
     // Build the request first: usage errors must not need a daemon.
     let (method, params) = request(&cli.cmd)?;
-    let timeout = Duration::from_secs_f64(cli.timeout);
+    let mut timeout = Duration::from_secs_f64(cli.timeout);
+    if let Cmd::Controller {
+        cmd: ControllerCmd::Calibrate { seconds, .. },
+    } = &cli.cmd
+    {
+        // The daemon answers when the calibration is done (up to 1.5x its time + 5 s;
+        // 3 cycles of a slow gait are long).
+        let wait = seconds.map_or(controller::CALIBRATION_WAIT_S, |s| 1.5 * s + 10.0);
+        timeout = timeout.max(Duration::from_secs_f64(wait));
+    }
     let token = tcp_token(cli)?;
     let mut client = Client::connect(&endpoint(cli), Some(timeout))?;
     if let Some(token) = token {
@@ -283,6 +304,26 @@ fn request(cmd: &Cmd) -> Result<(&str, Option<Value>), Failure> {
                     .map_err(Failure::Usage)?;
             }
             ("controller.set", Some(p))
+        }
+        Cmd::Controller {
+            cmd:
+                ControllerCmd::Calibrate {
+                    gait,
+                    seconds,
+                    clear,
+                },
+        } => {
+            let mut p = json!({});
+            if let Some(g) = gait {
+                p["gait"] = json!(g);
+            }
+            if let Some(s) = seconds {
+                p["seconds"] = json!(s);
+            }
+            if *clear {
+                p["clear"] = json!(true);
+            }
+            ("controller.calibrate", Some(p))
         }
         Cmd::Hold => ("hold", None),
         Cmd::Limp => ("limp", None),
@@ -410,6 +451,9 @@ fn print_human(cmd: &Cmd, r: &Value) {
         Cmd::Controller {
             cmd: ControllerCmd::List { .. },
         } => controller::print_list(r),
+        Cmd::Controller {
+            cmd: ControllerCmd::Calibrate { .. },
+        } => controller::print_calibration(r),
         Cmd::Controller { .. } => controller::print_installed(r),
         Cmd::Stats => print_stats(r),
         _ => println!("ok"),

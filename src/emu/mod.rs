@@ -48,6 +48,12 @@ pub trait Plant: Send {
     fn contacts(&self) -> ContactSummary {
         ContactSummary::default()
     }
+    /// Contact onsets between non-adjacent links of the body since the start (a pair
+    /// that starts touching counts once until it separates); 0 for a plant without
+    /// self-collision.
+    fn self_contacts(&self) -> u64 {
+        0
+    }
 }
 
 /// One body's exact pose: position, m, and orientation quaternion (w, x, y, z).

@@ -40,6 +40,11 @@ impl LabController {
     /// "config": {..}}`, the controller [`VARIANT_BASE`] when not named); any other key
     /// overrides the configuration too, e.g. `soft={"amplitude":{"gains":{"stiffness":2}}}`.
     pub fn variant(gait: GaitKind, spec: &str) -> Result<Self, LabError> {
+        Self::variant_on(gait, spec, VARIANT_BASE)
+    }
+
+    /// [`Self::variant`] over `base` when the JSON names no controller.
+    pub fn variant_on(gait: GaitKind, spec: &str, base: &str) -> Result<Self, LabError> {
         let bad = |msg: String| LabError::BadValue(format!("--variant {spec:?}: {msg}"));
         let (label, json) = spec
             .split_once('=')
@@ -67,7 +72,7 @@ impl LabController {
             Some(_) => Err(bad(format!("`{key}` must be a string"))),
         };
         let controller =
-            text(map.remove("controller"), "controller")?.unwrap_or_else(|| VARIANT_BASE.into());
+            text(map.remove("controller"), "controller")?.unwrap_or_else(|| base.into());
         let preset = text(map.remove("preset"), "preset")?;
         let mut config = map.remove("config");
         if !map.is_empty() {

@@ -18,7 +18,9 @@
 //! Definitions and the command line are in `docs/lab.md`.
 
 pub mod board;
+pub mod calibration;
 pub mod controllers;
+pub mod displacement;
 pub mod experiment;
 pub mod metrics;
 pub mod pegboard;
@@ -114,7 +116,7 @@ pub fn write_report(
         let stem = file_stem(&r.controller);
         let title = format!("{}: layout {}, start {}", r.controller, r.layout, r.start);
         let p = dir.join(format!("path-{stem}.png"));
-        plots::path_plot(&p, &title, world, board, rec)?;
+        plots::path_plot(&p, &title, world, Some(&board.region), rec)?;
         written.push(p);
         let p = dir.join(format!("signals-{stem}.png"));
         plots::signals_plot(&p, &title, rec)?;

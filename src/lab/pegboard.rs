@@ -15,7 +15,8 @@ use crate::gait::GaitKind;
 pub struct Pegboard;
 
 /// Its controllers, in report order: open loop, the ablations (each adds a compliant
-/// parameter), the centralisation variants of the full controller, the CPG baseline.
+/// parameter), the centralisation variants of the full controller, the CPG baseline,
+/// and switching directional compliance (SPEC §8, calibrated on open ground first).
 pub const CONTROLLERS: &[&str] = &[
     "open_loop",
     "a",
@@ -25,6 +26,7 @@ pub const CONTROLLERS: &[&str] = &[
     "a_ws_omega_per_joint",
     "a_ws_omega_windowed_phase",
     "cpg",
+    "dc_switching",
 ];
 
 impl ExperimentModule for Pegboard {

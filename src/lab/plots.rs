@@ -13,19 +13,19 @@ use plotters::style::text_anchor::{HPos, Pos, VPos};
 use plotters::style::{FontStyle, register_font};
 
 use super::LabError;
-use super::board::Board;
 use super::metrics::{MetricsConfig, moving_average};
 use super::report::summarise;
 use super::runner::TrialResult;
 use super::trial::TrialRecord;
 use crate::emu::world::WorldSpec;
+use crate::emu::world::scenario::Region;
 
 /// Panels drawn at most by [`signals_plot`]; further signals are left out (and said so).
 pub const MAX_SIGNAL_PANELS: usize = 12;
 
-const FONT: &str = "sans-serif";
+pub(crate) const FONT: &str = "sans-serif";
 
-fn register_fonts() {
+pub(crate) fn register_fonts() {
     static ONCE: Once = Once::new();
     ONCE.call_once(|| {
         // The bytes are a valid TrueType font shipped in the crate; a failure would
@@ -34,7 +34,7 @@ fn register_fonts() {
     });
 }
 
-fn plot_err<E: std::fmt::Display>(path: &Path) -> impl Fn(E) -> LabError + '_ {
+pub(crate) fn plot_err<E: std::fmt::Display>(path: &Path) -> impl Fn(E) -> LabError + '_ {
     move |e| LabError::Plot {
         path: path.to_owned(),
         msg: e.to_string(),
@@ -63,18 +63,26 @@ fn bounds(points: impl Iterator<Item = [f64; 2]>, margin_m: f64) -> [f64; 4] {
     ]
 }
 
-/// A trial's body-centre path (raw and smoothed as the metrics smooth it) over the peg
-/// board: pegs to scale, the board's region, the body at the start and at the end.
+/// A trial's body-centre path (raw and smoothed as the metrics smooth it) over the
+/// obstacles: pegs and rocks to scale (rocks by their footprint's reach), the board's
+/// region when there is one, the body at the start and at the end.
 pub fn path_plot(
     path: &Path,
     title: &str,
     world: &WorldSpec,
-    board: &Board,
+    region: Option<&Region>,
     rec: &TrialRecord,
 ) -> Result<(), LabError> {
     register_fonts();
-    let r = board.region;
-    let corners = [[r.x_m[0], r.y_m[0]], [r.x_m[1], r.y_m[1]]];
+    let corners: Vec<[f64; 2]> = region
+        .map(|r| vec![[r.x_m[0], r.y_m[0]], [r.x_m[1], r.y_m[1]]])
+        .unwrap_or_default();
+    let reach = |k: &crate::emu::world::Rock| {
+        k.points_m
+            .iter()
+            .map(|q| q[0].hypot(q[1]))
+            .fold(0.0, f64::max)
+    };
     let b = bounds(
         corners
             .into_iter()
@@ -108,12 +116,14 @@ pub fn path_plot(
         .label_style((FONT, 14))
         .draw()
         .map_err(&err)?;
-    chart
-        .draw_series(std::iter::once(Rectangle::new(
-            [(r.x_m[0], r.y_m[0]), (r.x_m[1], r.y_m[1])],
-            BLACK.mix(0.4).stroke_width(1),
-        )))
-        .map_err(&err)?;
+    if let Some(r) = region {
+        chart
+            .draw_series(std::iter::once(Rectangle::new(
+                [(r.x_m[0], r.y_m[0]), (r.x_m[1], r.y_m[1])],
+                BLACK.mix(0.4).stroke_width(1),
+            )))
+            .map_err(&err)?;
+    }
     let px_per_m = {
         let (a, c) = (
             chart.backend_coord(&(0.0, 0.0)),
@@ -125,6 +135,16 @@ pub fn path_plot(
         .draw_series(world.pegs.iter().map(|p| {
             let radius = (p.diameter_m / 2.0 * px_per_m).round().max(2.0) as i32;
             Circle::new((p.x_m, p.y_m), radius, BLACK.mix(0.6).filled())
+        }))
+        .map_err(&err)?;
+    chart
+        .draw_series(world.rocks.iter().map(|k| {
+            let radius = (reach(k) * px_per_m).round().max(2.0) as i32;
+            Circle::new(
+                (k.center_m[0], k.center_m[1]),
+                radius,
+                BLACK.mix(0.25).filled(),
+            )
         }))
         .map_err(&err)?;
     let xy = |v: &[[f64; 2]]| v.iter().map(|p| (p[0], p[1])).collect::<Vec<_>>();

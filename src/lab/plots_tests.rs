@@ -3,6 +3,7 @@
 use super::*;
 use crate::emu::world::Peg;
 use crate::emu::world::scenario::Region;
+use crate::lab::board::Board;
 use crate::lab::metrics::TrialMetrics;
 
 const PNG_SIGNATURE: [u8; 8] = [0x89, b'P', b'N', b'G', 0x0d, 0x0a, 0x1a, 0x0a];
@@ -35,6 +36,7 @@ fn record(signals: usize) -> TrialRecord {
         success: true,
         temporal_freq_rad_s: 1.0,
         cycles_not_running: 0,
+        self_contacts: 0,
     }
 }
 
@@ -56,7 +58,7 @@ fn every_figure_is_a_png() {
     };
     let board = Board::new(region, std::f64::consts::PI);
     let p = dir.path().join("path.png");
-    path_plot(&p, "path", &world, &board, &record(0)).unwrap();
+    path_plot(&p, "path", &world, Some(&board.region), &record(0)).unwrap();
     assert!(is_png(&p));
     for n in [0, 3, MAX_SIGNAL_PANELS + 2] {
         let p = dir.path().join(format!("signals{n}.png"));

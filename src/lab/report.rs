@@ -36,7 +36,7 @@ pub fn results_csv(results: &[TrialResult]) -> String {
     out
 }
 
-fn csv_field(s: &str) -> String {
+pub(crate) fn csv_field(s: &str) -> String {
     if s.contains([',', '"', '\n']) {
         format!("\"{}\"", s.replace('"', "\"\""))
     } else {
@@ -51,9 +51,30 @@ pub struct SummaryContext {
     pub command: String,
     pub layouts: Vec<String>,
     pub starts: usize,
+    /// Trials per start (differing in their sensor-noise seed).
+    pub repeats: usize,
     pub limit_s: f64,
     /// PNG files written beside the summary (names).
     pub plots: Vec<String>,
+    /// Controllers calibrated on open ground before the trials: label and what was
+    /// measured (JSON).
+    pub calibrations: Vec<(String, String)>,
+}
+
+/// The calibrations section of a summary (empty when there were none).
+pub fn calibrations_markdown(ctx: &SummaryContext) -> String {
+    let mut s = String::new();
+    if ctx.calibrations.is_empty() {
+        return s;
+    }
+    s.push_str(
+        "\nCalibrated on open ground before the trials (`controller.calibrate`, 3 gait \
+         cycles, the trials' ground without obstacles), friction offsets in rad:\n\n",
+    );
+    for (label, json) in &ctx.calibrations {
+        let _ = writeln!(s, "- {label}: `{json}`");
+    }
+    s
 }
 
 /// One controller's figures over its trials.
@@ -149,6 +170,7 @@ pub fn summary_markdown(results: &[TrialResult], ctx: &SummaryContext) -> String
         MIN_PATH_M * 100.0,
         MIN_PATH_M * 100.0
     );
+    s.push_str(&calibrations_markdown(ctx));
     let _ = writeln!(s, "\nPer trial: `results.csv`.");
     if !ctx.plots.is_empty() {
         s.push_str("\nPlots:\n\n");
@@ -226,11 +248,17 @@ mod tests {
                 command: "snake-lab pegboard --layouts 1".into(),
                 layouts: vec!["seed1000".into()],
                 starts: 3,
+                repeats: 1,
                 limit_s: 120.0,
                 plots: vec!["cycles_per_m.png".into()],
+                calibrations: vec![("dc_switching".into(), "{\"lateral_rad\":[0.1]}".into())],
             },
         );
         assert!(md.contains("snake-lab pegboard --layouts 1"));
+        assert!(
+            md.contains("- dc_switching: `{\"lateral_rad\":[0.1]}`"),
+            "{md}"
+        );
         assert!(
             md.contains("| b | 3 | 1/3 (33 %) | 30.00 ± 26.46 | 20.00 |"),
             "{md}"

@@ -90,6 +90,8 @@ pub struct TrialRecord {
     pub temporal_freq_rad_s: f64,
     /// Cycles in which the loop did not run the gait (failsafe hold or limp).
     pub cycles_not_running: u64,
+    /// Contact onsets between non-adjacent links during the trial (`Plant::self_contacts`).
+    pub self_contacts: u64,
 }
 
 /// The body layout and nominal parameters every slithering controller gets.
@@ -110,13 +112,15 @@ pub struct TrialRecording<'a> {
 }
 
 /// The loop of one trial: `controller` installed for its gait, the selector starting
-/// on that gait, over `plant`; recorded when `recording` says where (the recorder is
+/// on that gait, over `plant`, with `requests` waiting for its first cycle (as if an
+/// operator had sent them); recorded when `recording` says where (the recorder is
 /// returned, to be finished at the trial's end).
-fn trial_loop(
+pub(super) fn trial_loop(
     controller: &LabController,
     plant: PhysicsPlant,
     config: &TrialConfig,
     recording: Option<TrialRecording<'_>>,
+    requests: &[crate::rt::messages::LoopRequest],
 ) -> Result<(ControlLoop, Vec<String>, Option<Recorder>), LabError> {
     let n = config.modules;
     let gait = controller.gait;
@@ -168,9 +172,13 @@ fn trial_loop(
             ..SimBusConfig::default()
         },
     );
-    // The lab's loop answers no socket: its channels only need to exist.
-    let (_req_tx, req_rx) = crossbeam_channel::bounded(1);
-    let (ack_tx, _ack_rx) = crossbeam_channel::bounded(1);
+    // The lab's loop answers no socket: its channels only need to exist, and carry the
+    // requests given (their answers are not read).
+    let (req_tx, req_rx) = crossbeam_channel::bounded(requests.len().max(1));
+    for (ticket, r) in requests.iter().enumerate() {
+        let _ = req_tx.try_send(crate::rt::messages::Envelope::new(ticket as u64, *r));
+    }
+    let (ack_tx, _ack_rx) = crossbeam_channel::bounded(requests.len().max(1));
     let (retired_tx, _retired_rx) = crossbeam_channel::bounded(1);
     let (writer, _reader) = telemetry::channel(Snapshot::new(n, gait, table, config.blend_time_s));
     let parts = LoopParts {
@@ -232,7 +240,7 @@ pub fn run_trial(
         .as_ref()
         .map(|r| r.path.clone())
         .unwrap_or_default();
-    let (mut lp, signal_names, recorder) = trial_loop(controller, plant, config, recording)?;
+    let (mut lp, signal_names, recorder) = trial_loop(controller, plant, config, recording, &[])?;
 
     let steps = (config.limit_s / config.dt_s).round() as usize;
     let per_sample = config.steps_per_sample();
@@ -248,6 +256,7 @@ pub fn run_trial(
         success: false,
         temporal_freq_rad_s,
         cycles_not_running: 0,
+        self_contacts: 0,
     };
     record(&lp, &mut rec);
     for k in 1..=steps {
@@ -268,6 +277,7 @@ pub fn run_trial(
     let plant = plant_of(&lp);
     rec.seconds = plant.time_s();
     rec.end_links_m = links(plant);
+    rec.self_contacts = plant.self_contacts();
     drop(lp); // The loop's end of the ring first: the file then holds everything.
     if let Some(r) = recorder {
         r.finish().map_err(|source| LabError::Record {
@@ -278,7 +288,7 @@ pub fn run_trial(
     Ok(rec)
 }
 
-fn plant_of(lp: &ControlLoop) -> &dyn Plant {
+pub(super) fn plant_of(lp: &ControlLoop) -> &dyn Plant {
     lp.bus().plant().expect("a trial runs over a SimBus")
 }
 

@@ -181,3 +181,56 @@ pub fn print_status(c: &Value) {
         }
     }
 }
+
+/// How long `controller calibrate` waits without `--seconds`, s (the daemon's longest
+/// default calibration is 3 cycles of the slowest gait, capped at 600 s).
+pub const CALIBRATION_WAIT_S: f64 = 910.0;
+
+/// `controller calibrate`: what was measured, and the override that keeps it.
+pub fn print_calibration(r: &Value) {
+    let controller = text(&r["controller"]);
+    if r["calibration"] == "none" {
+        println!(
+            "{} {controller}: calibration cleared (offset 0)",
+            text(&r["gait"])
+        );
+        return;
+    }
+    println!(
+        "{} {controller}: calibrated over {} s",
+        text(&r["gait"]),
+        num(&r["seconds"], 1)
+    );
+    let signals = r["signals"].as_object();
+    let get = |k: &str| {
+        signals
+            .and_then(|s| s.get(k))
+            .cloned()
+            .unwrap_or(Value::Null)
+    };
+    let mut keep = Map::new();
+    for (plane, key) in [("lat", "lateral_rad"), ("dor", "dorsal_rad")] {
+        let values: Vec<Value> = ["head", "mid", "tail"]
+            .iter()
+            .map(|t| get(&format!("offset_{plane}_{t}")))
+            .collect();
+        if values.iter().all(Value::is_null) {
+            continue;
+        }
+        let shown: Vec<String> = values.iter().map(|v| num(v, 4)).collect();
+        println!(
+            "  offset {key:<12} head {}  mid {}  tail {}",
+            shown[0], shown[1], shown[2]
+        );
+        let values = values
+            .into_iter()
+            .map(|v| if v.is_number() { v } else { json!(0.0) });
+        keep.insert(key.to_owned(), Value::Array(values.collect()));
+    }
+    if !keep.is_empty() {
+        println!(
+            "  kept until the controller is replaced; to keep it in a new one: --config '{}'",
+            json!({ "friction_offset": keep })
+        );
+    }
+}

@@ -1,0 +1,164 @@
+//! `snake-lab peg-array` and `snake-lab rock-pile`: the directional-compliance paper's
+//! experiments (SPEC §8, docs/lab.md).
+
+use std::path::PathBuf;
+
+use snaked::emu::world::scenario::WorldScenario;
+use snaked::gait::GaitKind;
+use snaked::lab::LabError;
+use snaked::lab::board::Layout;
+use snaked::lab::controllers::LabController;
+use snaked::lab::displacement::{self, Displacement, MODULES, Terrain};
+use snaked::lab::experiment::ExperimentModule;
+use snaked::lab::report::SummaryContext;
+use snaked::lab::runner::{Experiment, RunOptions, run as run_trials};
+use snaked::lab::trial::TrialConfig;
+
+/// Options of both experiments. The defaults are the paper's protocol: one layout,
+/// 5 random poses, 4 trials per pose, 2 minutes each.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Controllers to compare, comma-separated (default: NC, NDC, PDC and switching
+    /// of the terrain's plane count).
+    #[arg(long, value_delimiter = ',')]
+    controllers: Vec<String>,
+    /// A controller with its own configuration, LABEL=JSON (repeatable), over the
+    /// terrain's switching controller unless the JSON names another, e.g.
+    /// 'wide={"thresholds":{"low_rad_s":-1.0,"high_rad_s":1.0,"reference":"threshold"}}'.
+    #[arg(long = "variant", value_name = "LABEL=JSON")]
+    variants: Vec<String>,
+    /// Seeded layouts: the scenario with master seeds seed-base .. seed-base + N - 1.
+    #[arg(long, default_value_t = 1)]
+    layouts: usize,
+    /// Random poses (position and heading) per layout.
+    #[arg(long, default_value_t = 5)]
+    starts: usize,
+    /// Trials per pose, differing only in their sensor-noise seed.
+    #[arg(long, default_value_t = 4)]
+    repeats: usize,
+    /// Master seed of the first layout (default: the scenario's own).
+    #[arg(long)]
+    seed_base: Option<u64>,
+    /// World scenario the layouts come from (default: the built-in
+    /// scenarios/peg-array.toml or scenarios/rock-pile-3d.toml).
+    #[arg(long, value_name = "FILE")]
+    scenario: Option<PathBuf>,
+    /// Modules of the snake (the paper's robot has 16).
+    #[arg(long, default_value_t = MODULES)]
+    modules: usize,
+    /// Time of a trial, simulated s.
+    #[arg(long, default_value_t = 120.0)]
+    seconds: f64,
+    /// Worker threads (default: the available parallelism).
+    #[arg(long)]
+    threads: Option<usize>,
+    /// Output directory (default: lab-out/peg-array or lab-out/rock-pile).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Record every trial as MCAP into this directory (created if missing).
+    #[arg(long, value_name = "DIR")]
+    record: Option<PathBuf>,
+    /// Run uncalibrated (friction offset 0) instead of calibrating on open ground first.
+    #[arg(long)]
+    no_calibrate: bool,
+    /// No progress bar, no list of written files.
+    #[arg(long)]
+    quiet: bool,
+}
+
+pub fn run(terrain: Terrain, args: Args) -> Result<(), LabError> {
+    let module = Displacement { terrain };
+    let threads = super::threads(args.threads)?;
+    let base = match &args.scenario {
+        Some(path) => WorldScenario::load(path)?,
+        None => WorldScenario::parse(module.scenario_toml())?,
+    };
+    if args.layouts == 0 {
+        return Err(LabError::NoLayouts);
+    }
+    if !(2..=64).contains(&args.modules) {
+        return Err(LabError::BadValue(format!(
+            "--modules must be 2 ..= 64, not {}",
+            args.modules
+        )));
+    }
+    let seed_base = args.seed_base.unwrap_or(base.seed);
+    let layouts: Vec<Layout> = (0..args.layouts as u64)
+        .map(|k| Layout::seeded(&base, seed_base.wrapping_add(k)))
+        .collect();
+    let gait = GaitKind::Slithering;
+    let names: Vec<String> = if args.controllers.is_empty() {
+        module.controllers().iter().map(|s| s.to_string()).collect()
+    } else {
+        args.controllers
+            .iter()
+            .map(|s| s.trim().to_owned())
+            .collect()
+    };
+    let mut controllers = names
+        .iter()
+        .map(|n| LabController::named(gait, n))
+        .collect::<Result<Vec<_>, _>>()?;
+    let variant_base = match terrain {
+        Terrain::PegArray => "dc_switching",
+        Terrain::RockPile => "dc3d_switching",
+    };
+    for spec in &args.variants {
+        controllers.push(LabController::variant_on(gait, spec, variant_base)?);
+    }
+    let trial = TrialConfig {
+        modules: args.modules,
+        limit_s: args.seconds,
+        ..TrialConfig::default()
+    };
+    let calibrations = if args.no_calibrate {
+        Vec::new()
+    } else {
+        super::calibrate_all(&mut controllers, &layouts, &trial, args.quiet)?
+    };
+    let exp = Experiment {
+        controllers,
+        layouts,
+        starts: args.starts,
+        repeats: args.repeats,
+        trial,
+        record_dir: args.record.clone(),
+    };
+    if let Some(dir) = &exp.record_dir {
+        std::fs::create_dir_all(dir).map_err(|source| LabError::Io {
+            path: dir.clone(),
+            source,
+        })?;
+    }
+    let results = run_trials(
+        &module,
+        &exp,
+        RunOptions {
+            threads,
+            progress: !args.quiet,
+        },
+    )?;
+    let ctx = SummaryContext {
+        command: super::command_line(),
+        layouts: exp.layouts.iter().map(|l| l.name.clone()).collect(),
+        starts: exp.starts,
+        repeats: exp.repeats,
+        limit_s: exp.trial.limit_s,
+        plots: Vec::new(),
+        calibrations,
+    };
+    let out = args
+        .out
+        .unwrap_or_else(|| PathBuf::from("lab-out").join(module.name()));
+    let written = displacement::write_report(&module, &out, &results, &ctx)?;
+    if !args.quiet {
+        for p in &written {
+            eprintln!("wrote {}", p.display());
+        }
+    }
+    print!(
+        "{}",
+        std::fs::read_to_string(out.join("summary.md")).unwrap_or_default()
+    );
+    Ok(())
+}
