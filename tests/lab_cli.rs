@@ -259,3 +259,97 @@ fn every_trial_can_be_recorded_and_the_file_holds_every_cycle() {
     assert_eq!(counts["/scene/world"], 1);
     assert!(counts["/tf"] >= 100, "{counts:?}");
 }
+
+#[test]
+fn peg_array_runs_poses_times_repeats_calibrated_and_reports_the_spread() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("pa");
+    let args = [
+        "peg-array",
+        "--controllers",
+        "dc_nc,dc_switching",
+        "--starts",
+        "2",
+        "--repeats",
+        "2",
+        "--seconds",
+        "3",
+        "--quiet",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    let o = lab(&args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let csv = read(&out.join("results.csv"));
+    let rows: Vec<&str> = csv.lines().collect();
+    assert!(
+        rows[0].starts_with("controller,layout,pose,repeat,seconds,displacement_m,velocity_bl_min")
+    );
+    assert_eq!(rows.len(), 1 + 2 * 2 * 2, "{csv}");
+    assert!(rows[1].starts_with("dc_nc,seed101,0,0,"), "{csv}");
+    assert!(rows[2].starts_with("dc_nc,seed101,0,1,"), "{csv}");
+    // Repeats of a pose differ only in their sensor noise: not bit-identical.
+    let field = |r: &str, k: usize| r.split(',').nth(k).unwrap().to_owned();
+    assert_ne!(field(rows[1], 5), field(rows[2], 5), "{csv}");
+    let md = read(&out.join("summary.md"));
+    assert!(md.contains("sd across poses"), "{md}");
+    assert!(md.contains("| seed101 pose 1 |"), "{md}");
+    assert!(
+        md.contains("- dc_switching: `{\"dorsal_rad\""),
+        "calibrated: {md}"
+    );
+    for f in [
+        "velocity.png",
+        "absitions-dc_switching.png",
+        "path-dc_nc.png",
+    ] {
+        let bytes = std::fs::read(out.join(f)).unwrap();
+        assert_eq!(bytes[..8], PNG_SIGNATURE, "{f}");
+    }
+}
+
+#[test]
+fn rock_pile_runs_the_3d_controllers() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("rp");
+    let o = lab(&[
+        "rock-pile",
+        "--controllers",
+        "dc3d_switching",
+        "--starts",
+        "1",
+        "--repeats",
+        "1",
+        "--seconds",
+        "2",
+        "--no-calibrate",
+        "--quiet",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let md = read(&out.join("summary.md"));
+    assert!(
+        md.contains("rock pile") && md.contains("| dc3d_switching | 1 |"),
+        "{md}"
+    );
+    assert!(!md.contains("Calibrated"), "--no-calibrate: {md}");
+    // Bad input is refused before any trial.
+    let o = lab(&[
+        "rock-pile",
+        "--repeats",
+        "0",
+        "--quiet",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(
+        o.status.code(),
+        Some(2),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let o = lab(&["peg-array", "--controllers", "a_ws_omega,bogus", "--quiet"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("unknown controller"));
+}

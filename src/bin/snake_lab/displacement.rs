@@ -73,8 +73,21 @@ pub fn run(terrain: Terrain, args: Args) -> Result<(), LabError> {
         Some(path) => WorldScenario::load(path)?,
         None => WorldScenario::parse(module.scenario_toml())?,
     };
+    // Checked before the calibrations, which take a while.
     if args.layouts == 0 {
         return Err(LabError::NoLayouts);
+    }
+    if args.starts == 0 {
+        return Err(LabError::NoStarts);
+    }
+    if args.repeats == 0 {
+        return Err(LabError::BadValue("--repeats must be at least 1".into()));
+    }
+    if !(args.seconds.is_finite() && args.seconds > 0.0) {
+        return Err(LabError::BadValue(format!(
+            "the time limit must be positive, not {} s",
+            args.seconds
+        )));
     }
     if !(2..=64).contains(&args.modules) {
         return Err(LabError::BadValue(format!(

@@ -62,12 +62,25 @@ impl PlaneWindow {
         }
     }
 
-    /// Semi-implicit Euler of `M·δ̈ + B·δ̇ + K·δ = F + τ_D` with the mode's filter on the
-    /// rate: a filtered rate is the state's rate (no wind-up behind the filter), and the
-    /// amplitude `nominal + δ` stays in the gains' range.
-    pub fn step_amplitude(&mut self, g: &AdmittanceGains, force: f64, nominal: f64, dt_s: f64) {
-        let accel =
-            (force + g.bias_force - g.damping * self.rate - g.stiffness * self.deviation) / g.mass;
+    /// Semi-implicit Euler of `M·δ̈ + B·δ̇ + K·(δ − δ_m) = F + τ_D` with the mode's filter
+    /// on the rate: a filtered rate is the state's rate (no wind-up behind the filter),
+    /// and the amplitude `nominal + δ` stays in the gains' range. `δ_m` is where the
+    /// spring pulls in the window's mode: 0 in NC, `+shift` in PDC, `−shift` in NDC.
+    pub fn step_amplitude(
+        &mut self,
+        g: &AdmittanceGains,
+        force: f64,
+        nominal: f64,
+        shift: f64,
+        dt_s: f64,
+    ) {
+        let rest = match self.mode {
+            Mode::Nc => 0.0,
+            Mode::Pdc => shift,
+            Mode::Ndc => -shift,
+        };
+        let spring = g.stiffness * (self.deviation - rest);
+        let accel = (force + g.bias_force - g.damping * self.rate - spring) / g.mass;
         self.rate = self.mode.filter(self.rate + accel * dt_s);
         self.deviation += self.rate * dt_s;
         let value = nominal + self.deviation;
@@ -135,13 +148,14 @@ mod tests {
         low_rad_s: -0.5,
         high_rad_s: 0.5,
         reference: Reference::Threshold,
+        shift_rad: 0.0,
     };
 
     /// Steps `w` under `force(t)` for `seconds`, switching by `T`.
     fn run(w: &mut PlaneWindow, seconds: f64, switching: bool, force: impl Fn(f64) -> f64) {
         let dt = 1e-3;
         for k in 0..(seconds / dt) as usize {
-            w.step_amplitude(&gains(), force(k as f64 * dt), 0.785, dt);
+            w.step_amplitude(&gains(), force(k as f64 * dt), 0.785, 0.0, dt);
             w.observe(0.0, dt, 1.5, switching.then_some(&T));
         }
     }
@@ -194,7 +208,7 @@ mod tests {
         let mut out = Vec::new();
         for k in 0..(seconds / dt) as usize {
             let t = t0 + k as f64 * dt;
-            w.step_amplitude(&gains(), force(t), 0.785, dt);
+            w.step_amplitude(&gains(), force(t), 0.785, 0.0, dt);
             if w.observe(0.0, dt, 1.5, Some(&T)) {
                 out.push((t, w.mode));
             }

@@ -60,6 +60,11 @@ pub struct Thresholds {
     /// NDC above it (the window was bent further than nominal for long), > 0.
     pub high_rad_s: f64,
     pub reference: Reference,
+    /// Where the amplitude's spring pulls while a window is directional, rad from
+    /// nominal: `+shift` in PDC (the window pushes out), `−shift` in NDC (it narrows);
+    /// 0: the reference's filter alone.
+    #[serde(default)]
+    pub shift_rad: f64,
 }
 
 /// The dorsal wave of the three-dimensional controller (reference eq. 10):
@@ -166,10 +171,17 @@ impl DirectionalComplianceConfig {
                     bias_force: 0.0,
                 },
             },
+            // Tuned on peg-array layouts 500-503 (docs/measurements.md); the fixed
+            // strategies are the reference's bare filters.
             thresholds: Thresholds {
-                low_rad_s: -0.6,
-                high_rad_s: 0.6,
+                low_rad_s: -1.2,
+                high_rad_s: 1.2,
                 reference: Reference::Threshold,
+                shift_rad: if strategy == Strategy::Switching {
+                    0.2
+                } else {
+                    0.0
+                },
             },
             mean_time_s: 1.5,
             friction_offset: None,
@@ -213,6 +225,12 @@ impl DirectionalComplianceConfig {
         let t = &self.thresholds;
         check_range("thresholds.low_rad_s", t.low_rad_s, -100.0, -1e-3)?;
         check_range("thresholds.high_rad_s", t.high_rad_s, 1e-3, 100.0)?;
+        check_range(
+            "thresholds.shift_rad",
+            t.shift_rad,
+            0.0,
+            JOINT_LIMIT_RAD / 2.0,
+        )?;
         check_range("mean_time_s", self.mean_time_s, 0.01, 60.0)?;
         if let Some(o) = &self.friction_offset {
             for (plane, values) in [

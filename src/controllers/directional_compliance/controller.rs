@@ -211,6 +211,7 @@ impl DirectionalCompliance {
         let nominal = [self.amplitude0(LAT), self.amplitude0(DOR)];
         let offsets = self.calibration.offsets();
         let mean_time = self.config.mean_time_s;
+        let shift = self.config.thresholds.shift_rad;
         let mut switches = 0;
         for (j, w) in self.manager.windows_mut().enumerate() {
             let bin = bin_of(w.window.a, w.window.b);
@@ -219,7 +220,7 @@ impl DirectionalCompliance {
                 if calibrating {
                     pw.mode = Mode::Nc;
                 }
-                pw.step_amplitude(&gains[p], self.forces[p][j], nominal[p], dt);
+                pw.step_amplitude(&gains[p], self.forces[p][j], nominal[p], shift, dt);
                 let offset = offset_of(&offsets, p, bin);
                 switches += u64::from(pw.observe(offset, dt, mean_time, switching));
             }
