@@ -57,7 +57,7 @@ fn examples_have_what_they_say() {
         .collect();
     assert_eq!(d, [0.10, 0.08, 0.12]);
     assert_eq!(load("rock-pile.toml").rocks.len(), 30);
-    assert_eq!(load("rock-pile-3d.toml").rocks.len(), 110);
+    assert_eq!(load("rock-pile-3d.toml").rocks.len(), 130);
     assert_eq!(load("peg-array.toml").pegs.len(), 270);
     assert_eq!(load("walls.toml").walls.len(), 5);
 }

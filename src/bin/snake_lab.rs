@@ -164,21 +164,36 @@ fn pegboard(args: Pegboard) -> Result<(), LabError> {
         trial,
         record_dir: args.record.clone(),
     };
+    let results = run_experiment(&pegboard::Pegboard, &exp, threads, args.quiet)?;
+    let ctx = context(&exp, calibrations);
+    let written = write_report(&args.out, &results, &ctx)?;
+    finish(&written, &args.out, args.quiet);
+    Ok(())
+}
+
+/// Runs every trial of `exp` (creating its recording directory first).
+pub(crate) fn run_experiment<E: snaked::lab::experiment::ExperimentModule>(
+    module: &E,
+    exp: &Experiment,
+    threads: usize,
+    quiet: bool,
+) -> Result<Vec<snaked::lab::runner::TrialResult<E>>, LabError> {
     if let Some(dir) = &exp.record_dir {
         std::fs::create_dir_all(dir).map_err(|source| LabError::Io {
             path: dir.clone(),
             source,
         })?;
     }
-    let results = run(
-        &pegboard::Pegboard,
-        &exp,
-        RunOptions {
-            threads,
-            progress: !args.quiet,
-        },
-    )?;
-    let ctx = SummaryContext {
+    let opts = RunOptions {
+        threads,
+        progress: !quiet,
+    };
+    run(module, exp, opts)
+}
+
+/// What the summary says of how `exp` was run.
+pub(crate) fn context(exp: &Experiment, calibrations: Vec<(String, String)>) -> SummaryContext {
+    SummaryContext {
         command: command_line(),
         layouts: exp.layouts.iter().map(|l| l.name.clone()).collect(),
         starts: exp.starts,
@@ -186,16 +201,17 @@ fn pegboard(args: Pegboard) -> Result<(), LabError> {
         limit_s: exp.trial.limit_s,
         plots: Vec::new(),
         calibrations,
-    };
-    let written = write_report(&args.out, &results, &ctx)?;
-    if !args.quiet {
-        for p in &written {
+    }
+}
+
+/// Lists the files written (unless quiet) and prints the summary.
+pub(crate) fn finish(written: &[PathBuf], out: &std::path::Path, quiet: bool) {
+    if !quiet {
+        for p in written {
             eprintln!("wrote {}", p.display());
         }
     }
-    let summary = std::fs::read_to_string(args.out.join("summary.md")).unwrap_or_default();
-    print!("{summary}");
-    Ok(())
+    print!("{}", std::fs::read_to_string(out.join("summary.md")).unwrap_or_default());
 }
 
 /// `--threads`, or the available parallelism.

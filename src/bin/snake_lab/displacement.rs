@@ -10,8 +10,7 @@ use snaked::lab::board::Layout;
 use snaked::lab::controllers::LabController;
 use snaked::lab::displacement::{self, Displacement, MODULES, Terrain};
 use snaked::lab::experiment::ExperimentModule;
-use snaked::lab::report::SummaryContext;
-use snaked::lab::runner::{Experiment, RunOptions, run as run_trials};
+use snaked::lab::runner::Experiment;
 use snaked::lab::trial::TrialConfig;
 
 /// Options of both experiments. The defaults are the paper's protocol: one layout,
@@ -137,41 +136,12 @@ pub fn run(terrain: Terrain, args: Args) -> Result<(), LabError> {
         trial,
         record_dir: args.record.clone(),
     };
-    if let Some(dir) = &exp.record_dir {
-        std::fs::create_dir_all(dir).map_err(|source| LabError::Io {
-            path: dir.clone(),
-            source,
-        })?;
-    }
-    let results = run_trials(
-        &module,
-        &exp,
-        RunOptions {
-            threads,
-            progress: !args.quiet,
-        },
-    )?;
-    let ctx = SummaryContext {
-        command: super::command_line(),
-        layouts: exp.layouts.iter().map(|l| l.name.clone()).collect(),
-        starts: exp.starts,
-        repeats: exp.repeats,
-        limit_s: exp.trial.limit_s,
-        plots: Vec::new(),
-        calibrations,
-    };
+    let results = super::run_experiment(&module, &exp, threads, args.quiet)?;
+    let ctx = super::context(&exp, calibrations);
     let out = args
         .out
         .unwrap_or_else(|| PathBuf::from("lab-out").join(module.name()));
     let written = displacement::write_report(&module, &out, &results, &ctx)?;
-    if !args.quiet {
-        for p in &written {
-            eprintln!("wrote {}", p.display());
-        }
-    }
-    print!(
-        "{}",
-        std::fs::read_to_string(out.join("summary.md")).unwrap_or_default()
-    );
+    super::finish(&written, &out, args.quiet);
     Ok(())
 }
