@@ -1,7 +1,8 @@
 //! Real-time factor (simulated s per wall s) of the physics plant: 18 modules
-//! slithering among 40 pegs, and sidewinding over a pile of convex rocks.
+//! slithering among 40 pegs, and sidewinding over a pile of convex rocks, each with
+//! self-collision off and on (the variants alternate, so a busy machine slows both).
 //! Criterion times one 1 ms plant step (RTF = 1 ms / step time); the explicit
-//! figures over 5 simulated seconds are printed first.
+//! figures over 5 simulated seconds (median of 3 alternating rounds) are printed first.
 use std::time::Instant;
 
 use criterion::{Criterion, criterion_group, criterion_main};
@@ -74,10 +75,11 @@ struct Run {
 }
 
 impl Run {
-    fn new(spec: &WorldSpec, gait: GaitKind) -> Self {
+    fn new(spec: &WorldSpec, gait: GaitKind, self_collision: bool) -> Self {
         let config = PhysicsConfig {
             modules: N,
             noise: NoiseConfig::default(),
+            self_collision,
             ..PhysicsConfig::default()
         };
         let layout = BodyLayout::alternating(N, Plane::Lateral, MODULE_LENGTH_M);
@@ -100,18 +102,43 @@ impl Run {
     }
 }
 
-fn print_rtf(name: &str, spec: &WorldSpec, gait: GaitKind) {
-    let mut run = Run::new(spec, gait);
+const VARIANTS: [(&str, bool); 2] = [("self_collision_off", false), ("self_collision_on", true)];
+const ROUNDS: usize = 3;
+
+/// Wall seconds for 5 simulated seconds from the start pose.
+fn time_5s(spec: &WorldSpec, gait: GaitKind, self_collision: bool) -> (f64, Run) {
+    let mut run = Run::new(spec, gait, self_collision);
     let start = Instant::now();
     for _ in 0..5000 {
         run.step();
     }
-    let wall = start.elapsed().as_secs_f64();
-    println!(
-        "physics_rtf {name}: 5.0 simulated s in {wall:.3} wall s, RTF {:.1}x, contacts at the end {:?}",
-        5.0 / wall,
-        run.plant.contacts()
-    );
+    (start.elapsed().as_secs_f64(), run)
+}
+
+fn print_rtf(name: &str, spec: &WorldSpec, gait: GaitKind) {
+    let mut walls = [Vec::new(), Vec::new()];
+    for round in 0..ROUNDS {
+        for (v, &(variant, on)) in VARIANTS.iter().enumerate() {
+            let (wall, run) = time_5s(spec, gait, on);
+            walls[v].push(wall);
+            println!(
+                "physics_rtf {name} {variant} round {round}: 5.0 simulated s in {wall:.3} wall s, \
+                 RTF {:.1}x, contacts at the end {:?}, self-contact onsets {}",
+                5.0 / wall,
+                run.plant.contacts(),
+                run.plant.self_contacts()
+            );
+        }
+    }
+    for (v, (variant, _)) in VARIANTS.iter().enumerate() {
+        walls[v].sort_by(f64::total_cmp);
+        let median = walls[v][ROUNDS / 2];
+        println!(
+            "physics_rtf {name} {variant}: median {:.1} µs per 1 ms step, RTF {:.1}x",
+            median / 5.0 * 1e3,
+            5.0 / median
+        );
+    }
 }
 
 fn physics_rtf(c: &mut Criterion) {
@@ -133,11 +160,13 @@ fn physics_rtf(c: &mut Criterion) {
     let mut group = c.benchmark_group("physics_step_1ms");
     group.sample_size(20);
     for (name, spec, gait) in &worlds {
-        let mut run = Run::new(spec, *gait);
-        for _ in 0..1000 {
-            run.step();
+        for (variant, on) in VARIANTS {
+            let mut run = Run::new(spec, *gait, on);
+            for _ in 0..1000 {
+                run.step();
+            }
+            group.bench_function(format!("{name}/{variant}"), |b| b.iter(|| run.step()));
         }
-        group.bench_function(*name, |b| b.iter(|| run.step()));
     }
     group.finish();
 }

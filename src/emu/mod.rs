@@ -54,6 +54,10 @@ pub trait Plant: Send {
     fn self_contacts(&self) -> u64 {
         0
     }
+    /// Pairs of non-adjacent links touching after the last step.
+    fn self_contact_pairs_now(&self) -> usize {
+        0
+    }
 }
 
 /// One body's exact pose: position, m, and orientation quaternion (w, x, y, z).
@@ -66,7 +70,8 @@ pub struct LinkPose {
 /// Contacts between the snake and the world after a step.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct ContactSummary {
-    /// Collider pairs (link–obstacle) in contact.
+    /// Collider pairs (link–obstacle) in contact; link–link pairs are
+    /// [`Plant::self_contact_pairs_now`].
     pub pairs: usize,
     /// Sum of their normal forces, N.
     pub normal_force_n: f64,

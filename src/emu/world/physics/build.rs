@@ -15,14 +15,16 @@ pub const MODULE_DIAMETER_M: f64 = 0.051;
 /// Joint limit, rad.
 pub const JOINT_LIMIT_RAD: f64 = std::f64::consts::FRAC_PI_2;
 
-/// Collision group of the snake's links (they do not collide with each other).
-const SNAKE_GROUP: Group = Group::GROUP_1;
-/// Collision group of everything else.
-const WORLD_GROUP: Group = Group::GROUP_2;
+/// Collision group of the world's (fixed) colliders.
+const WORLD_GROUP: Group = Group::GROUP_32;
+/// The links' groups: link `k` is in bit `k % 31`, so its filter can leave out its
+/// neighbours (see [`link_groups`]).
+const SNAKE_GROUPS: Group = Group::ALL.difference(WORLD_GROUP);
+const SNAKE_BITS: usize = 31;
 
-/// `user_data` of world colliders whose friction the anisotropy applies to.
+/// `user_data` of fixed world colliders whose friction the anisotropy applies to.
 pub const TAG_SKIN_SURFACE: u128 = 1;
-/// `user_data` of pole colliders (their own isotropic `mu`).
+/// `user_data` of pole colliders (fixed; their own isotropic `mu`).
 pub const TAG_POLE: u128 = 2;
 /// `user_data` of a snake link collider: `TAG_LINK_BASE + link index`.
 pub const TAG_LINK_BASE: u128 = 1000;
@@ -43,11 +45,12 @@ fn v(x: f64, y: f64, z: f64) -> Vector {
 
 /// Static geometry from `spec` (ground, pegs, poles, rocks, walls).
 pub fn build_world(world: &mut PhysicsWorld, spec: &WorldSpec) -> Result<(), PhysicsError> {
-    let groups = InteractionGroups::new(WORLD_GROUP, SNAKE_GROUP, InteractionTestMode::And);
+    let groups = InteractionGroups::new(WORLD_GROUP, SNAKE_GROUPS, InteractionTestMode::And);
     let mu = spec.friction.mu as f32;
     let fixed = world.bodies.insert(RigidBodyBuilder::fixed());
     let skin = |b: ColliderBuilder| {
         b.friction(mu)
+            .friction_combine_rule(own_coefficient_against_skin(mu, mu))
             .collision_groups(groups)
             .user_data(TAG_SKIN_SURFACE)
     };
@@ -82,6 +85,7 @@ pub fn build_world(world: &mut PhysicsWorld, spec: &WorldSpec) -> Result<(), Phy
             .translation(v(pole.x_m, pole.y_m, 0.5 * (s.z0_m + s.z1_m)))
             .rotation(upright)
             .friction(pole.mu as f32)
+            .friction_combine_rule(own_coefficient_against_skin(pole.mu as f32, mu))
             .collision_groups(groups)
             .user_data(TAG_POLE);
             add(world, c);
@@ -112,6 +116,38 @@ pub fn build_world(world: &mut PhysicsWorld, spec: &WorldSpec) -> Result<(), Phy
         add(world, skin(c));
     }
     Ok(())
+}
+
+/// The combine rule that makes a world collider of friction `own` keep its own
+/// coefficient against the skin's `skin_mu`: the links use rule `Average` (the lowest),
+/// so this one decides, and `Max`/`Min` of the pair is `own` exactly. Skin on skin
+/// (both `Average` of `skin_mu`) is `skin_mu`: a self-contact is never frictionless.
+pub fn own_coefficient_against_skin(own: f32, skin_mu: f32) -> CoefficientCombineRule {
+    if own >= skin_mu {
+        CoefficientCombineRule::Max
+    } else {
+        CoefficientCombineRule::Min
+    }
+}
+
+/// Collision groups of link `k` of `links`. With self-collision, a link meets the
+/// world and every link at least 3 away: its filter leaves out itself and the links 1
+/// and 2 away, so the broad phase never makes those pairs (adjacent links overlap at
+/// the joint, links 2 apart cannot touch within the ±π/2 limits). Past 31 links the
+/// bits repeat, so the filter takes every link and the joints (`contacts_enabled
+/// (false)`) alone keep adjacent links apart.
+fn link_groups(k: usize, links: usize, self_collision: bool) -> InteractionGroups {
+    let bit = |j: usize| Group::from_bits_truncate(1 << (j % SNAKE_BITS));
+    let filter = if !self_collision {
+        WORLD_GROUP
+    } else if links <= SNAKE_BITS {
+        let near = (k.saturating_sub(2)..=(k + 2).min(links - 1))
+            .fold(Group::NONE, |g, j| g.union(bit(j)));
+        WORLD_GROUP.union(SNAKE_GROUPS.difference(near))
+    } else {
+        WORLD_GROUP.union(SNAKE_GROUPS)
+    };
+    InteractionGroups::new(bit(k), filter, InteractionTestMode::And)
 }
 
 /// The start pose's link poses: from the spec's head pose and joint angles, or from
@@ -165,16 +201,17 @@ fn lowest_point_m(poses: &[Isometry3<f64>]) -> f64 {
         .fold(f64::INFINITY, f64::min)
 }
 
-/// Links (capsules of the module's length and diameter and mass) and revolute
-/// impulse joints between them, with contacts between the links disabled.
+/// Links (capsules of the module's length and diameter and mass, skin friction
+/// `skin_mu`) and revolute impulse joints between them, with contacts between the two
+/// links of a joint disabled.
 pub fn build_chain(
     world: &mut PhysicsWorld,
     config: &PhysicsConfig,
     poses: &[Isometry3<f64>],
+    skin_mu: f32,
 ) -> Chain {
     let radius = 0.5 * MODULE_DIAMETER_M;
     let half_len = 0.5 * MODULE_LENGTH_M;
-    let groups = InteractionGroups::new(SNAKE_GROUP, WORLD_GROUP, InteractionTestMode::And);
     let hooks = if config.anisotropic_hooks {
         ActiveHooks::MODIFY_SOLVER_CONTACTS
     } else {
@@ -188,13 +225,14 @@ pub fn build_chain(
             .can_sleep(false)
             .angular_damping(config.link_angular_damping as f32);
         let h = world.bodies.insert(body);
-        // Friction 0 with rule Max: each contact takes the world surface's coefficient.
+        // Rule Average (the lowest): against the world the surface's rule decides
+        // (`own_coefficient_against_skin`), against another link it is `skin_mu`.
         let c = ColliderBuilder::capsule_x((half_len - radius) as f32, radius as f32)
             .mass(MODULE_MASS_KG as f32)
-            .friction(0.0)
-            .friction_combine_rule(CoefficientCombineRule::Max)
+            .friction(skin_mu)
+            .friction_combine_rule(CoefficientCombineRule::Average)
             .restitution(0.0)
-            .collision_groups(groups)
+            .collision_groups(link_groups(k, poses.len(), config.self_collision))
             .active_hooks(hooks)
             .user_data(TAG_LINK_BASE + k as u128);
         colliders.push(world.colliders.insert_with_parent(c, h, &mut world.bodies));

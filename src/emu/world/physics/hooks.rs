@@ -17,7 +17,12 @@
 //!   regularising the stick (the remainder fades to zero at rest, where rapier's cone
 //!   of `μ_min` holds alone). Total: the principal-axis anisotropic Coulomb model.
 //!
-//! Poles keep their own isotropic `mu`.
+//! Poles keep their own isotropic `mu`, and so does skin on skin (a link against
+//! another, with self-collision): both touch at the world's `friction.mu`, from the
+//! colliders' combine rules (`build.rs`), so neither the hook nor the remainder
+//! touches those manifolds. The anisotropy belongs to the skin sliding over the
+//! ground along or across its own axis; two links have an axis each, and sleeve on
+//! sleeve is taken as the sleeve's base coefficient.
 
 use rapier3d::prelude::*;
 
@@ -41,6 +46,7 @@ impl PhysicsHooks for AnisotropicFriction {
         ) else {
             return;
         };
+        // Only link against a world surface: link–link manifolds keep `mu`.
         let link_and_skin = |a: &Collider, b: &Collider| {
             a.user_data >= TAG_LINK_BASE && b.user_data == TAG_SKIN_SURFACE
         };
@@ -84,6 +90,9 @@ impl PhysicsPlant {
                     continue;
                 }
                 let body = &self.world.bodies[link];
+                // The surface's body (fixed for every surface `build_world` makes, but
+                // the slip is taken relative to it all the same).
+                let surface = oc.parent().and_then(|h| self.world.bodies.get(h));
                 let centre = body.translation();
                 // Normal into the link (the side of the obstacle it is on).
                 let mut n = imp / imp.length();
@@ -91,7 +100,8 @@ impl PhysicsPlant {
                     n = -n;
                 }
                 let point = centre - n * radius;
-                let v = body.velocity_at_point(point);
+                let v = body.velocity_at_point(point)
+                    - surface.map_or(Vector::ZERO, |b| b.velocity_at_point(point));
                 let vt = v - n * v.dot(n);
                 let axis = *body.rotation() * Vector::X;
                 let at = axis - n * axis.dot(n);

@@ -9,11 +9,14 @@
 //!   torque is applied equal and opposite to the two links about the joint axis.
 //!   Reported torque = spring torque (sign as in `servo.rs`).
 //! - Sensors: encoder, torque and an IMU on each module's output link ([`sensors`]).
-//! - Contacts: Coulomb friction cones (isotropic `mu`), optional anisotropy ([`hooks`]).
+//! - Contacts: Coulomb friction cones (isotropic `mu`), optional anisotropy ([`hooks`]);
+//!   links not joined by a joint collide with each other, skin on skin at `mu`
+//!   ([`self_contact`] counts the contacts).
 
 pub mod build;
 pub mod hooks;
 pub mod kinematics;
+mod self_contact;
 pub mod sensors;
 mod step;
 
@@ -72,6 +75,10 @@ pub struct PhysicsConfig {
     pub contact_damping_ratio: f64,
     /// Angular damping of each link (air, skin), 1/s.
     pub link_angular_damping: f64,
+    /// Links not joined by a joint collide with each other, skin on skin at the world's
+    /// `friction.mu` (only pairs 3 or more apart are tested: 2 apart cannot touch
+    /// within the joint limits); false: they pass through each other (the old model).
+    pub self_collision: bool,
     /// Install the anisotropic friction hook (set from the world's friction).
     #[serde(skip)]
     pub anisotropic_hooks: bool,
@@ -96,6 +103,7 @@ impl Default for PhysicsConfig {
             contact_natural_frequency_hz: 120.0,
             contact_damping_ratio: 10.0,
             link_angular_damping: 0.05,
+            self_collision: true,
             anisotropic_hooks: false,
             temperature_c: 35.0,
             voltage_v: 48.0,
@@ -127,6 +135,7 @@ pub struct PhysicsPlant {
     imu: Vec<ImuState>,
     feedback: Vec<Feedback>,
     hooks: Option<hooks::AnisotropicFriction>,
+    self_contacts: self_contact::SelfContacts,
     time_ns: u64,
     rng: Pcg64,
 }
@@ -158,7 +167,8 @@ impl PhysicsPlant {
         ip.num_solver_iterations = config.solver_iterations;
         ip.num_internal_pgs_iterations = config.pgs_iterations;
         ip.warmstart_joints = config.warmstart_joints;
-        // Every contact is with a fixed body: the static softness is the one that acts.
+        // The same softness against fixed bodies (the world) and dynamic ones (another
+        // link, with self-collision).
         let soft = SpringCoefficients::new(
             config.contact_natural_frequency_hz as f32,
             config.contact_damping_ratio as f32,
@@ -167,7 +177,7 @@ impl PhysicsPlant {
         ip.static_contact_softness = soft;
         build_world(&mut world, spec)?;
         let poses = start_poses(spec, &config, head);
-        let chain = build_chain(&mut world, &config, &poses);
+        let chain = build_chain(&mut world, &config, &poses, spec.friction.mu as f32);
         let n = config.modules;
         let mut plant = Self {
             servos: Vec::with_capacity(n),
@@ -179,6 +189,7 @@ impl PhysicsPlant {
                 .friction
                 .anisotropic
                 .map(|coefficients| hooks::AnisotropicFriction { coefficients }),
+            self_contacts: self_contact::SelfContacts::new(chain.links.len()),
             time_ns: 0,
             rng: Pcg64::seed_from_u64(config.seed),
             world,
@@ -274,6 +285,8 @@ fn validate(c: &PhysicsConfig) -> Result<(), PhysicsError> {
 mod coulomb_model;
 #[cfg(test)]
 mod pole_tests;
+#[cfg(test)]
+mod self_collision_tests;
 #[cfg(test)]
 mod tests;
 #[cfg(test)]

@@ -2,6 +2,7 @@
 //! `substeps` rapier steps per plant step, the actuator torques coupling them.
 
 use super::PhysicsPlant;
+use super::build::TAG_LINK_BASE;
 use super::kinematics::twist_angle;
 use crate::emu::{ContactSummary, GroundTruth, LinkPose, Plant};
 use crate::protocol::{Command, ControlStrategy, Feedback};
@@ -51,6 +52,10 @@ impl PhysicsPlant {
         match &self.hooks {
             Some(hooks) => self.world.step_with_events(hooks, &()),
             None => self.world.step_with_events(&(), &()),
+        }
+        if self.config.self_collision {
+            self.self_contacts
+                .update(&self.world, &self.chain.colliders);
         }
     }
 
@@ -117,16 +122,33 @@ impl Plant for PhysicsPlant {
         }
     }
 
-    /// Collider pairs touching and their summed normal force (last substep's impulses).
+    /// Link–world collider pairs touching and their summed normal force (last
+    /// substep's impulses); link–link pairs are left to [`Plant::self_contacts`].
     fn contacts(&self) -> ContactSummary {
         let mut s = ContactSummary::default();
         let dt = f64::from(self.world.integration_parameters.dt);
+        let is_link = |h| {
+            self.world
+                .colliders
+                .get(h)
+                .is_some_and(|c| c.user_data >= TAG_LINK_BASE)
+        };
         for pair in self.world.narrow_phase.contact_pairs() {
-            if pair.has_any_active_contact() {
+            if pair.has_any_active_contact()
+                && !(is_link(pair.collider1) && is_link(pair.collider2))
+            {
                 s.pairs += 1;
                 s.normal_force_n += f64::from(pair.total_impulse_magnitude()) / dt;
             }
         }
         s
+    }
+
+    fn self_contacts(&self) -> u64 {
+        self.self_contacts.onsets()
+    }
+
+    fn self_contact_pairs_now(&self) -> usize {
+        self.self_contacts.pairs_now()
     }
 }

@@ -25,7 +25,7 @@ fn gait_pose(kind: GaitKind, params: &GaitParams, psi_rad: f64) -> Vec<f64> {
 
 /// Runs `kind` open loop for `duration_s` from its own start pose (no blend), calling
 /// `each(t_s, plant)` after every step; returns the plant.
-fn run_gait(
+pub(super) fn run_gait(
     spec: &WorldSpec,
     kind: GaitKind,
     params: GaitParams,
