@@ -211,7 +211,10 @@ pub(crate) fn finish(written: &[PathBuf], out: &std::path::Path, quiet: bool) {
             eprintln!("wrote {}", p.display());
         }
     }
-    print!("{}", std::fs::read_to_string(out.join("summary.md")).unwrap_or_default());
+    print!(
+        "{}",
+        std::fs::read_to_string(out.join("summary.md")).unwrap_or_default()
+    );
 }
 
 /// `--threads`, or the available parallelism.
