@@ -59,7 +59,8 @@ fn pegboard_writes_csv_summary_and_plots() {
             "path_m",
             "distance_m",
             "cycles_per_m",
-            "stuck_s"
+            "stuck_s",
+            "self_contacts"
         ]
     );
     assert_eq!(rows.len(), 3, "header + 2 layouts x 1 start:\n{csv}");

@@ -49,6 +49,8 @@ pub struct TrialMetrics {
     pub cycles_per_m: f64,
     /// Time in stuck windows, s.
     pub stuck_s: f64,
+    /// Contact onsets between non-adjacent links (set from the trial's record).
+    pub self_contacts: u64,
 }
 
 /// The figures of a centre path sampled every `sample_dt_s` (sample 0 at t = 0).
@@ -80,6 +82,7 @@ pub fn trial_metrics(
             config.stuck_window_s,
             config.stuck_move_m,
         ),
+        self_contacts: 0,
     }
 }
 

@@ -56,14 +56,18 @@ impl ExperimentModule for Pegboard {
     }
 
     fn metrics(&self, rec: &TrialRecord) -> TrialMetrics {
-        trial_metrics(
+        let m = trial_metrics(
             &rec.centre_m,
             rec.sample_dt_s,
             rec.seconds,
             rec.success,
             rec.temporal_freq_rad_s,
             &MetricsConfig::for_wave(rec.temporal_freq_rad_s),
-        )
+        );
+        TrialMetrics {
+            self_contacts: rec.self_contacts,
+            ..m
+        }
     }
 }
 

@@ -79,6 +79,7 @@ fn every_figure_is_a_png() {
                 distance_m: 1.0,
                 cycles_per_m: 5.0 + k as f64,
                 stuck_s: 0.0,
+                self_contacts: 0,
             },
             plotted: None,
         })

@@ -9,7 +9,8 @@ use super::runner::TrialResult;
 
 /// The CSV header; one row per trial follows in plan order.
 pub const CSV_HEADER: &str =
-    "controller,layout,start,success,seconds,cycles,path_m,distance_m,cycles_per_m,stuck_s";
+    "controller,layout,start,success,seconds,cycles,path_m,distance_m,cycles_per_m,stuck_s,\
+self_contacts";
 
 /// `results.csv` as text.
 pub fn results_csv(results: &[TrialResult]) -> String {
@@ -20,7 +21,7 @@ pub fn results_csv(results: &[TrialResult]) -> String {
         let m = &r.metrics;
         let _ = writeln!(
             out,
-            "{},{},{},{},{:.3},{:.4},{:.4},{:.4},{:.4},{:.2}",
+            "{},{},{},{},{:.3},{:.4},{:.4},{:.4},{:.4},{:.2},{}",
             csv_field(&r.controller),
             csv_field(&r.layout),
             r.start,
@@ -30,7 +31,8 @@ pub fn results_csv(results: &[TrialResult]) -> String {
             m.path_m,
             m.distance_m,
             m.cycles_per_m,
-            m.stuck_s
+            m.stuck_s,
+            m.self_contacts
         );
     }
     out
@@ -208,6 +210,7 @@ mod tests {
                 distance_m: 0.1,
                 cycles_per_m: cpm,
                 stuck_s: 2.0,
+                self_contacts: 3,
             },
             plotted: None,
         }
@@ -222,9 +225,9 @@ mod tests {
         assert_eq!(lines[0], CSV_HEADER);
         assert_eq!(
             lines[1],
-            "a,seed1000,0,true,10.000,1.5000,0.1500,0.1000,10.0000,2.00"
+            "a,seed1000,0,true,10.000,1.5000,0.1500,0.1000,10.0000,2.00,3"
         );
-        assert!(lines.iter().all(|l| l.split(',').count() == 10));
+        assert!(lines.iter().all(|l| l.split(',').count() == 11));
         assert_eq!(csv_field("a,b"), "\"a,b\"");
     }
 
