@@ -8,8 +8,7 @@ use super::metrics::{MIN_PATH_M, mean_sd_median};
 use super::runner::TrialResult;
 
 /// The CSV header; one row per trial follows in plan order.
-pub const CSV_HEADER: &str =
-    "controller,layout,start,success,seconds,cycles,path_m,distance_m,cycles_per_m,stuck_s,\
+pub const CSV_HEADER: &str = "controller,layout,start,success,seconds,cycles,path_m,distance_m,cycles_per_m,stuck_s,\
 self_contacts";
 
 /// `results.csv` as text.
