@@ -65,7 +65,8 @@ fn pegboard_writes_csv_summary_and_plots() {
     );
     assert_eq!(rows.len(), 3, "header + 2 layouts x 1 start:\n{csv}");
     for (row, layout) in rows[1..].iter().zip(["seed1000", "seed1001"]) {
-        assert_eq!(row.len(), 10);
+        assert_eq!(row.len(), 11);
+        assert_eq!(row[10], "0", "no self-contact in 2 s of open loop");
         assert_eq!(&row[..3], ["open_loop", layout, "0"]);
         assert_eq!(row[3], "false", "2 s cannot cross a 2 m board");
         assert_eq!(row[4], "2.000");
