@@ -155,7 +155,8 @@ impl DirectionalCompliance {
         }
     }
 
-    /// Phase and amplitude of joint `i` in its plane: `(φ_i, A_i, ∂θ/∂A factor)`.
+    /// Joint `i` in its plane: `(plane, φ_i, A_i, g)` with `θ_i = g·A_i·sin φ_i` (`g`: the
+    /// dorsal fade-in, 0 for a planar controller's dorsal joints, 1 for lateral ones).
     fn joint_wave(&self, i: usize) -> (usize, f64, f64, f64) {
         let n = self.layout.len();
         let s = self.layout.s[i];
