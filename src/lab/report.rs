@@ -93,13 +93,7 @@ pub struct ControllerSummary {
 
 /// Per-controller figures, controllers in the order they first appear in `results`.
 pub fn summarise(results: &[TrialResult]) -> Vec<ControllerSummary> {
-    let mut names: Vec<&str> = Vec::new();
-    for r in results {
-        if !names.contains(&r.controller.as_str()) {
-            names.push(&r.controller);
-        }
-    }
-    names
+    super::runner::controller_names(results)
         .into_iter()
         .map(|name| {
             let mine: Vec<_> = results

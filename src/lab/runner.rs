@@ -61,6 +61,17 @@ pub struct TrialResult<E: ExperimentModule = Pegboard> {
     pub plotted: Option<(Arc<WorldSpec>, E::Goal, TrialRecord)>,
 }
 
+/// The controllers of `results`, in the order they first appear.
+pub fn controller_names<E: ExperimentModule>(results: &[TrialResult<E>]) -> Vec<&str> {
+    let mut names: Vec<&str> = Vec::new();
+    for r in results {
+        if !names.contains(&r.controller.as_str()) {
+            names.push(&r.controller);
+        }
+    }
+    names
+}
+
 /// How to run.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct RunOptions {

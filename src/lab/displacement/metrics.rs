@@ -112,13 +112,7 @@ fn mean(values: impl Iterator<Item = f64>) -> f64 {
 
 /// Per controller, in the order they first appear.
 pub fn summarise(results: &[TrialResult<Displacement>]) -> Vec<ControllerSummary> {
-    let mut names: Vec<&str> = Vec::new();
-    for r in results {
-        if !names.contains(&r.controller.as_str()) {
-            names.push(&r.controller);
-        }
-    }
-    names
+    crate::lab::runner::controller_names(results)
         .into_iter()
         .map(|name| {
             let mine: Vec<_> = results.iter().filter(|r| r.controller == name).collect();
