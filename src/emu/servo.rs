@@ -29,6 +29,25 @@
 
 use crate::protocol::{Command, ControlStrategy};
 
+/// How a position command becomes the velocity loop's reference.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PositionLoop {
+    /// `v_ref = clamp(Kp·e, ±v_max)`, the integrator at `velocity_integral_nm_per_rad`.
+    /// The clamp caps what the position error alone can ask at `Kv·v_max` (0.7 N·m),
+    /// so a loaded joint leans on the fast integrator, and that makes any load above
+    /// 0.005 kg·m² oscillate (Routh): a lifted body thrashes (docs/emulator.md, "The
+    /// servo loop"). The default until the peg-board results are re-measured with
+    /// [`Profiled`](Self::Profiled).
+    #[default]
+    SpeedClamped,
+    /// The position loop chases a target that approaches the set-point at no more than
+    /// the motor's speed (a motion profile), `v_ref = Kp·(target − θ)` unclamped, so a
+    /// stalled joint gets full torque from its error; the integrator runs at the slow
+    /// `position_integral_nm_per_rad`. Stable for every load a joint can lift.
+    Profiled,
+}
+
 /// Physical and controller parameters of one servo. Defaults are SEA-Snake-like
 /// (SPEC §1: 205 g, 6.4 cm, 7 N·m, 3.46 rad/s).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Deserialize, serde::Serialize)]
@@ -50,8 +69,18 @@ pub struct ServoParams {
     pub position_gain_per_s: f64,
     /// Velocity loop proportional gain, N·m·s/rad.
     pub velocity_gain_nm_s_per_rad: f64,
-    /// Velocity loop integral gain, N·m/rad.
+    /// Velocity loop integral gain, N·m/rad (under a velocity-only command, and under a
+    /// position command in the [`PositionLoop::SpeedClamped`] loop).
     pub velocity_integral_nm_per_rad: f64,
+    /// How a position command drives the velocity loop (see [`PositionLoop`]).
+    pub position_loop: PositionLoop,
+    /// Velocity loop integral gain while a position is commanded in the
+    /// [`PositionLoop::Profiled`] loop, N·m/rad. Through the position gain it
+    /// integrates the position error at `Ki·Kp`, and the cascade is stable only while
+    /// `Kv·(Kv·Kp + Ki) > J·Ki·Kp` (Routh; `J` the load's inertia): 0.2 keeps up to
+    /// 0.2 kg·m² stable, past the 0.12 of the most a joint can lift (7 modules held out
+    /// at 7 N·m).
+    pub position_integral_nm_per_rad: f64,
     /// Torque loop bandwidth, 1/s (spring torque follows its reference with this rate).
     pub torque_bandwidth_per_s: f64,
     /// Rate at which a limp motor lets the spring unwind, 1/s.
@@ -77,6 +106,8 @@ impl Default for ServoParams {
             position_gain_per_s: 150.0,
             velocity_gain_nm_s_per_rad: 0.2,
             velocity_integral_nm_per_rad: 10.0,
+            position_loop: PositionLoop::SpeedClamped,
+            position_integral_nm_per_rad: 0.2,
             torque_bandwidth_per_s: 2000.0,
             limp_relax_per_s: 500.0,
             max_substep_s: 1e-4,
@@ -125,6 +156,10 @@ impl ServoParams {
                 "velocity_integral_nm_per_rad",
                 self.velocity_integral_nm_per_rad,
             ),
+            (
+                "position_integral_nm_per_rad",
+                self.position_integral_nm_per_rad,
+            ),
         ];
         for (name, value) in positive {
             if !(value.is_finite() && value > 0.0) {
@@ -157,6 +192,9 @@ pub struct Servo {
     motor_rad_s: f64,
     /// Velocity-loop integrator, N·m.
     integral_nm: f64,
+    /// The [`PositionLoop::Profiled`] loop's target: the set-point approached at no
+    /// more than the motor's speed.
+    target_rad: f64,
 }
 
 /// A set-point is commanded when it is finite (NaN, and defensively ±inf, are not).
@@ -174,6 +212,7 @@ impl Servo {
             output_rad_s: 0.0,
             motor_rad_s: 0.0,
             integral_nm: 0.0,
+            target_rad: angle_rad,
         }
     }
 
@@ -220,6 +259,7 @@ impl Servo {
         let limp = strategy == ControlStrategy::Off || cmd.is_limp();
         if limp {
             self.integral_nm = 0.0;
+            self.target_rad = self.output_rad;
         }
         for _ in 0..n as u64 {
             let ext = external_nm(self.output_rad, self.output_rad_s);
@@ -263,6 +303,7 @@ impl Servo {
         let limp = strategy == ControlStrategy::Off || cmd.is_limp();
         if limp {
             self.integral_nm = 0.0;
+            self.target_rad = self.output_rad;
         }
         let tau_s = self.torque_nm();
         let motor_rad_s = self.motor_speed(h, cmd, limp);
@@ -304,21 +345,42 @@ impl Servo {
         let pos = commanded(cmd.position_rad);
         let vel = commanded(cmd.velocity_rad_s);
         let tau_ff = commanded(cmd.torque_nm).unwrap_or(0.0);
-        let v_ref = match (pos, vel) {
-            (Some(x), v) => p.position_gain_per_s * (x - self.output_rad) + v.unwrap_or(0.0),
-            (None, Some(v)) => v,
+        let (v_ref, ki) = match (pos, vel) {
+            (Some(x), v) if p.position_loop == PositionLoop::Profiled => {
+                let step = p.max_motor_speed_rad_s * h;
+                self.target_rad += (x - self.target_rad).clamp(-step, step);
+                // Not clamped: a stalled joint's error must reach full torque; the
+                // profile limits the motion instead.
+                let v_ref =
+                    p.position_gain_per_s * (self.target_rad - self.output_rad) + v.unwrap_or(0.0);
+                (v_ref, p.position_integral_nm_per_rad)
+            }
+            (Some(x), v) => {
+                self.target_rad = x;
+                let v_ref = p.position_gain_per_s * (x - self.output_rad) + v.unwrap_or(0.0);
+                (
+                    v_ref.clamp(-p.max_motor_speed_rad_s, p.max_motor_speed_rad_s),
+                    p.velocity_integral_nm_per_rad,
+                )
+            }
+            (None, Some(v)) => {
+                // Velocity only: `J·s² + Kv·s + Ki`, stable for any load.
+                self.target_rad = self.output_rad;
+                let v_ref = v.clamp(-p.max_motor_speed_rad_s, p.max_motor_speed_rad_s);
+                (v_ref, p.velocity_integral_nm_per_rad)
+            }
             (None, None) => {
                 // Torque only: no motion loop.
                 self.integral_nm = 0.0;
+                self.target_rad = self.output_rad;
                 return tau_ff.clamp(-p.max_torque_nm, p.max_torque_nm);
             }
         };
-        let v_ref = v_ref.clamp(-p.max_motor_speed_rad_s, p.max_motor_speed_rad_s);
         let err = v_ref - self.output_rad_s;
         let unclamped = p.velocity_gain_nm_s_per_rad * err + self.integral_nm + tau_ff;
         // Anti-windup: integrate only while the output is not saturated (or it unwinds).
         if unclamped.abs() < p.max_torque_nm || unclamped.signum() != err.signum() {
-            self.integral_nm += p.velocity_integral_nm_per_rad * err * h;
+            self.integral_nm += ki * err * h;
             self.integral_nm = self.integral_nm.clamp(-p.max_torque_nm, p.max_torque_nm);
         }
         (p.velocity_gain_nm_s_per_rad * err + self.integral_nm + tau_ff)

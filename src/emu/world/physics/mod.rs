@@ -284,6 +284,8 @@ fn validate(c: &PhysicsConfig) -> Result<(), PhysicsError> {
 #[cfg(test)]
 mod coulomb_model;
 #[cfg(test)]
+mod no_slip_bound;
+#[cfg(test)]
 mod pole_tests;
 #[cfg(test)]
 mod self_collision_tests;

@@ -32,12 +32,13 @@ pub(super) fn run_gait(
     duration_s: f64,
     each: impl FnMut(f64, &PhysicsPlant),
 ) -> PhysicsPlant {
-    run_gait_from(spec, kind, params, 0.0, duration_s, each)
+    run_gait_from(spec, quiet(N), kind, params, 0.0, duration_s, each)
 }
 
 /// [`run_gait`] with the gait's clock starting at `t0_s` (its pose at that phase).
 fn run_gait_from(
     spec: &WorldSpec,
+    config: PhysicsConfig,
     kind: GaitKind,
     params: GaitParams,
     t0_s: f64,
@@ -52,7 +53,7 @@ fn run_gait_from(
         },
         ..spec.clone()
     };
-    let mut plant = PhysicsPlant::new(&spec, quiet(N)).unwrap();
+    let mut plant = PhysicsPlant::new(&spec, config).unwrap();
     let (l, mut pos) = (layout(), vec![0.0; N]);
     let gait = Serpenoid::for_layout(kind, &params, &l);
     let steps = (duration_s * 1e3).round() as usize;
@@ -158,13 +159,27 @@ fn travel_per_cycle(
     settle_s: f64,
     cycles: usize,
 ) -> (f64, f64, [f64; 2], [f64; 2]) {
+    travel_per_cycle_with(spec, quiet(N), kind, params, settle_s, cycles)
+}
+
+/// [`travel_per_cycle`] with the plant's `config`.
+fn travel_per_cycle_with(
+    spec: &WorldSpec,
+    config: PhysicsConfig,
+    kind: GaitKind,
+    params: GaitParams,
+    settle_s: f64,
+    cycles: usize,
+) -> (f64, f64, [f64; 2], [f64; 2]) {
     let cycle_s = 2.0 * PI / params.temporal_freq_rad_s;
     let mut marks: Vec<([f64; 3], [f64; 2])> = Vec::new();
     let mut next = settle_s;
-    run_gait(
+    run_gait_from(
         spec,
+        config,
         kind,
         params,
+        0.0,
         settle_s + cycle_s * cycles as f64 + 1e-3,
         |t, p| {
             if t >= next - 1e-9 {
@@ -205,6 +220,7 @@ fn rolling_rolls_sideways() {
     // stands on its ends).
     run_gait_from(
         &WorldSpec::default(),
+        quiet(N),
         GaitKind::Rolling,
         params,
         0.25 * cycle_s,
@@ -408,4 +424,75 @@ fn slithering_on_anisotropic_skin_moves_forward() {
         "slithering, anisotropic skin (axial 0.2, lateral 0.8): {forward:.3} m forward per cycle"
     );
     assert!(forward > 0.1, "{d:?}");
+}
+
+/// The physics with the servo's profiled position loop (`PositionLoop::Profiled`).
+fn profiled(modules: usize) -> PhysicsConfig {
+    let mut c = quiet(modules);
+    c.servo.position_loop = crate::emu::servo::PositionLoop::Profiled;
+    c
+}
+
+/// Sidewinding and rolling travel no further per cycle than the body could without its
+/// skin slipping (`no_slip_bound`), and a held 3-D pose comes to rest: with the
+/// profiled servo loop. With the speed-clamped loop (the default until the peg results
+/// are re-measured) a held sidewinding pose thrashes (links at 5 rad/s, flung 0.3 m up)
+/// and sidewinding covers 0.74 m per cycle, past the bound (printed here).
+#[test]
+fn three_d_gaits_stay_within_the_no_slip_bound() {
+    let radius = 0.5 * build::MODULE_DIAMETER_M;
+    for kind in [GaitKind::Sidewinding, GaitKind::Rolling] {
+        let params = GaitParams::default_for(kind);
+        let cycle_s = 2.0 * PI / params.temporal_freq_rad_s;
+        let bound = super::no_slip_bound::no_slip(kind, &params, &layout(), radius);
+        let travel = |config: PhysicsConfig| {
+            travel_per_cycle_with(&WorldSpec::default(), config, kind, params, cycle_s, 3).0
+        };
+        let (per_cycle, clamped) = (travel(profiled(N)), travel(quiet(N)));
+        println!(
+            "{kind:?}: {per_cycle:.3} m per cycle ({clamped:.3} with the speed-clamped \
+             servo loop); no-slip bound {:.3} m, the cross-section loop {:.3} m",
+            bound.bound_m, bound.loop_m
+        );
+        assert!(
+            per_cycle < bound.bound_m,
+            "{kind:?}: {per_cycle} vs {bound:?}"
+        );
+        assert!(
+            per_cycle > 0.2 * bound.bound_m,
+            "{kind:?} hardly moves: {per_cycle}"
+        );
+    }
+    // A held sidewinding pose comes to rest.
+    let params = GaitParams::default_for(GaitKind::Sidewinding);
+    let pose = gait_pose(GaitKind::Sidewinding, &params, 0.0);
+    let spec = WorldSpec {
+        start: crate::emu::world::StartPose {
+            joint_angles_rad: pose.clone(),
+            ..WorldSpec::default().start
+        },
+        ..WorldSpec::default()
+    };
+    let fastest = |config: PhysicsConfig| {
+        let mut plant = PhysicsPlant::new(&spec, config).unwrap();
+        let mut fastest = 0.0f64;
+        for k in 0..4000 {
+            plant.step(1e-3, &hold(&pose));
+            if k >= 2000 {
+                for l in 0..plant.link_count() {
+                    fastest = fastest.max(plant.link_angvel_rad_s(l).norm());
+                }
+            }
+        }
+        fastest
+    };
+    let (profiled_w, clamped_w) = (fastest(profiled(N)), fastest(quiet(N)));
+    println!(
+        "held sidewinding pose, 2-4 s: links up to {profiled_w:.3} rad/s ({clamped_w:.1} \
+         with the speed-clamped loop)"
+    );
+    assert!(
+        profiled_w < 0.2,
+        "a held sidewinding pose still moves at {profiled_w} rad/s"
+    );
 }
