@@ -114,6 +114,11 @@ fn results_are_deterministic_for_any_thread_count() {
     let other_seeds = tempfile::tempdir().unwrap();
     pegboard(other_seeds.path(), &["--layouts", "2", "--seed-base", "7"]);
     assert_ne!(read(&other_seeds.path().join("results.csv")), csv[0]);
+    // The servos' other position loop is another physics, so another run.
+    let profiled = tempfile::tempdir().unwrap();
+    let args = ["--layouts", "2", "--servo-loop", "profiled"];
+    pegboard(profiled.path(), &args);
+    assert_ne!(read(&profiled.path().join("results.csv")), csv[0]);
 }
 
 #[test]
@@ -205,6 +210,11 @@ fn bad_input_exits_2_with_a_clear_message() {
     let err = bad_input(&["pegboard", "--seconds", "0", "--out", out]);
     assert!(err.contains("time limit"), "{err}");
     bad_input(&["pegboard", "--layouts", "many"]);
+    let err = bad_input(&["pegboard", "--servo-loop", "stiff", "--out", out]);
+    assert!(
+        err.contains("speed-clamped") && err.contains("profiled"),
+        "{err}"
+    );
     let err = bad_input(&["pegboard", "--variant", "soft", "--out", out]);
     assert!(err.contains("LABEL=JSON"), "{err}");
     let err = bad_input(&[

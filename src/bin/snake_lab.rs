@@ -10,6 +10,7 @@ use snaked::lab::displacement::Terrain;
 
 #[path = "snake_lab/displacement.rs"]
 mod displacement;
+use snaked::emu::servo::PositionLoop;
 use snaked::emu::world::scenario::WorldScenario;
 use snaked::gait::GaitKind;
 use snaked::lab::PEGBOARD_CONTROLLERS;
@@ -90,6 +91,10 @@ struct Pegboard {
     /// of calibrating them on open ground first.
     #[arg(long)]
     no_calibrate: bool,
+    /// The emulated servos' position loop: `speed-clamped` (the default, unstable when
+    /// links are held in the air) or `profiled` (docs/emulator.md, "The servo loop").
+    #[arg(long, value_enum, default_value = "speed-clamped")]
+    servo_loop: PositionLoop,
 }
 
 fn main() -> ExitCode {
@@ -149,6 +154,7 @@ fn pegboard(args: Pegboard) -> Result<(), LabError> {
     }
     let trial = TrialConfig {
         limit_s: args.seconds,
+        servo_loop: args.servo_loop,
         ..TrialConfig::default()
     };
     let calibrations = if args.no_calibrate {

@@ -30,7 +30,17 @@
 use crate::protocol::{Command, ControlStrategy};
 
 /// How a position command becomes the velocity loop's reference.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize, serde::Serialize)]
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Default,
+    serde::Deserialize,
+    serde::Serialize,
+    clap::ValueEnum,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum PositionLoop {
     /// `v_ref = clamp(Kp·e, ±v_max)`, the integrator at `velocity_integral_nm_per_rad`.

@@ -13,7 +13,7 @@ use super::controllers::LabController;
 use super::trial::{TrialConfig, plant_of, trial_loop};
 use crate::controller::ControllerCommand;
 use crate::emu::world::WorldSpec;
-use crate::emu::world::physics::{PhysicsConfig, PhysicsPlant};
+use crate::emu::world::physics::PhysicsPlant;
 use crate::rt::control_loop::Flow;
 use crate::rt::messages::LoopRequest;
 
@@ -52,11 +52,7 @@ pub fn calibrate(
     config: &TrialConfig,
 ) -> Result<Option<Calibrated>, LabError> {
     let world = open_ground(ground);
-    let physics = PhysicsConfig {
-        modules: config.modules,
-        seed: CALIBRATION_SEED,
-        ..PhysicsConfig::default()
-    };
+    let physics = config.physics(CALIBRATION_SEED);
     let plant = PhysicsPlant::new(&world, physics).map_err(|source| LabError::Physics {
         trial: format!("calibration of {}", controller.label),
         source,

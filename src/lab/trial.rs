@@ -14,6 +14,7 @@ use super::experiment::Goal;
 use crate::bus::sim::{SimBus, SimBusConfig};
 use crate::controller::catalog::Catalog;
 use crate::emu::Plant;
+use crate::emu::servo::PositionLoop;
 use crate::emu::world::WorldSpec;
 use crate::emu::world::physics::{PhysicsConfig, PhysicsPlant};
 use crate::emu::world::scenario::MODULE_LENGTH_M;
@@ -42,6 +43,8 @@ pub struct TrialConfig {
     /// The selector's blend from the measured start pose into the gait, s (the
     /// daemon's default); the controller takes over when it ends.
     pub blend_time_s: f64,
+    /// The emulated servos' position loop.
+    pub servo_loop: PositionLoop,
 }
 
 impl Default for TrialConfig {
@@ -52,11 +55,23 @@ impl Default for TrialConfig {
             dt_s: 1e-3,
             sample_hz: 20.0,
             blend_time_s: DEFAULT_BLEND_TIME_S,
+            servo_loop: PositionLoop::default(),
         }
     }
 }
 
 impl TrialConfig {
+    /// The physics plant's configuration for a trial with sensor-noise seed `seed`.
+    pub fn physics(&self, seed: u64) -> PhysicsConfig {
+        let mut physics = PhysicsConfig {
+            modules: self.modules,
+            seed,
+            ..PhysicsConfig::default()
+        };
+        physics.servo.position_loop = self.servo_loop;
+        physics
+    }
+
     /// Loop cycles between two samples.
     pub fn steps_per_sample(&self) -> usize {
         (1.0 / (self.sample_hz * self.dt_s)).round().max(1.0) as usize
@@ -223,11 +238,7 @@ pub fn run_trial(
     config: &TrialConfig,
     recording: Option<TrialRecording<'_>>,
 ) -> Result<TrialRecord, LabError> {
-    let physics = PhysicsConfig {
-        modules: config.modules,
-        seed: noise_seed,
-        ..PhysicsConfig::default()
-    };
+    let physics = config.physics(noise_seed);
     let plant = PhysicsPlant::new(world, physics).map_err(|source| LabError::Physics {
         trial: format!("{} (seed {noise_seed})", controller.label),
         source,

@@ -3,6 +3,7 @@
 
 use std::path::PathBuf;
 
+use snaked::emu::servo::PositionLoop;
 use snaked::emu::world::scenario::WorldScenario;
 use snaked::gait::GaitKind;
 use snaked::lab::LabError;
@@ -63,6 +64,10 @@ pub struct Args {
     /// No progress bar, no list of written files.
     #[arg(long)]
     quiet: bool,
+    /// The emulated servos' position loop: `speed-clamped` (the default, unstable when
+    /// links are held in the air) or `profiled` (docs/emulator.md, "The servo loop").
+    #[arg(long, value_enum, default_value = "speed-clamped")]
+    servo_loop: PositionLoop,
 }
 
 pub fn run(terrain: Terrain, args: Args) -> Result<(), LabError> {
@@ -121,6 +126,7 @@ pub fn run(terrain: Terrain, args: Args) -> Result<(), LabError> {
     let trial = TrialConfig {
         modules: args.modules,
         limit_s: args.seconds,
+        servo_loop: args.servo_loop,
         ..TrialConfig::default()
     };
     let calibrations = if args.no_calibrate {

@@ -17,6 +17,7 @@ pub(crate) fn build(
         friction: Friction {
             mu: s.friction.mu,
             anisotropic: s.friction.anisotropic,
+            peg_mu: s.friction.peg_mu,
         },
         ..WorldSpec::default()
     };

@@ -77,6 +77,8 @@ impl Default for Ground {
 pub struct FrictionSpec {
     pub mu: f64,
     pub anisotropic: Option<Anisotropic>,
+    /// Skin–peg friction; default `mu` (docs/scenarios.md).
+    pub peg_mu: Option<f64>,
 }
 
 impl Default for FrictionSpec {
@@ -84,6 +86,7 @@ impl Default for FrictionSpec {
         Self {
             mu: 0.5,
             anisotropic: None,
+            peg_mu: None,
         }
     }
 }

@@ -349,6 +349,7 @@ fn invalid_values_name_the_file_and_key() {
         (BOARD.replace("[0.0, 2.0]", "[2.0, 2.0]"), "peg_board[0].region.x_m"),
         (BOARD.replace("0.16", "0.03"), "peg_board[0].min_spacing_m"),
         ("[friction]\nmu = nan".into(), "friction.mu"),
+        ("[friction]\npeg_mu = -0.1".into(), "friction.peg_mu"),
         ("[start]\nhead_m = [0, inf]".into(), "start.head_m"),
         ("[start]\nhead_m = [0]".into(), "start.head_m"),
         ("[[wall]]\nfrom_m = [0, 0]\nto_m = [0, 0]\nheight_m = 1\nthickness_m = 0.1".into(), "wall[0].to_m"),

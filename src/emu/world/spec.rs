@@ -10,6 +10,10 @@ pub struct Friction {
     /// Optional anisotropy: coefficients for sliding along the module's axis and across
     /// it (the cone becomes an ellipse); `None` = isotropic.
     pub anisotropic: Option<Anisotropic>,
+    /// Skin–peg friction (isotropic), when the pegs are smoother than the ground;
+    /// `None` = `mu` (and the anisotropy, as on the ground).
+    #[serde(default)]
+    pub peg_mu: Option<f64>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -24,6 +28,7 @@ impl Default for Friction {
         Self {
             mu: 0.5,
             anisotropic: None,
+            peg_mu: None,
         }
     }
 }

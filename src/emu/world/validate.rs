@@ -15,6 +15,9 @@ impl WorldScenario {
     pub fn validate(&self) -> R {
         let f = &self.friction;
         self.non_negative("friction.mu", f.mu)?;
+        if let Some(mu) = f.peg_mu {
+            self.non_negative("friction.peg_mu", mu)?;
+        }
         if let Some(a) = f.anisotropic {
             self.non_negative("friction.anisotropic.mu_axial", a.mu_axial)?;
             self.non_negative("friction.anisotropic.mu_lateral", a.mu_lateral)?;

@@ -66,15 +66,20 @@ pub fn build_world(world: &mut PhysicsWorld, spec: &WorldSpec) -> Result<(), Phy
     // Parry's cylinders stand along y: turn them to z.
     let upright = Vector::X * std::f32::consts::FRAC_PI_2;
     for p in &spec.pegs {
-        add(
-            world,
-            skin(ColliderBuilder::cylinder(
-                (0.5 * p.height_m) as f32,
-                (0.5 * p.diameter_m) as f32,
-            ))
-            .translation(v(p.x_m, p.y_m, 0.5 * p.height_m))
-            .rotation(upright),
-        );
+        let cylinder =
+            ColliderBuilder::cylinder((0.5 * p.height_m) as f32, (0.5 * p.diameter_m) as f32)
+                .translation(v(p.x_m, p.y_m, 0.5 * p.height_m))
+                .rotation(upright);
+        // Pegs of their own friction touch like poles: isotropic, their own coefficient.
+        let peg = match spec.friction.peg_mu {
+            None => skin(cylinder),
+            Some(peg_mu) => cylinder
+                .friction(peg_mu as f32)
+                .friction_combine_rule(own_coefficient_against_skin(peg_mu as f32, mu))
+                .collision_groups(groups)
+                .user_data(TAG_POLE),
+        };
+        add(world, peg);
     }
     for pole in &spec.poles {
         for s in &pole.sections {

@@ -128,6 +128,7 @@ fn anisotropic_friction_builds_and_steps() {
                 mu_axial: 0.2,
                 mu_lateral: 0.8,
             }),
+            peg_mu: None,
         },
         ..WorldSpec::default()
     };

@@ -415,6 +415,7 @@ fn slithering_on_anisotropic_skin_moves_forward() {
                 mu_axial: 0.2,
                 mu_lateral: 0.8,
             }),
+            peg_mu: None,
         },
         ..WorldSpec::default()
     };
@@ -494,5 +495,43 @@ fn three_d_gaits_stay_within_the_no_slip_bound() {
     assert!(
         profiled_w < 0.2,
         "a held sidewinding pose still moves at {profiled_w} rad/s"
+    );
+}
+
+/// With the profiled servo loop (no shaking), open-loop slithering along matched pegs
+/// is carried by the pegs' reaction only, and pegs as rough as the ground (µ 0.5) hold
+/// the body back; smooth pegs let it slide along them and push (docs/emulator.md).
+#[test]
+fn smooth_pegs_carry_slithering_that_rough_pegs_hold() {
+    let params = GaitParams::default_for(GaitKind::Slithering);
+    let cycles = 4;
+    let (pegs, fwd) = matched_pegs(&params);
+    let forward = |peg_mu: Option<f64>| {
+        let world = WorldSpec {
+            pegs: pegs.clone(),
+            friction: crate::emu::world::Friction {
+                peg_mu,
+                ..Default::default()
+            },
+            ..WorldSpec::default()
+        };
+        let (_, _, d, _) = travel_per_cycle_with(
+            &world,
+            profiled(N),
+            GaitKind::Slithering,
+            params,
+            0.5,
+            cycles,
+        );
+        (d[0] * fwd[0] + d[1] * fwd[1]) / cycles as f64
+    };
+    let (rough, smooth) = (forward(None), forward(Some(0.2)));
+    println!(
+        "matched pegs, profiled servo loop: {rough:.3} m per cycle forward at the ground's µ, {smooth:.3} at peg µ 0.2"
+    );
+    assert!(rough < 0.05, "{rough}");
+    assert!(
+        smooth > 0.08 && smooth > rough + 0.05,
+        "{smooth} vs {rough}"
     );
 }
