@@ -4,6 +4,7 @@
 //! - [`protocol`]: the module network's wire format.
 //! - [`bus`]: the loop's view of the modules (UDP or in-process emulator).
 //! - [`emu`]: the module emulator (plant, module endpoints, faults).
+//! - [`estimation`]: the body's pose from its IMUs and joint angles (virtual chassis).
 //! - [`gait`]: open-loop gaits and the selector that blends between them.
 //! - [`safety`]: the failsafe state machine.
 //! - [`shape`]: shape-based compliance and the controllers built on it.
@@ -18,6 +19,7 @@ pub mod controller;
 pub mod controllers;
 pub mod daemon;
 pub mod emu;
+pub mod estimation;
 pub mod gait;
 pub mod lab;
 pub mod protocol;

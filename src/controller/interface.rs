@@ -28,6 +28,8 @@ pub struct BodyEstimate {
     pub orientation_wxyz: [f64; 4],
     /// Heading of the body frame's forward axis in the ground plane, rad.
     pub heading_rad: f64,
+    /// The shape had no clear main axis (coiled): the axis is the last one kept.
+    pub round: bool,
 }
 
 impl Default for BodyEstimate {
@@ -37,6 +39,7 @@ impl Default for BodyEstimate {
             position_m: [0.0; 3],
             orientation_wxyz: [1.0, 0.0, 0.0, 0.0],
             heading_rad: 0.0,
+            round: false,
         }
     }
 }
