@@ -47,18 +47,13 @@ pub fn chassis(points: &[Vector3<f64>], previous: Option<&Chassis>) -> Chassis {
         cov += d * d.transpose();
     }
     let eig = SymmetricEigen::new(cov / n);
-    let (mut first, mut second) = (0, 1);
-    if eig.eigenvalues[second] > eig.eigenvalues[first] {
-        std::mem::swap(&mut first, &mut second);
-    }
-    let third = 3 - first - second;
-    if eig.eigenvalues[third] > eig.eigenvalues[first] {
-        second = first;
-        first = third;
-    } else if eig.eigenvalues[third] > eig.eigenvalues[second] {
-        second = third;
-    }
-    let (l1, l2) = (eig.eigenvalues[first], eig.eigenvalues[second]);
+    let mut order = [0usize, 1, 2];
+    order.sort_by(|&a, &b| eig.eigenvalues[b].total_cmp(&eig.eigenvalues[a]));
+    let (first, l1, l2) = (
+        order[0],
+        eig.eigenvalues[order[0]],
+        eig.eigenvalues[order[1]],
+    );
     let round = !(l1 > 0.0 && l2 < ROUND_RATIO * l1);
     let previous_x = previous.map(|c| c.rotation * Vector3::x());
     let head_side = points[0] - origin;

@@ -1,6 +1,6 @@
 //! The robot's pose from its own sensors (issue 11): the head's attitude from every
 //! module's IMU fused through the kinematics ([`attitude`]), the body's shape from the
-//! joint angles ([`chain`]), and the virtual chassis from both ([`chassis`]). As an
+//! joint angles ([`crate::gait::kinematics`]), and the virtual chassis from both ([`chassis`]). As an
 //! [`Estimator`] it fills [`BodyEstimate`] before the controllers run; allocation-free
 //! after construction. Not yet in the daemon's loop: unoptimised (the tests' debug
 //! build) one update costs about 0.4 ms of the 1 ms cycle (nalgebra's generic code at
@@ -11,7 +11,6 @@
 //! chassis' origin relative to the head, in world axes).
 
 pub mod attitude;
-pub mod chain;
 pub mod chassis;
 
 use nalgebra::{Isometry3, UnitQuaternion, Vector3};
@@ -78,7 +77,12 @@ impl Estimator for VirtualChassisEstimator {
             out.valid = false;
             return;
         }
-        chain::link_poses(&self.layout, &obs.position_rad[..n], &mut self.poses);
+        crate::gait::kinematics::link_poses(
+            Isometry3::identity(),
+            &self.layout,
+            &obs.position_rad[..n],
+            &mut self.poses,
+        );
         for (r, p) in self.rel_now.iter_mut().zip(&self.poses[1..]) {
             *r = p.rotation;
         }

@@ -4,6 +4,7 @@
 //! Everything here is pure: time comes in as an argument, nothing allocates after
 //! construction, nothing reads a clock. See `docs/gaits.md`.
 
+pub mod kinematics;
 pub mod layout;
 pub mod params;
 pub mod selector;

@@ -14,15 +14,11 @@
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use rapier3d::math::{Pose, Rotation, Vector};
 
-use crate::emu::plant::plane_of;
-use crate::gait::Plane;
+use crate::gait::{BodyLayout, Plane, kinematics};
 
-/// Joint axis of `plane` in both links' frames.
+/// Joint axis of `plane` in both links' frames ([`crate::gait::kinematics`]).
 pub fn axis_of(plane: Plane) -> Vector3<f64> {
-    match plane {
-        Plane::Lateral => Vector3::z(),
-        Plane::Dorsal => -Vector3::y(),
-    }
+    kinematics::axis_of(plane).into_inner()
 }
 
 /// Pose of the head link whose head end is at `head_m` and whose body points from
@@ -43,16 +39,9 @@ pub fn chain_poses(
     angles_rad: &[f64],
     link_length_m: f64,
 ) -> Vec<Isometry3<f64>> {
-    let half = Translation3::new(-0.5 * link_length_m, 0.0, 0.0);
-    let mut poses = Vec::with_capacity(angles_rad.len() + 1);
-    let mut pose = head;
-    poses.push(pose);
-    for (i, &a) in angles_rad.iter().enumerate() {
-        let axis = nalgebra::Unit::new_normalize(axis_of(plane_of(first, i)));
-        let rot = UnitQuaternion::from_axis_angle(&axis, a);
-        pose = pose * half * Isometry3::from_parts(Translation3::identity(), rot) * half;
-        poses.push(pose);
-    }
+    let layout = BodyLayout::alternating(angles_rad.len(), first, link_length_m);
+    let mut poses = vec![Isometry3::identity(); angles_rad.len() + 1];
+    kinematics::link_poses(head, &layout, angles_rad, &mut poses);
     poses
 }
 
