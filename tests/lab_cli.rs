@@ -60,13 +60,19 @@ fn pegboard_writes_csv_summary_and_plots() {
             "distance_m",
             "cycles_per_m",
             "stuck_s",
-            "self_contacts"
+            "self_contacts",
+            "side_exit",
+            "progress_m"
         ]
     );
     assert_eq!(rows.len(), 3, "header + 2 layouts x 1 start:\n{csv}");
     for (row, layout) in rows[1..].iter().zip(["seed1000", "seed1001"]) {
-        assert_eq!(row.len(), 11);
+        assert_eq!(row.len(), 13);
         assert_eq!(row[10], "0", "no self-contact in 2 s of open loop");
+        assert_eq!(row[11], "false", "no side exit in 2 s");
+        let progress_m: f64 = row[12].parse().unwrap();
+        let distance_m: f64 = row[7].parse().unwrap();
+        assert!(progress_m.abs() <= distance_m + 1e-4, "{row:?}");
         assert_eq!(&row[..3], ["open_loop", layout, "0"]);
         assert_eq!(row[3], "false", "2 s cannot cross a 2 m board");
         assert_eq!(row[4], "2.000");
@@ -75,7 +81,7 @@ fn pegboard_writes_csv_summary_and_plots() {
     }
     let summary = read(&dir.path().join("summary.md"));
     assert!(
-        summary.contains("| controller | trials | success |"),
+        summary.contains("| controller | trials | success | side exits |"),
         "{summary}"
     );
     assert!(

@@ -100,6 +100,15 @@ pub enum Edge {
 impl Edge {
     const ALL: [Edge; 4] = [Edge::XMin, Edge::XMax, Edge::YMin, Edge::YMax];
 
+    fn opposite(self) -> Edge {
+        match self {
+            Edge::XMin => Edge::XMax,
+            Edge::XMax => Edge::XMin,
+            Edge::YMin => Edge::YMax,
+            Edge::YMax => Edge::YMin,
+        }
+    }
+
     fn outward_normal(self) -> [f64; 2] {
         match self {
             Edge::XMin => [-1.0, 0.0],
@@ -135,8 +144,15 @@ impl Board {
         Self { region, entry }
     }
 
-    /// True when `p` lies beyond an edge other than the entry edge.
+    /// True when `p` lies beyond an edge other than the entry edge (the thesis ends a
+    /// trial there: "the front half of the robot left the outer boundary of the pegs").
     pub fn crossed(&self, p: [f64; 2]) -> bool {
+        self.exit(p).is_some()
+    }
+
+    /// Which way `p` has left the board: by the far edge (opposite the entry: across
+    /// it), by a side, or not at all (inside, or back out by the entry edge).
+    pub fn exit(&self, p: [f64; 2]) -> Option<Exit> {
         let r = &self.region;
         let beyond = |e: Edge| match e {
             Edge::XMin => p[0] < r.x_m[0],
@@ -144,8 +160,33 @@ impl Board {
             Edge::YMin => p[1] < r.y_m[0],
             Edge::YMax => p[1] > r.y_m[1],
         };
-        Edge::ALL.into_iter().any(|e| e != self.entry && beyond(e))
+        let far = self.entry.opposite();
+        if beyond(far) {
+            Some(Exit::Far)
+        } else if Edge::ALL
+            .into_iter()
+            .any(|e| e != self.entry && e != far && beyond(e))
+        {
+            Some(Exit::Side)
+        } else {
+            None
+        }
     }
+
+    /// The board's forward direction, across it from the entry edge to the far one.
+    pub fn forward(&self) -> [f64; 2] {
+        let n = self.entry.outward_normal();
+        [-n[0], -n[1]]
+    }
+}
+
+/// How a trial left the board.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Exit {
+    /// Across: by the edge opposite the entry (the experiment's success).
+    Far,
+    /// By one of the two side edges: the trial ends (as the thesis's did), not a crossing.
+    Side,
 }
 
 /// A sensor-noise seed for start `start` of the layout seeded `layout_seed`: the same
@@ -197,6 +238,22 @@ mod tests {
         assert!(b.crossed([2.01, 0.0]), "beyond the far edge");
         assert!(b.crossed([1.0, 0.61]), "beyond a side");
         assert!(b.crossed([1.0, -0.61]), "beyond the other side");
+    }
+
+    #[test]
+    fn only_the_far_edge_is_across_and_forward_points_to_it() {
+        let b = board(PI);
+        assert_eq!(b.exit([2.01, 0.0]), Some(Exit::Far));
+        assert_eq!(b.exit([2.01, 0.7]), Some(Exit::Far), "a far corner is across");
+        assert_eq!(b.exit([1.0, 0.61]), Some(Exit::Side));
+        assert_eq!(b.exit([1.0, -0.61]), Some(Exit::Side));
+        assert_eq!(b.exit([-0.3, 0.0]), None, "backed out");
+        assert_eq!(b.exit([1.0, 0.0]), None);
+        assert_eq!(b.forward(), [1.0, 0.0]);
+        let up = board(-PI / 2.0); // enters by y_min, crosses to y_max
+        assert_eq!(up.forward(), [0.0, 1.0]);
+        assert_eq!(up.exit([1.0, 0.61]), Some(Exit::Far));
+        assert_eq!(up.exit([2.01, 0.0]), Some(Exit::Side));
     }
 
     #[test]

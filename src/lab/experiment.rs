@@ -39,6 +39,6 @@ pub trait ExperimentModule: Sync {
         modules: usize,
         start: u64,
     ) -> Result<(WorldSpec, Self::Goal), LabError>;
-    /// The figures of a finished trial.
-    fn metrics(&self, rec: &TrialRecord) -> Self::Metrics;
+    /// The figures of a finished trial on the world whose goal was `goal`.
+    fn metrics(&self, goal: &Self::Goal, rec: &TrialRecord) -> Self::Metrics;
 }

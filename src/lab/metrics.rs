@@ -35,8 +35,13 @@ impl MetricsConfig {
 /// One trial's figures.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TrialMetrics {
-    /// The front half crossed the board before the time limit.
+    /// The front half crossed the board, leaving it by the far edge, before the limit.
     pub success: bool,
+    /// The front half left the board by a side edge (the trial ended; not a success).
+    pub side_exit: bool,
+    /// The centre's signed displacement across the board (towards its far edge), first
+    /// to last position, m: negative when the body drifted back.
+    pub progress_m: f64,
     /// Trial length: until success, or the limit, s.
     pub seconds: f64,
     /// Nominal body-wave cycles in that time, `ωT·t / 2π`.
@@ -83,6 +88,8 @@ pub fn trial_metrics(
             config.stuck_move_m,
         ),
         self_contacts: 0,
+        side_exit: false,
+        progress_m: 0.0,
     }
 }
 

@@ -1,12 +1,14 @@
 //! The peg-board experiment (SPEC §5, thesis Fig. 4.6): slithering controllers on
 //! seeded irregular peg boards, a trial ending when the front half of the body leaves
-//! the board on the far side; time to traverse in body-wave cycles per metre.
+//! the board (as the thesis's did); success = it left across, by the far edge (a side
+//! exit is counted apart); time to traverse in body-wave cycles per metre, and the
+//! centre's signed progress across the board.
 
 use super::LabError;
-use super::board::{Board, Layout};
+use super::board::{Board, Exit, Layout};
 use super::experiment::{ExperimentModule, Goal};
 use super::metrics::{MetricsConfig, TrialMetrics, trial_metrics};
-use super::trial::{TrialRecord, front_half_centre};
+use super::trial::{TrialRecord, front_half_centre, front_half_of};
 use crate::emu::Plant;
 use crate::emu::world::WorldSpec;
 use crate::gait::GaitKind;
@@ -55,17 +57,32 @@ impl ExperimentModule for Pegboard {
         layout.world(modules, start)
     }
 
-    fn metrics(&self, rec: &TrialRecord) -> TrialMetrics {
+    fn metrics(&self, board: &Board, rec: &TrialRecord) -> TrialMetrics {
+        // The trial ended at the sample it left the board: where the front half was then.
+        let exit = if rec.success {
+            board.exit(front_half_of(rec.end_links_m.iter().copied()))
+        } else {
+            None
+        };
         let m = trial_metrics(
             &rec.centre_m,
             rec.sample_dt_s,
             rec.seconds,
-            rec.success,
+            exit == Some(Exit::Far),
             rec.temporal_freq_rad_s,
             &MetricsConfig::for_wave(rec.temporal_freq_rad_s),
         );
+        let progress_m = match (rec.centre_m.first(), rec.centre_m.last()) {
+            (Some(a), Some(b)) => {
+                let f = board.forward();
+                (b[0] - a[0]) * f[0] + (b[1] - a[1]) * f[1]
+            }
+            _ => 0.0,
+        };
         TrialMetrics {
             self_contacts: rec.self_contacts,
+            side_exit: exit == Some(Exit::Side),
+            progress_m,
             ..m
         }
     }

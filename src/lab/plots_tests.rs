@@ -80,6 +80,8 @@ fn every_figure_is_a_png() {
                 cycles_per_m: 5.0 + k as f64,
                 stuck_s: 0.0,
                 self_contacts: 0,
+                side_exit: false,
+                progress_m: 1.0,
             },
             plotted: None,
         })

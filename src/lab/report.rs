@@ -9,7 +9,7 @@ use super::runner::TrialResult;
 
 /// The CSV header; one row per trial follows in plan order.
 pub const CSV_HEADER: &str = "controller,layout,start,success,seconds,cycles,path_m,distance_m,cycles_per_m,stuck_s,\
-self_contacts";
+self_contacts,side_exit,progress_m";
 
 /// `results.csv` as text.
 pub fn results_csv(results: &[TrialResult]) -> String {
@@ -20,7 +20,7 @@ pub fn results_csv(results: &[TrialResult]) -> String {
         let m = &r.metrics;
         let _ = writeln!(
             out,
-            "{},{},{},{},{:.3},{:.4},{:.4},{:.4},{:.4},{:.2},{}",
+            "{},{},{},{},{:.3},{:.4},{:.4},{:.4},{:.4},{:.2},{},{},{:.4}",
             csv_field(&r.controller),
             csv_field(&r.layout),
             r.start,
@@ -31,7 +31,9 @@ pub fn results_csv(results: &[TrialResult]) -> String {
             m.distance_m,
             m.cycles_per_m,
             m.stuck_s,
-            m.self_contacts
+            m.self_contacts,
+            m.side_exit,
+            m.progress_m
         );
     }
     out
@@ -84,11 +86,13 @@ pub struct ControllerSummary {
     pub controller: String,
     pub trials: usize,
     pub successes: usize,
+    pub side_exits: usize,
     /// Cycles per metre over all trials: mean, sample sd, median.
     pub cycles_per_m: (f64, f64, f64),
     pub mean_stuck_s: f64,
     pub mean_seconds: f64,
     pub mean_path_m: f64,
+    pub mean_progress_m: f64,
 }
 
 /// Per-controller figures, controllers in the order they first appear in `results`.
@@ -109,10 +113,12 @@ pub fn summarise(results: &[TrialResult]) -> Vec<ControllerSummary> {
                 controller: name.to_owned(),
                 trials: mine.len(),
                 successes: mine.iter().filter(|m| m.success).count(),
+                side_exits: mine.iter().filter(|m| m.side_exit).count(),
                 cycles_per_m: mean_sd_median(&cpm).expect("a named controller has trials"),
                 mean_stuck_s: mean(&|m| m.stuck_s),
                 mean_seconds: mean(&|m| m.seconds),
                 mean_path_m: mean(&|m| m.path_m),
+                mean_progress_m: mean(&|m| m.progress_m),
             }
         })
         .collect()
@@ -132,26 +138,28 @@ pub fn summary_markdown(results: &[TrialResult], ctx: &SummaryContext) -> String
         ctx.limit_s
     );
     s.push_str(
-        "| controller | trials | success | cycles/m mean ± sd | cycles/m median \
-         | stuck s (mean) | trial s (mean) | path m (mean) |\n\
-         | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n",
+        "| controller | trials | success | side exits | cycles/m mean ± sd | cycles/m median \
+         | stuck s (mean) | trial s (mean) | path m (mean) | progress m (mean) |\n\
+         | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n",
     );
     for c in summarise(results) {
         let (mean, sd, median) = c.cycles_per_m;
         let _ = writeln!(
             s,
-            "| {} | {} | {}/{} ({:.0} %) | {:.2} ± {:.2} | {:.2} | {:.1} | {:.1} | {:.2} |",
+            "| {} | {} | {}/{} ({:.0} %) | {} | {:.2} ± {:.2} | {:.2} | {:.1} | {:.1} | {:.2} | {:+.2} |",
             c.controller,
             c.trials,
             c.successes,
             c.trials,
             100.0 * c.successes as f64 / c.trials as f64,
+            c.side_exits,
             mean,
             sd,
             median,
             c.mean_stuck_s,
             c.mean_seconds,
-            c.mean_path_m
+            c.mean_path_m,
+            c.mean_progress_m
         );
     }
     let _ = writeln!(
@@ -159,8 +167,11 @@ pub fn summary_markdown(results: &[TrialResult], ctx: &SummaryContext) -> String
         "\nTime to traverse = nominal body-wave cycles (ωT·t/2π at the end of the trial) per \
          metre of the body centre's smoothed path; lower is better. Every trial counts, failed \
          ones with the cycles and path they had at the time limit; a smoothed path under \
-         {:.0} cm counts as {:.0} cm. Success = the front half of the body left the board \
-         (not by the edge it entered) before the limit. Stuck = time in 2 s windows in which \
+         {:.0} cm counts as {:.0} cm. A trial ends when the front half of the body leaves \
+         the board by any edge but the one it entered (as the thesis's did); success = it left \
+         by the far edge, across the board; side exits are counted apart. Progress = the \
+         centre's signed displacement towards the far edge, first to last position (negative: \
+         it drifted back). Stuck = time in 2 s windows in which \
          the smoothed centre moved under 2 cm. Definitions: docs/lab.md.",
         MIN_PATH_M * 100.0,
         MIN_PATH_M * 100.0
@@ -204,6 +215,8 @@ mod tests {
                 cycles_per_m: cpm,
                 stuck_s: 2.0,
                 self_contacts: 3,
+                side_exit: !success && start == 2,
+                progress_m: if success { 2.0 } else { -0.05 },
             },
             plotted: None,
         }
@@ -218,9 +231,10 @@ mod tests {
         assert_eq!(lines[0], CSV_HEADER);
         assert_eq!(
             lines[1],
-            "a,seed1000,0,true,10.000,1.5000,0.1500,0.1000,10.0000,2.00,3"
+            "a,seed1000,0,true,10.000,1.5000,0.1500,0.1000,10.0000,2.00,3,false,2.0000"
         );
-        assert!(lines.iter().all(|l| l.split(',').count() == 11));
+        assert!(lines[2].ends_with(",false,-0.0500"), "{}", lines[2]);
+        assert!(lines.iter().all(|l| l.split(',').count() == 13));
         assert_eq!(csv_field("a,b"), "\"a,b\"");
     }
 
@@ -236,6 +250,8 @@ mod tests {
         assert_eq!(sum.len(), 2);
         assert_eq!(sum[0].controller, "b", "order of appearance");
         assert_eq!((sum[0].trials, sum[0].successes), (3, 1));
+        assert_eq!(sum[0].side_exits, 1, "start 2 left by a side");
+        assert!((sum[0].mean_progress_m - (2.0 - 0.1) / 3.0).abs() < 1e-12);
         assert_eq!(sum[0].cycles_per_m.0, 30.0);
         assert_eq!(sum[0].cycles_per_m.2, 20.0);
         let md = summary_markdown(
@@ -256,10 +272,10 @@ mod tests {
             "{md}"
         );
         assert!(
-            md.contains("| b | 3 | 1/3 (33 %) | 30.00 ± 26.46 | 20.00 |"),
+            md.contains("| b | 3 | 1/3 (33 %) | 1 | 30.00 ± 26.46 | 20.00 |"),
             "{md}"
         );
-        assert!(md.contains("| a | 1 | 1/1 (100 %) | 5.00 ± 0.00 | 5.00 |"));
+        assert!(md.contains("| a | 1 | 1/1 (100 %) | 0 | 5.00 ± 0.00 | 5.00 |"));
         assert!(md.contains("`cycles_per_m.png`"));
     }
 }

@@ -208,7 +208,7 @@ pub fn run<E: ExperimentModule>(
             &exp.trial,
             recording,
         )?;
-        let metrics = module.metrics(&rec);
+        let metrics = module.metrics(&w.goal, &rec);
         let first = w.layout == 0 && w.start == 0 && w.repeat == 0;
         Ok(TrialResult {
             controller: controller.label.clone(),

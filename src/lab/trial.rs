@@ -99,7 +99,8 @@ pub struct TrialRecord {
     pub signals: Vec<Vec<f64>>,
     /// Simulated time at the end, s.
     pub seconds: f64,
-    /// The front half crossed the board before the limit.
+    /// The goal ended the trial before the limit (on a peg board: the front half left
+    /// it, by any edge but the entry; the experiment's metrics say which).
     pub success: bool,
     /// The gait's nominal temporal frequency, rad/s.
     pub temporal_freq_rad_s: f64,
@@ -335,10 +336,17 @@ fn links(plant: &dyn Plant) -> Vec<[f64; 2]> {
 
 /// Mean ground-plane position of the front half of the links (`0 .. links/2`), m.
 pub fn front_half_centre(plant: &dyn Plant) -> [f64; 2] {
-    let half = (plant.link_count() / 2).max(1);
-    let mut c = [0.0, 0.0];
-    for k in 0..half {
+    front_half_of((0..plant.link_count()).map(|k| {
         let p = plant.link_pose(k).position_m;
+        [p[0], p[1]]
+    }))
+}
+
+/// The front half's centre of link positions given head first (as recorded).
+pub fn front_half_of(links: impl ExactSizeIterator<Item = [f64; 2]>) -> [f64; 2] {
+    let half = (links.len() / 2).max(1);
+    let mut c = [0.0, 0.0];
+    for p in links.take(half) {
         c = [c[0] + p[0], c[1] + p[1]];
     }
     [c[0] / half as f64, c[1] / half as f64]

@@ -199,7 +199,7 @@ mod tests {
         let m = Displacement {
             terrain: Terrain::PegArray,
         }
-        .metrics(&rec);
+        .metrics(&crate::lab::displacement::FullTime, &rec);
         assert!(
             (m.velocity_bl_min - 1.3 / 1.024 / 2.0).abs() < 1e-12,
             "16 modules"

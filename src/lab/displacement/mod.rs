@@ -105,7 +105,7 @@ impl ExperimentModule for Displacement {
         Ok((layout.scenario.generate_trial(modules, start)?, FullTime))
     }
 
-    fn metrics(&self, rec: &TrialRecord) -> DisplacementMetrics {
+    fn metrics(&self, _goal: &FullTime, rec: &TrialRecord) -> DisplacementMetrics {
         let modules = rec.start_links_m.len().saturating_sub(1).max(1);
         displacement_metrics(rec, modules as f64 * MODULE_LENGTH_M)
     }
