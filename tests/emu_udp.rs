@@ -65,7 +65,9 @@ fn realtime_protocol_end_to_end() {
 
     // Commands move the joint; feedback echoes the command seq.
     let mut last_seq = 0;
-    let end = Instant::now() + Duration::from_millis(800);
+    // 2 s: the servo's slow position integral (docs/emulator.md, "The servo loop") takes
+    // the obstacle's 2 N·m off the position error with a time constant of about 1.7 s.
+    let end = Instant::now() + Duration::from_millis(2000);
     while Instant::now() < end {
         last_seq = c.send(m1, S, &Message::Command(Command::position(0.3)));
         // Paces the loop and drains the feedback stream so what follows is fresh.

@@ -4,12 +4,12 @@
 //!
 //! What one board shows end to end: the compliant controller engages, the pegs' torques
 //! come back over UDP and reshape the wave (window amplitudes leave their nominal value,
-//! the phase runs late), the shape-forces are non-zero, and the body gets through the
-//! pegs. Whether it beats open loop on one board is a coin toss in this physics (one
-//! trial's outcome swings with the start transient; on the lab's board seed 1002 the
-//! in-process lab had open loop stuck 28 of 30 s and the compliant controller 2 s, over
-//! UDP both moved about 0.4-0.5 m): the contrast is a statistic, and the lab measures it
-//! over 40 trials (docs/lab.md). This test prints both runs' figures.
+//! the phase runs late) and the shape-forces are non-zero. It no longer asserts that the
+//! body gets through: that came from the old speed-clamped servo loop's shaking
+//! (docs/emulator.md, "The servo loop"); with the stable loop neither controller
+//! slithers forward on the thesis board (docs/measurements.md). Whether one beats the
+//! other is a statistic the lab measures over many trials (docs/lab.md). This test
+//! prints both runs' figures.
 mod common;
 
 use std::path::Path;
@@ -129,13 +129,12 @@ fn run(controller: &str) -> Outcome {
 }
 
 #[test]
-fn compliant_slithering_over_udp_reshapes_to_the_pegs_and_gets_through() {
+fn compliant_slithering_over_udp_reshapes_to_the_pegs() {
     let open = run("open_loop");
     let compliant = run("a_ws_omega");
-    assert!(
-        compliant.progress_m > 0.3,
-        "compliant moved {:.3} m",
-        compliant.progress_m
+    println!(
+        "progress along the board in {SIM_S} s: open loop {:+.3} m, a_ws_omega {:+.3} m",
+        open.progress_m, compliant.progress_m
     );
     assert!(
         compliant.amplitude_excursion_rad > 0.05,
@@ -147,7 +146,6 @@ fn compliant_slithering_over_udp_reshapes_to_the_pegs_and_gets_through() {
         "{:.3}",
         compliant.min_phase_lag_rad
     );
-    // Open loop never reports a shape (its wave is fixed) and moved too on this board.
+    // Open loop never reports a shape (its wave is fixed).
     assert_eq!(open.amplitude_excursion_rad, 0.0);
-    assert!(open.progress_m > 0.0);
 }

@@ -91,9 +91,10 @@ struct Pegboard {
     /// of calibrating them on open ground first.
     #[arg(long)]
     no_calibrate: bool,
-    /// The emulated servos' position loop: `speed-clamped` (the default, unstable when
-    /// links are held in the air) or `profiled` (docs/emulator.md, "The servo loop").
-    #[arg(long, value_enum, default_value = "speed-clamped")]
+    /// The emulated servos' position loop: `profiled` (the default) or `speed-clamped`
+    /// (the loop before 2026-12-02, unstable when links are held in the air; the earlier
+    /// lab results were measured with it: docs/emulator.md, "The servo loop").
+    #[arg(long, value_enum, default_value = "profiled")]
     servo_loop: PositionLoop,
 }
 

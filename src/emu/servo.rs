@@ -47,14 +47,14 @@ pub enum PositionLoop {
     /// The clamp caps what the position error alone can ask at `Kv·v_max` (0.7 N·m),
     /// so a loaded joint leans on the fast integrator, and that makes any load above
     /// 0.005 kg·m² oscillate (Routh): a lifted body thrashes (docs/emulator.md, "The
-    /// servo loop"). The default until the peg-board results are re-measured with
-    /// [`Profiled`](Self::Profiled).
-    #[default]
+    /// servo loop"). The default until 2026-12-02; kept to reproduce the results
+    /// measured with it.
     SpeedClamped,
     /// The position loop chases a target that approaches the set-point at no more than
     /// the motor's speed (a motion profile), `v_ref = Kp·(target − θ)` unclamped, so a
     /// stalled joint gets full torque from its error; the integrator runs at the slow
     /// `position_integral_nm_per_rad`. Stable for every load a joint can lift.
+    #[default]
     Profiled,
 }
 
@@ -116,7 +116,7 @@ impl Default for ServoParams {
             position_gain_per_s: 150.0,
             velocity_gain_nm_s_per_rad: 0.2,
             velocity_integral_nm_per_rad: 10.0,
-            position_loop: PositionLoop::SpeedClamped,
+            position_loop: PositionLoop::Profiled,
             position_integral_nm_per_rad: 0.2,
             torque_bandwidth_per_s: 2000.0,
             limp_relax_per_s: 500.0,

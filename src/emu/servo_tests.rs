@@ -80,8 +80,9 @@ fn large_step_takes_at_least_the_speed_limited_time() {
 #[test]
 fn external_torque_shows_up_with_documented_sign() {
     let mut s = Servo::new(ServoParams::default(), 0.0);
-    // Push the joint negative while it holds position zero.
-    run(&mut s, Command::position(0.0), 1000, -2.0);
+    // Push the joint negative while it holds position zero (5 s: the slow position
+    // integral takes the push off the error with a 1 s time constant).
+    run(&mut s, Command::position(0.0), 5000, -2.0);
     assert!(
         (s.torque_nm() - 2.0).abs() < 0.05,
         "torque {}",
@@ -242,7 +243,13 @@ fn a_heavy_lifted_load_settles_in_the_profiled_loop_only() {
         let p = hold_peaks(profiled(), inertia);
         assert!(p[3] < 0.05, "J {inertia}: {p:.3?}");
     }
-    let clamped = hold_peaks(ServoParams::default(), 0.12);
+    let clamped = hold_peaks(
+        ServoParams {
+            position_loop: PositionLoop::SpeedClamped,
+            ..ServoParams::default()
+        },
+        0.12,
+    );
     assert!(
         clamped[11] > 1.0,
         "the speed-clamped loop settled: {clamped:.3?}"

@@ -244,7 +244,11 @@ mod tests {
     fn only_the_far_edge_is_across_and_forward_points_to_it() {
         let b = board(PI);
         assert_eq!(b.exit([2.01, 0.0]), Some(Exit::Far));
-        assert_eq!(b.exit([2.01, 0.7]), Some(Exit::Far), "a far corner is across");
+        assert_eq!(
+            b.exit([2.01, 0.7]),
+            Some(Exit::Far),
+            "a far corner is across"
+        );
         assert_eq!(b.exit([1.0, 0.61]), Some(Exit::Side));
         assert_eq!(b.exit([1.0, -0.61]), Some(Exit::Side));
         assert_eq!(b.exit([-0.3, 0.0]), None, "backed out");
