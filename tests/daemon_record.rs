@@ -65,14 +65,22 @@ fn the_daemon_records_a_run_and_finishes_the_file_on_sigterm() {
     d.signal(libc::SIGTERM);
     assert!(d.wait(Duration::from_secs(30)).success(), "exit 0");
 
-    let (counts, msgs) = read(&file, &["/joints", "/events", "/controller/signals"]);
+    let (counts, msgs) = read(
+        &file,
+        &[
+            "/joints",
+            "/events",
+            "/controller/signals",
+            "/body/estimate",
+        ],
+    );
     let cycles: Vec<u64> = msgs
         .iter()
         .filter(|(t, _)| t == "/joints")
         .map(|(_, v)| v["cycle"].as_u64().expect("cycle"))
         .collect();
     assert!(cycles.len() > 2000, "{counts:?}");
-    for topic in ["/commands", "/imu", "/controller/signals"] {
+    for topic in ["/commands", "/imu", "/body/estimate", "/controller/signals"] {
         assert_eq!(counts[topic], cycles.len() as u64, "{topic}: {counts:?}");
     }
     // Cycles come in order; a gap is a skipped period (an overrun of this debug build
@@ -115,6 +123,15 @@ fn the_daemon_records_a_run_and_finishes_the_file_on_sigterm() {
         .iter()
         .any(|(t, v)| t == "/controller/signals" && v["signals"]["phase_lag_rad"].is_number());
     assert!(named, "compliant slithering's signals by name");
+    // The pose estimate ran in the loop: a valid body frame with a finite heading.
+    let estimated = msgs.iter().rfind(|(t, _)| t == "/body/estimate");
+    let (_, body) = estimated.expect("body estimates recorded");
+    assert_eq!(body["valid"], true, "{body}");
+    assert!(
+        body["heading_rad"].as_f64().is_some_and(f64::is_finite),
+        "{body}"
+    );
+    assert_eq!(body["orientation_wxyz"].as_array().map(Vec::len), Some(4));
 
     // The independent reader, where it is installed (.ci/run installs it).
     let python = Command::new("python3")

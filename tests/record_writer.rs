@@ -276,8 +276,9 @@ fn status_reports_progress_and_the_cap() {
     let s = rec.status();
     assert_eq!(s.items, 100);
     assert_eq!(s.capped, Some(CapReason::MaxDuration));
-    // Joints, commands, IMU, signals a cycle over 0..=10 ms, and the 3-D pair at 0 ms.
-    assert_eq!(s.messages_written, 11 * 4 + 2);
+    // Joints, commands, IMU, body estimate, signals a cycle over 0..=10 ms, and the 3-D
+    // pair at 0 ms.
+    assert_eq!(s.messages_written, 11 * 5 + 2);
     assert!(s.bytes > 0, "the finished file has its size");
     assert_eq!((s.dropped, s.live_clients), (0, 0));
     rec.finish().expect("finish");

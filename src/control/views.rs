@@ -24,9 +24,19 @@ pub(crate) fn status(s: &Snapshot, info: &DaemonInfo, catalog: &Catalog) -> Valu
         "requests_refused": s.requests_refused,
         "joints": joints_summary(s),
         "controller": telemetry_view(&s.controller, catalog),
+        "body": body_view(&s.body),
         "guard": s.guard,
         "daemon": info,
     })
+}
+
+/// The body estimate (docs/estimation.md): its frame and heading while valid; only
+/// `valid: false` before the estimator has settled or when its input was not finite.
+fn body_view(b: &crate::controller::BodyEstimate) -> Value {
+    if !b.valid {
+        return json!({ "valid": false });
+    }
+    json!(b)
 }
 
 /// Extremes over the joints plus their positions and torques as plain arrays.
@@ -112,6 +122,7 @@ pub(crate) fn telemetry(s: &Snapshot, catalog: &Catalog) -> Value {
         "blend_progress": s.blend_progress,
         "joints": s.joints,
         "controller": telemetry_view(&s.controller, catalog),
+        "body": body_view(&s.body),
     })
 }
 
@@ -148,6 +159,7 @@ mod tests {
         assert_eq!(v["joints"]["max_abs_torque_nm"], 2.0);
         assert_eq!(v["joints"]["max_tracking_error_rad"], 0.3);
         assert_eq!(v["joints"]["max_feedback_age_s"], Value::Null, "inf → null");
+        assert_eq!(v["body"], json!({"valid": false}), "no estimate yet");
         let line = serde_json::to_string(&v).unwrap();
         assert!(!line.contains("NaN") && !line.contains("inf"), "{line}");
     }

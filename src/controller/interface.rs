@@ -19,7 +19,7 @@ pub struct Imu {
 
 /// The body's pose as estimators see it. Estimators fill it each cycle before any
 /// controller runs; without an estimator it stays `valid: false`.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct BodyEstimate {
     pub valid: bool,
     /// Body frame origin in the estimator's world frame, m.

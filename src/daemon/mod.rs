@@ -166,6 +166,7 @@ pub fn run(cfg: Config, emulated: bool) -> Result<()> {
     let layout = BodyLayout::alternating(n, cfg.body.first_joint_plane, cfg.body.module_length_m);
     let catalog = Catalog::default();
     let controllers = build_controllers(&cfg, &layout, &table, &catalog)?;
+    let estimators = crate::estimation::standard_estimators(&layout);
     let recorder = start_recorder(&cfg, &built, &layout, &catalog)?;
     let selector = GaitSelector::new(
         layout.clone(),
@@ -255,7 +256,7 @@ pub fn run(cfg: Config, emulated: bool) -> Result<()> {
         hold_at_start: cfg.gait.start == StartMode::Hold,
         retired: retired_tx,
         controllers,
-        estimators: Vec::new(),
+        estimators,
         recording: recorder.as_ref().map(|(tx, _)| LoopRecording {
             tx: tx.clone(),
             wait_when_full: false,

@@ -8,7 +8,7 @@
 //! The head is fixed and level in the world: world = head frame, x forward (toward
 //! the head's nose), y left, z up. Joint `i` rotates module `i` (its output side,
 //! where the IMU sits) relative to module `i − 1` (the head for joint 0) about the
-//! body's z axis when lateral (yaw) and the body's y axis when dorsal (pitch).
+//! body's z axis when lateral (yaw) and about −y when dorsal (pitch), as `gait::kinematics::axis_of` and the physics plant have it.
 //! Positive joint angles follow the right-hand rule about those axes.
 //! - Accelerometer: specific force, quasi-static (gravity reaction only, the links'
 //!   own accelerations are not modelled): world `(0, 0, +9.81)` in the module frame.
@@ -180,11 +180,9 @@ impl JointSpacePlant {
     pub fn new(config: PlantConfig) -> Result<Self, PlantError> {
         validate(&config)?;
         let n = config.modules;
+        // The one joint-axis convention (the physics plant and the estimator share it).
         let axes = (0..n)
-            .map(|i| match plane_of(config.first_plane, i) {
-                Plane::Lateral => Vector3::z(),
-                Plane::Dorsal => Vector3::y(),
-            })
+            .map(|i| crate::gait::kinematics::axis_of(plane_of(config.first_plane, i)).into_inner())
             .collect();
         let mut plant = Self {
             servos: vec![Servo::new(config.servo, 0.0); n],

@@ -85,14 +85,15 @@ fn pitch_joint_tilts_downstream_accelerometers() {
     // Module 0 is upstream of the pitch joint: level.
     let a0 = p.feedback(0).accel_m_s2;
     assert!(close(a0[2], GRAVITY_M_S2, 1e-3), "{a0:?}");
-    // Modules 1 and 2 are pitched by +90° about y: gravity reaction along −x.
+    // Modules 1 and 2 are pitched by +90° about the dorsal axis (−y): their x axis
+    // (towards the head) points up, so the gravity reaction is along +x.
     for i in 1..n {
         let a = p.feedback(i).accel_m_s2;
-        assert!(close(a[0], -GRAVITY_M_S2, 0.01), "{i}: {a:?}");
+        assert!(close(a[0], GRAVITY_M_S2, 0.01), "{i}: {a:?}");
         assert!(close(a[2], 0.0, 0.01), "{i}: {a:?}");
-        // The head-side yaw rate now appears about the module's −x axis.
+        // The head-side yaw rate now appears about the module's +x axis.
         let g = p.feedback(i).gyro_rad_s;
-        assert!(close(g[0], -0.5, 0.02), "{i}: {g:?}");
+        assert!(close(g[0], 0.5, 0.02), "{i}: {g:?}");
         assert!(close(g[2], 0.0, 0.02), "{i}: {g:?}");
     }
 }

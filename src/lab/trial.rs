@@ -141,6 +141,7 @@ pub(super) fn trial_loop(
     let n = config.modules;
     let gait = controller.gait;
     let layout = BodyLayout::alternating(n, Plane::Lateral, MODULE_LENGTH_M);
+    let estimators = crate::estimation::standard_estimators(&layout);
     let table = GaitTable::default();
     let built = controller.build(&layout, table.get(gait))?;
     let names = built
@@ -223,7 +224,7 @@ pub(super) fn trial_loop(
                 controller: built.controller,
             },
         )],
-        estimators: Vec::new(),
+        estimators,
         recording: record,
     };
     Ok((ControlLoop::new(parts), names, recorder))

@@ -16,6 +16,7 @@ pub enum Topic {
     Joints,
     Commands,
     Imu,
+    BodyEstimate,
     ControllerSignals,
     ControllerWindows,
     ControllerInfo,
@@ -27,10 +28,11 @@ pub enum Topic {
 }
 
 impl Topic {
-    pub const ALL: [Topic; 11] = [
+    pub const ALL: [Topic; 12] = [
         Topic::Joints,
         Topic::Commands,
         Topic::Imu,
+        Topic::BodyEstimate,
         Topic::ControllerSignals,
         Topic::ControllerWindows,
         Topic::ControllerInfo,
@@ -46,6 +48,7 @@ impl Topic {
             Topic::Joints => "/joints",
             Topic::Commands => "/commands",
             Topic::Imu => "/imu",
+            Topic::BodyEstimate => "/body/estimate",
             Topic::ControllerSignals => "/controller/signals",
             Topic::ControllerWindows => "/controller/windows",
             Topic::ControllerInfo => "/controller/info",
@@ -66,6 +69,7 @@ impl Topic {
             Topic::Joints => schemas::joints(),
             Topic::Commands => schemas::commands(),
             Topic::Imu => schemas::imu(),
+            Topic::BodyEstimate => schemas::body_estimate(),
             Topic::ControllerSignals => schemas::controller_signals(),
             Topic::ControllerWindows => schemas::controller_windows(),
             Topic::ControllerInfo => schemas::controller_info(),

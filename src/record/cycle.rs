@@ -1,6 +1,7 @@
 //! What the loop hands the recorder: `Copy` items pushed into a bounded lock-free ring
 //! (never blocking, never allocating; a full ring drops the item and counts it).
 
+use crate::controller::BodyEstimate;
 use crate::controller::report::ControllerReport;
 use crate::emu::LinkPose;
 use crate::gait::GaitKind;
@@ -46,6 +47,8 @@ pub struct CycleRecord {
     pub joints: [JointSample; RECORD_MAX_MODULES],
     /// The controller's report (meaningful while `engaged`).
     pub report: ControllerReport,
+    /// The estimators' body estimate this cycle (the robot's own, not ground truth).
+    pub body: BodyEstimate,
     /// Ground-truth link poses (simulated runs only; 0 links otherwise), head first.
     pub links: usize,
     pub link_poses: [LinkPose; RECORD_MAX_LINKS],
@@ -71,6 +74,13 @@ impl CycleRecord {
             gyro_rad_s: [0.0; 3],
         }; RECORD_MAX_MODULES],
         report: ControllerReport::EMPTY,
+        body: BodyEstimate {
+            valid: false,
+            position_m: [0.0; 3],
+            orientation_wxyz: [1.0, 0.0, 0.0, 0.0],
+            heading_rad: 0.0,
+            round: false,
+        },
         links: 0,
         link_poses: [LinkPose {
             position_m: [0.0; 3],

@@ -120,6 +120,25 @@ impl<'a> Imu<'a> {
     }
 }
 
+/// `/body/estimate`: the estimators' body estimate of the cycle.
+#[derive(Serialize)]
+pub struct BodyEstimateMsg<'a> {
+    cycle: u64,
+    t_ns: u64,
+    #[serde(flatten)]
+    body: &'a crate::controller::BodyEstimate,
+}
+
+impl<'a> BodyEstimateMsg<'a> {
+    pub fn new(rec: &'a CycleRecord) -> Self {
+        Self {
+            cycle: rec.cycle,
+            t_ns: rec.t_ns,
+            body: &rec.body,
+        }
+    }
+}
+
 /// The report's signals as `{name: value}`, names from the catalog.
 struct Signals<'a> {
     info: Option<&'a ControllerInfo>,

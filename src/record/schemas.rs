@@ -60,6 +60,20 @@ pub fn imu() -> Value {
     )
 }
 
+pub fn body_estimate() -> Value {
+    object(
+        "snaked.BodyEstimate",
+        header(),
+        json!({
+            "valid": {"type": "boolean", "description": "false until the estimator has settled, or on non-finite input"},
+            "position_m": numbers("the virtual chassis' origin relative to the head link, world axes, m"),
+            "orientation_wxyz": numbers("the virtual chassis' orientation in the estimate's world (z up, yaw 0 at the start)"),
+            "heading_rad": {"type": "number", "description": "the chassis' forward (head-ward) axis in the ground plane, rad"},
+            "round": {"type": "boolean", "description": "no clear main axis (coiled): the axis kept from before"},
+        }),
+    )
+}
+
 pub fn controller_signals() -> Value {
     object(
         "snaked.ControllerSignals",

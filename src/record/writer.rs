@@ -13,7 +13,9 @@ use serde_json::json;
 
 use super::channels::{Channels, Topic};
 use super::cycle::{CycleRecord, RecordEvent, RecordItem};
-use super::encode::{Commands, ControllerSignals, ControllerWindows, Imu, Joints, Stats};
+use super::encode::{
+    BodyEstimateMsg, Commands, ControllerSignals, ControllerWindows, Imu, Joints, Stats,
+};
 use super::error::RecordError;
 use super::file::McapFile;
 use super::live::{Latch, Live};
@@ -252,6 +254,9 @@ impl Writer {
             serde_json::to_writer(b, &Commands::new(rec))
         });
         ch.log_json(Topic::Imu, t, |b| serde_json::to_writer(b, &Imu::new(rec)));
+        ch.log_json(Topic::BodyEstimate, t, |b| {
+            serde_json::to_writer(b, &BodyEstimateMsg::new(rec))
+        });
         ch.log_json(Topic::ControllerSignals, t, |b| {
             serde_json::to_writer(b, &ControllerSignals::new(rec, info))
         });

@@ -88,6 +88,7 @@ impl ControlLoop {
             slots: &self.slots,
             bus: self.p.bus.as_ref(),
             stats: &self.stats,
+            body: &self.body,
         });
     }
 
@@ -107,7 +108,7 @@ impl ControlLoop {
         let (selector, failsafe, bus) = (&self.p.selector, &self.p.failsafe, &self.p.bus);
         let (slots, guard) = (&self.slots, self.guard.counters());
         let record_dropped = self.recording.as_ref().map_or(0, Recording::dropped);
-        let (applied, refused) = (self.applied, self.refused);
+        let (applied, refused, body) = (self.applied, self.refused, self.body);
         self.p.telemetry.write(|snap| {
             snap.cycle = c.index;
             snap.t_s = c.t_ns as f64 * 1e-9;
@@ -138,6 +139,7 @@ impl ControlLoop {
             slots.publish(selector.active(), &mut snap.controller);
             snap.guard = guard;
             snap.record_dropped = record_dropped;
+            snap.body = body;
         });
     }
 }

@@ -88,6 +88,7 @@ pub fn echo_harness_on(
     let n = bus.module_count();
     let faults = bus.faults();
     let layout = BodyLayout::alternating(n, Plane::Lateral, MODULE_LENGTH_M);
+    let estimators = crate::estimation::standard_estimators(&layout);
     let (req_tx, req_rx) = crossbeam_channel::bounded(16);
     let (ack_tx, ack_rx) = crossbeam_channel::bounded(16);
     let (retired_tx, retired_rx) = crossbeam_channel::bounded(18);
@@ -119,7 +120,7 @@ pub fn echo_harness_on(
         hold_at_start,
         retired: retired_tx,
         controllers,
-        estimators: Vec::new(),
+        estimators,
         recording: None,
     });
     Harness {

@@ -45,6 +45,7 @@ pub struct CycleView<'a> {
     pub slots: &'a ControllerSlots,
     pub bus: &'a dyn Bus,
     pub stats: &'a LoopStats,
+    pub body: &'a crate::controller::BodyEstimate,
 }
 
 impl Recording {
@@ -130,6 +131,7 @@ impl Recording {
         r.controller_id = v.slots.id(v.gait);
         let report = v.slots.report();
         r.engaged = report.is_some();
+        r.body = *v.body;
         match report {
             Some((_, rep)) => r.report = *rep,
             None => r.report.clear(),

@@ -50,6 +50,8 @@ pub struct Snapshot {
     pub guard: GuardCounters,
     /// Recorder items dropped because its ring was full (0 without a recorder).
     pub record_dropped: u64,
+    /// The estimators' body estimate (pose, heading) this cycle.
+    pub body: crate::controller::BodyEstimate,
 }
 
 impl Snapshot {
@@ -71,6 +73,7 @@ impl Snapshot {
             controller: ControllerTelemetry::default(),
             guard: GuardCounters::default(),
             record_dropped: 0,
+            body: crate::controller::BodyEstimate::default(),
         }
     }
 }
