@@ -94,15 +94,34 @@ pub enum ControllerCommand {
     Calibrate { duration_s: f64 },
     /// Forget the calibration (back to none).
     ClearCalibration,
+    /// The nominal heading a steering controller holds (sidewinding's reversal and
+    /// heading adjustment), rad in the pose estimate's world; `None`: the heading now.
+    SetHeading { heading_rad: Option<f64> },
 }
 
 /// Why a controller refused a command (built without allocating).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
 pub enum CommandRefused {
     #[error("this controller has nothing to calibrate")]
-    Unsupported,
+    NothingToCalibrate,
+    #[error("this controller does not steer by a heading")]
+    NoHeading,
+    #[error("the heading must be a finite angle in radians")]
+    BadHeading,
     #[error("the calibration time must be positive and finite, at most an hour")]
     BadDuration,
+}
+
+impl CommandRefused {
+    /// Why a controller that does not take `command` refuses it.
+    pub fn unsupported(command: ControllerCommand) -> Self {
+        match command {
+            ControllerCommand::Calibrate { .. } | ControllerCommand::ClearCalibration => {
+                Self::NothingToCalibrate
+            }
+            ControllerCommand::SetHeading { .. } => Self::NoHeading,
+        }
+    }
 }
 
 /// A controller the loop can run. Every method but construction runs in the loop
@@ -122,8 +141,7 @@ pub trait Controller: Send {
     /// An operator's command; it takes effect at the controller's next step. Most
     /// controllers have none.
     fn command(&mut self, command: ControllerCommand) -> Result<(), CommandRefused> {
-        let _ = command;
-        Err(CommandRefused::Unsupported)
+        Err(CommandRefused::unsupported(command))
     }
 }
 

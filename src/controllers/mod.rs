@@ -7,6 +7,7 @@ pub mod cpg;
 pub mod directional_compliance;
 pub mod open_loop;
 pub mod serpenoid_admittance;
+pub mod sidewinding;
 
 use crate::controller::registry::{Entry, Family};
 
@@ -17,4 +18,5 @@ pub static REGISTRY: &[&dyn Family] = &[
     &Entry::<cpg::CpgKind>::NEW,
     &Entry::<serpenoid_admittance::SerpenoidAdmittanceKind>::NEW,
     &Entry::<directional_compliance::DirectionalComplianceKind>::NEW,
+    &Entry::<sidewinding::SidewindingKind>::NEW,
 ];

@@ -306,6 +306,7 @@ pub fn request_name(r: &LoopRequest) -> &'static str {
             crate::controller::ControllerCommand::ClearCalibration => {
                 "controller_clear_calibration"
             }
+            crate::controller::ControllerCommand::SetHeading { .. } => "controller_heading",
         },
         LoopRequest::SetBlendTime(_) => "set_blend_time",
         LoopRequest::Hold => "hold",
@@ -335,6 +336,11 @@ enum RequestArgs<'a> {
         gait: crate::gait::GaitKind,
         seconds: f64,
     },
+    Heading {
+        gait: crate::gait::GaitKind,
+        /// `null`: the heading at the time.
+        heading_rad: Option<f64>,
+    },
 }
 
 fn request_args(r: &LoopRequest) -> RequestArgs<'_> {
@@ -353,6 +359,12 @@ fn request_args(r: &LoopRequest) -> RequestArgs<'_> {
             }
             crate::controller::ControllerCommand::ClearCalibration => {
                 RequestArgs::Gait { gait: *gait }
+            }
+            crate::controller::ControllerCommand::SetHeading { heading_rad } => {
+                RequestArgs::Heading {
+                    gait: *gait,
+                    heading_rad: *heading_rad,
+                }
             }
         },
         _ => RequestArgs::None {},

@@ -244,6 +244,12 @@ impl CompliantSlithering {
         self.shape.lateral_mean(&self.sigma, p)
     }
 
+    /// The wave's phase `φ(s)` at normalised arc length `s` (what a second wave on the
+    /// other plane follows, e.g. sidewinding's dorsal one).
+    pub fn wave_phase_at(&self, s: f64) -> f64 {
+        self.shape.phase_at(&self.sigma, s)
+    }
+
     /// `p`'s value at normalised arc length `s`.
     pub fn value_at(&self, p: Param, s: f64) -> f64 {
         self.shape.field_at(&self.sigma, p, s)

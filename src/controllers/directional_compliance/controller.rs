@@ -448,6 +448,7 @@ impl Controller for DirectionalCompliance {
                 self.calibration.clear();
                 Ok(())
             }
+            other => Err(CommandRefused::unsupported(other)),
         }
     }
 }

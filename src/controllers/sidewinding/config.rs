@@ -1,0 +1,194 @@
+//! Configuration of anti-compliant sidewinding (thesis §4.3, SPEC §7): the lateral
+//! amplitude (windowed) and spatial frequency (central) admittances, their sign, and
+//! the inertial steering; the thesis's ablations as presets.
+
+use std::f64::consts::PI;
+
+use serde::{Deserialize, Serialize};
+
+use super::steering::{HeadingConfig, ReversalConfig};
+use crate::controller::config::{ConfigError, check_range};
+use crate::controllers::compliant_slithering::{
+    Centralization, CompliantSlitheringConfig, ParamConfig,
+};
+use crate::gait::JOINT_LIMIT_RAD;
+use crate::shape::admittance::{AdmittanceGains, AdmittanceSign};
+
+/// Everything that defines the controller besides the gait's nominal parameters.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SidewindingConfig {
+    /// The lateral amplitude, per travelling half-wave window.
+    pub amplitude: ParamConfig,
+    /// The spatial frequency of both waves, one value for the body.
+    pub spatial_freq: ParamConfig,
+    /// `anti_compliant` (the thesis's: the body pushes back) or `compliant`.
+    pub sign: AdmittanceSign,
+    /// Low-pass cutoff of the joint torques, Hz.
+    pub torque_cutoff_hz: f64,
+    /// Torques below this (after filtering) are ignored, N·m.
+    pub torque_deadband_nm: f64,
+    /// Width of a window's edge, in modules.
+    pub edge_width_modules: f64,
+    /// The heading the steering uses is low-passed over this long, s (the thesis
+    /// averages it over a gait cycle: the chassis sways within one).
+    pub heading_filter_s: f64,
+    pub reversal: ReversalConfig,
+    pub heading: HeadingConfig,
+}
+
+/// Range every amplitude bound must lie in, rad.
+const AMPLITUDE_RANGE: (f64, f64) = (0.0, JOINT_LIMIT_RAD);
+/// Range every spatial-frequency bound must lie in, rad per body length.
+const SPATIAL_FREQ_RANGE: (f64, f64) = (0.25 * PI, 8.0 * PI);
+
+impl SidewindingConfig {
+    /// AC-SFC: both parameters anti-compliant, steering on. Gains from the compliant
+    /// slithering controller's, tuned on the peg array (docs/compliance.md).
+    pub fn full() -> Self {
+        Self {
+            amplitude: ParamConfig {
+                enabled: true,
+                centralization: Centralization::Windowed,
+                gains: AdmittanceGains {
+                    mass: 1.0,
+                    damping: 6.0,
+                    stiffness: 4.0,
+                    min: 0.3,
+                    max: 1.2,
+                    bias_force: 0.0,
+                },
+            },
+            spatial_freq: ParamConfig {
+                enabled: true,
+                centralization: Centralization::Central,
+                gains: AdmittanceGains {
+                    mass: 0.05,
+                    damping: 0.3,
+                    stiffness: 0.3,
+                    min: 2.0 * PI,
+                    max: 4.0 * PI,
+                    bias_force: 0.0,
+                },
+            },
+            sign: AdmittanceSign::AntiCompliant,
+            torque_cutoff_hz: 5.0,
+            torque_deadband_nm: 0.3,
+            edge_width_modules: 0.5,
+            heading_filter_s: 1.0,
+            reversal: ReversalConfig::DEFAULT,
+            heading: HeadingConfig::DEFAULT,
+        }
+    }
+
+    /// The thesis's ablations (`None` for an unknown name): `ac_sfc` (both), `ac`
+    /// (amplitude only), `sfc` (spatial frequency only), `sw_open_loop` (neither; the
+    /// inertial steering stays on in all four, as in the thesis's experiment).
+    pub fn preset(name: &str) -> Option<Self> {
+        let mut c = Self::full();
+        match name {
+            "ac_sfc" => {}
+            "ac" => c.spatial_freq.enabled = false,
+            "sfc" => c.amplitude.enabled = false,
+            "sw_open_loop" => {
+                c.amplitude.enabled = false;
+                c.spatial_freq.enabled = false;
+            }
+            _ => return None,
+        }
+        Some(c)
+    }
+
+    pub const PRESETS: &'static [(&'static str, &'static str)] = &[
+        (
+            "ac_sfc",
+            "anti-compliant amplitude (windowed) and spatial frequency (central), with reversal and heading adjustment",
+        ),
+        ("ac", "anti-compliant amplitude only, with the steering"),
+        ("sfc", "anti-compliant spatial frequency only, with the steering"),
+        (
+            "sw_open_loop",
+            "the nominal sidewinding wave with the steering, no compliance",
+        ),
+    ];
+
+    /// The lateral wave's engine: compliant slithering's admittance with the temporal
+    /// phase off (the wave keeps its pace) and this sign.
+    pub fn lateral(&self) -> CompliantSlitheringConfig {
+        let mut c = CompliantSlitheringConfig::full();
+        c.amplitude = self.amplitude;
+        c.spatial_freq = self.spatial_freq;
+        c.phase.enabled = false;
+        c.sign = self.sign;
+        c.torque_cutoff_hz = self.torque_cutoff_hz;
+        c.torque_deadband_nm = self.torque_deadband_nm;
+        c.edge_width_modules = self.edge_width_modules;
+        c
+    }
+
+    /// Every bound (field paths relative to the configuration).
+    pub fn check(&self) -> Result<(), ConfigError> {
+        self.amplitude
+            .gains
+            .check(AMPLITUDE_RANGE.0, AMPLITUDE_RANGE.1, 0.0)
+            .map_err(|e| e.under("amplitude.gains"))?;
+        self.spatial_freq
+            .gains
+            .check(SPATIAL_FREQ_RANGE.0, SPATIAL_FREQ_RANGE.1, 0.0)
+            .map_err(|e| e.under("spatial_freq.gains"))?;
+        if self.spatial_freq.centralization != Centralization::Central {
+            return Err(ConfigError::invalid(
+                "spatial_freq.centralization",
+                "must be `central`: one spatial frequency keeps both waves in step",
+            ));
+        }
+        if self.amplitude.centralization == Centralization::PerJoint {
+            return Err(ConfigError::invalid(
+                "amplitude.centralization",
+                "must be `windowed` or `central`",
+            ));
+        }
+        check_range("torque_cutoff_hz", self.torque_cutoff_hz, 0.01, 200.0)?;
+        check_range("torque_deadband_nm", self.torque_deadband_nm, 0.0, 7.0)?;
+        check_range("edge_width_modules", self.edge_width_modules, 0.05, 4.0)?;
+        check_range("heading_filter_s", self.heading_filter_s, 0.0, 30.0)?;
+        let r = &self.reversal;
+        check_range("reversal.k_b", r.k_b, -100.0, -1e-3)?;
+        check_range("reversal.k_h", r.k_h, 1e-3, 100.0)?;
+        check_range("reversal.max_rate_rad_s", r.max_rate_rad_s, 1e-3, 20.0)?;
+        let h = &self.heading;
+        check_range("heading.deadband_rad", h.deadband_rad, 0.0, PI)?;
+        check_range("heading.turn_taper", h.turn_taper, 0.0, 0.8)?;
+        check_range("heading.taper_rate_per_s", h.taper_rate_per_s, 1e-3, 10.0)?;
+        if h.turn_sign != 1.0 && h.turn_sign != -1.0 {
+            return Err(ConfigError::invalid("heading.turn_sign", "must be 1 or -1"));
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn presets_pass_their_checks_and_bad_values_are_named() {
+        for (name, _) in SidewindingConfig::PRESETS {
+            SidewindingConfig::preset(name).unwrap().check().unwrap();
+        }
+        assert!(SidewindingConfig::preset("nope").is_none());
+        let mut c = SidewindingConfig::full();
+        c.reversal.k_b = 1.0;
+        assert!(c.check().unwrap_err().to_string().contains("reversal.k_b"));
+        let mut c = SidewindingConfig::full();
+        c.spatial_freq.centralization = Centralization::Windowed;
+        let e = c.check().unwrap_err().to_string();
+        assert!(e.contains("spatial_freq.centralization"), "{e}");
+        let mut c = SidewindingConfig::full();
+        c.heading.turn_taper = f64::NAN;
+        assert!(c.check().unwrap_err().to_string().contains("turn_taper"));
+        let mut c = SidewindingConfig::full();
+        c.amplitude.gains.max = 9.0;
+        assert!(c.check().unwrap_err().to_string().contains("amplitude.gains"));
+    }
+}
