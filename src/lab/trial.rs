@@ -131,7 +131,7 @@ pub struct TrialRecording<'a> {
 /// on that gait, over `plant`, with `requests` waiting for its first cycle (as if an
 /// operator had sent them); recorded when `recording` says where (the recorder is
 /// returned, to be finished at the trial's end).
-pub(super) fn trial_loop(
+pub(crate) fn trial_loop(
     controller: &LabController,
     plant: PhysicsPlant,
     config: &TrialConfig,
@@ -301,7 +301,7 @@ pub fn run_trial(
     Ok(rec)
 }
 
-pub(super) fn plant_of(lp: &ControlLoop) -> &dyn Plant {
+pub(crate) fn plant_of(lp: &ControlLoop) -> &dyn Plant {
     lp.bus().plant().expect("a trial runs over a SimBus")
 }
 

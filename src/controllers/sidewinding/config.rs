@@ -55,7 +55,9 @@ impl SidewindingConfig {
                     damping: 6.0,
                     stiffness: 4.0,
                     min: 0.3,
-                    max: 1.2,
+                    // With the turning taper's growth (1 + 0.4) it stays within the
+                    // joints' ±π/2: 1.1 × 1.4 = 1.54 rad.
+                    max: 1.1,
                     bias_force: 0.0,
                 },
             },
@@ -105,7 +107,10 @@ impl SidewindingConfig {
             "anti-compliant amplitude (windowed) and spatial frequency (central), with reversal and heading adjustment",
         ),
         ("ac", "anti-compliant amplitude only, with the steering"),
-        ("sfc", "anti-compliant spatial frequency only, with the steering"),
+        (
+            "sfc",
+            "anti-compliant spatial frequency only, with the steering",
+        ),
         (
             "sw_open_loop",
             "the nominal sidewinding wave with the steering, no compliance",
@@ -189,6 +194,11 @@ mod tests {
         assert!(c.check().unwrap_err().to_string().contains("turn_taper"));
         let mut c = SidewindingConfig::full();
         c.amplitude.gains.max = 9.0;
-        assert!(c.check().unwrap_err().to_string().contains("amplitude.gains"));
+        assert!(
+            c.check()
+                .unwrap_err()
+                .to_string()
+                .contains("amplitude.gains")
+        );
     }
 }

@@ -1,10 +1,11 @@
 //! Anti-compliant sidewinding (SPEC §7): the lateral wave from compliant slithering's
 //! admittance engine (windowed amplitude, central spatial frequency, sign −1), the
 //! dorsal wave on the lateral one's phase shifted by `δ + β`, β from the reversal, and
-//! both amplitudes tapered by the heading adjustment (conical sidewinding).
+//! both amplitudes tapered by the heading adjustment (conical sidewinding,
+//! [`taper_factor`]).
 
 use super::config::SidewindingConfig;
-use super::steering::{HeadingAdjust, Reversal, wrap_pi};
+use super::steering::{HeadingAdjust, Reversal, taper_factor, wrap_pi};
 use crate::controller::nominal::{Nominal, lateral_room, within};
 use crate::controller::report::ControllerReport;
 use crate::controller::{
@@ -154,13 +155,13 @@ impl Controller for AntiCompliantSidewinding {
         let c = self.adjust.taper;
         for &(i, s) in &self.lateral_joints {
             let wave = set_points_rad[i] - p.offset_lat_rad;
-            set_points_rad[i] = p.offset_lat_rad + (1.0 - c * s) * wave;
+            set_points_rad[i] = p.offset_lat_rad + taper_factor(c, s) * wave;
         }
         let shift = p.phase_shift_rad + self.reversal.beta_rad;
         for &(i, s) in &self.dorsal_joints {
             let phi = self.lateral.wave_phase_at(s);
             set_points_rad[i] =
-                p.offset_dor_rad + p.amplitude_dor_rad * (1.0 - c * s) * (phi + shift).sin();
+                p.offset_dor_rad + p.amplitude_dor_rad * taper_factor(c, s) * (phi + shift).sin();
         }
     }
 
@@ -173,7 +174,10 @@ impl Controller for AntiCompliantSidewinding {
             self.reversal.beta_rad,
             or_nan(self.heading_rad()),
             or_nan(self.nominal_heading),
-            or_nan(self.relative_heading().map(|h| wrap_pi(h - self.reversal.well()))),
+            or_nan(
+                self.relative_heading()
+                    .map(|h| wrap_pi(h - self.reversal.well())),
+            ),
             self.adjust.taper,
             self.reversal.reversals as f64,
             if self.heading.is_some() { 1.0 } else { 0.0 },
@@ -211,3 +215,7 @@ impl Controller for AntiCompliantSidewinding {
 #[cfg(test)]
 #[path = "controller_tests.rs"]
 mod tests;
+
+#[cfg(test)]
+#[path = "physics_tests.rs"]
+mod physics;

@@ -73,6 +73,17 @@ const REVERSALS: usize = 5;
 const AMPLITUDE: usize = 7;
 
 #[test]
+fn every_preset_accepts_the_default_gait_and_refuses_no_room_for_the_taper() {
+    for (name, _) in SidewindingConfig::PRESETS {
+        preset(name).accepts(&params()).unwrap();
+    }
+    let mut wide = params();
+    wide.offset_lat_rad = 0.2; // 1.1 × 1.4 + 0.2 > π/2
+    let e = preset("ac_sfc").accepts(&wide).unwrap_err();
+    assert_eq!(e.field, "offset_lat_rad");
+}
+
+#[test]
 fn at_its_heading_without_torque_every_preset_is_the_open_loop_gait() {
     let (l, p) = (layout(), params());
     let mut open = OpenLoop::new(GaitKind::Sidewinding, &l, &p);
@@ -100,7 +111,11 @@ fn a_body_turned_round_reverses_the_dorsal_wave_without_a_jump() {
     // The heading holds for 2 s, then a peg turns the body round.
     let heading = |t: f64| if t < 2.0 { 0.1 } else { 0.1 + PI };
     let all = run(&mut c, 0.0, 12.0, heading, |_| [0.0; N]);
-    assert!(wrap_pi(c.beta_rad() - PI).abs() < 0.05, "β {}", c.beta_rad());
+    assert!(
+        wrap_pi(c.beta_rad() - PI).abs() < 0.05,
+        "β {}",
+        c.beta_rad()
+    );
     assert_eq!(signal(&c, REVERSALS), 1.0);
     // The dorsal wave is the nominal one shifted by π: every dorsal joint inverted
     // about its offset, the lateral wave untouched (the taper is back to 0 by now,
@@ -115,7 +130,11 @@ fn a_body_turned_round_reverses_the_dorsal_wave_without_a_jump() {
             Plane::Lateral => nominal[i],
             Plane::Dorsal => -nominal[i],
         };
-        assert!((last[i] - expect).abs() < 0.02, "joint {i}: {} vs {expect}", last[i]);
+        assert!(
+            (last[i] - expect).abs() < 0.02,
+            "joint {i}: {} vs {expect}",
+            last[i]
+        );
     }
     // Smoothly: no set-point moves more per millisecond than the gait itself does
     // plus β's rate limit through the dorsal amplitude.

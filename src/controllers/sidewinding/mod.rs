@@ -58,6 +58,8 @@ impl ControllerKind for SidewindingKind {
     }
 
     fn build(config: &Self::Config, ctx: &BuildContext<'_>) -> Box<dyn Controller> {
-        Box::new(AntiCompliantSidewinding::new(ctx.layout, ctx.params, *config))
+        Box::new(AntiCompliantSidewinding::new(
+            ctx.layout, ctx.params, *config,
+        ))
     }
 }

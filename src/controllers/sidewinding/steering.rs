@@ -108,6 +108,19 @@ impl Reversal {
     }
 }
 
+/// The amplitude factor of the turning taper `c` at normalised arc length `s`: the
+/// amplitude grows towards the head (`1 + c·(1 − s)`, c > 0) or the tail (`1 − c·s`,
+/// c < 0), a cone with its apex beyond the other end. Never below 1: in this emulator
+/// a cone that only shrinks the amplitude (the gait table's `1 − c·s` with c > 0)
+/// hardly turns (`physics_tests`). Continuous in `c`.
+pub fn taper_factor(c: f64, s: f64) -> f64 {
+    if c >= 0.0 {
+        1.0 + c * (1.0 - s)
+    } else {
+        1.0 - c * s
+    }
+}
+
 /// The heading adjustment's settings.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -115,12 +128,15 @@ pub struct HeadingConfig {
     pub enabled: bool,
     /// Half-width of the dead-band around the nominal heading, rad.
     pub deadband_rad: f64,
-    /// The conical taper used to turn back, |c| ≤ 0.8.
+    /// How much the turning cone grows the amplitude at one end ([`taper_factor`]),
+    /// ≤ 0.8.
     pub turn_taper: f64,
     /// How fast the taper blends in and out, per second.
     pub taper_rate_per_s: f64,
-    /// Which way a positive taper turns the body's heading while β is in its 0 well:
-    /// +1 (counter-clockwise) or −1. Measured in the physics (`controller_tests`).
+    /// Which way a positive (head-heavy) taper turns the body's heading while β is in
+    /// its 0 well: +1 (counter-clockwise) or −1. Measured in the physics
+    /// (`physics_tests`: clockwise; the tail-heavy one turns it the other way, and
+    /// both swap with β at π).
     pub turn_sign: f64,
 }
 
@@ -130,7 +146,7 @@ impl HeadingConfig {
         deadband_rad: 0.35,
         turn_taper: 0.4,
         taper_rate_per_s: 0.2,
-        turn_sign: 1.0,
+        turn_sign: -1.0,
     };
 }
 
@@ -178,7 +194,11 @@ mod tests {
         for k in 0..60_000 {
             let h = 1.05 * (k as f64 * 1e-3).sin();
             r.step(&c, 1e-3, Some(h));
-            assert!(wrap_pi(r.beta_rad).abs() < 1.0, "β left its well: {}", r.beta_rad);
+            assert!(
+                wrap_pi(r.beta_rad).abs() < 1.0,
+                "β left its well: {}",
+                r.beta_rad
+            );
         }
         assert_eq!(r.reversals, 0);
         assert!(c.switch_heading_rad() > 1.5 && c.switch_heading_rad() < 2.2);
@@ -196,7 +216,11 @@ mod tests {
         assert_eq!((r.reversals, r.well()), (2, 0.0));
         // Held headings just short of the switch stay put.
         let mut r = Reversal::default();
-        run(&mut r, ReversalConfig::DEFAULT.switch_heading_rad() - 0.15, 10.0);
+        run(
+            &mut r,
+            ReversalConfig::DEFAULT.switch_heading_rad() - 0.15,
+            10.0,
+        );
         assert_eq!(r.reversals, 0, "{}", r.beta_rad);
         // No estimate: β holds.
         let before = r.beta_rad;
@@ -221,7 +245,10 @@ mod tests {
 
     #[test]
     fn the_taper_blends_in_outside_the_deadband_and_out_inside() {
-        let c = HeadingConfig::DEFAULT;
+        let c = HeadingConfig {
+            turn_sign: 1.0,
+            ..HeadingConfig::DEFAULT
+        };
         let mut a = HeadingAdjust::default();
         for _ in 0..1000 {
             a.step(&c, 1e-3, Some(0.1), 0.0);
