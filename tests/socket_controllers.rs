@@ -561,3 +561,52 @@ fn a_controller_is_calibrated_through_the_socket_and_snakectl() {
     let s = status_when(&mut c, |s| s["controller"]["signals"]["calibration"] == 0.0);
     assert_eq!(s["controller"]["signals"]["calibration"], 0.0, "{s}");
 }
+
+#[test]
+fn a_nominal_heading_is_set_through_the_socket_and_snakectl() {
+    let l = real_loop();
+    let mut c = Client::connect(
+        &Endpoint::Unix(l.path.clone()),
+        Some(Duration::from_secs(20)),
+    )
+    .unwrap();
+    status_when(&mut c, |s| s["controller"]["state"] == "engaged");
+    // Open loop does not steer: refused by the loop, saying why.
+    let r = call(&mut c, "controller.heading", json!({"heading_rad": 0.5}));
+    assert_eq!(error_code(&r), code::REFUSED, "{r}");
+    assert!(error_message(&r).contains("does not steer"), "{r}");
+    for bad in [
+        json!({}),
+        json!({"heading_rad": 0.5, "here": true}),
+        json!({"heading_rad": 100.0}),
+        json!({"heading_rad": "north"}),
+        json!({"here": "yes"}),
+        json!({"gait": "crawling", "here": true}),
+    ] {
+        let r = call(&mut c, "controller.heading", bad.clone());
+        assert_eq!(error_code(&r), code::INVALID_PARAMS, "{bad}: {r}");
+    }
+    c.call(
+        "controller.set",
+        Some(json!({"gait": "sidewinding", "controller": "ac_sfc"})),
+    )
+    .unwrap();
+    let r = c
+        .call(
+            "controller.heading",
+            Some(json!({"gait": "sidewinding", "heading_rad": -1.0})),
+        )
+        .unwrap();
+    assert_eq!(r["controller"], "anti_compliant_sidewinding", "{r}");
+    assert_eq!(r["heading_rad"], -1.0);
+    let text = snakectl(
+        &l,
+        &["controller", "heading", "here", "--gait", "sidewinding"],
+    );
+    assert!(text.contains("nominal heading \"here\""), "{text}");
+    let text = snakectl(
+        &l,
+        &["controller", "heading", "-0.3", "--gait", "sidewinding"],
+    );
+    assert!(text.contains("nominal heading -0.3"), "{text}");
+}

@@ -125,6 +125,17 @@ enum ControllerCmd {
         #[arg(long, conflicts_with = "seconds")]
         clear: bool,
     },
+    /// The nominal heading GAIT's controller steers to (anti-compliant sidewinding):
+    /// RAD in the pose estimate's world (yaw 0 where the daemon started), or `here`
+    /// for the heading now.
+    Heading {
+        /// Radians, or `here`.
+        #[arg(allow_hyphen_values = true)]
+        heading: String,
+        /// The gait (default: the running one).
+        #[arg(long)]
+        gait: Option<String>,
+    },
 }
 
 #[derive(Subcommand, Debug)]
@@ -325,6 +336,27 @@ fn request(cmd: &Cmd) -> Result<(&str, Option<Value>), Failure> {
             }
             ("controller.calibrate", Some(p))
         }
+        Cmd::Controller {
+            cmd: ControllerCmd::Heading { heading, gait },
+        } => {
+            let mut p = json!({});
+            if heading == "here" {
+                p["here"] = json!(true);
+            } else {
+                let h: f64 = heading
+                    .parse()
+                    .ok()
+                    .filter(|h: &f64| h.is_finite())
+                    .ok_or_else(|| {
+                        Failure::Usage(format!("heading {heading:?}: radians or `here`"))
+                    })?;
+                p["heading_rad"] = json!(h);
+            }
+            if let Some(g) = gait {
+                p["gait"] = json!(g);
+            }
+            ("controller.heading", Some(p))
+        }
         Cmd::Hold => ("hold", None),
         Cmd::Limp => ("limp", None),
         Cmd::Estop => ("estop", None),
@@ -454,6 +486,14 @@ fn print_human(cmd: &Cmd, r: &Value) {
         Cmd::Controller {
             cmd: ControllerCmd::Calibrate { .. },
         } => controller::print_calibration(r),
+        Cmd::Controller {
+            cmd: ControllerCmd::Heading { .. },
+        } => println!(
+            "{} {}: nominal heading {}",
+            text(&r["gait"]),
+            text(&r["controller"]),
+            r["heading_rad"]
+        ),
         Cmd::Controller { .. } => controller::print_installed(r),
         Cmd::Stats => print_stats(r),
         _ => println!("ok"),

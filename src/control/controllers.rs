@@ -354,3 +354,32 @@ pub(crate) fn telemetry_view(c: &ControllerTelemetry, catalog: &Catalog) -> Valu
     v["fields"] = Value::Array(fields);
     v
 }
+
+/// `controller.heading`: the nominal heading of `gait`'s controller (the running gait's
+/// by default), rad in the pose estimate's world, or (`None`) the heading now. The loop
+/// refuses it, saying why, when that controller does not steer by a heading.
+pub(crate) async fn set_heading(
+    shared: &Shared,
+    gait: Option<GaitKind>,
+    heading_rad: Option<f64>,
+) -> Result<Value, RpcError> {
+    let snap = shared.telemetry.latest();
+    let gait = gait.unwrap_or(snap.gait);
+    let id = snap.controller.installed[gait.index()];
+    let info = shared.catalog.get(id).ok_or_else(|| {
+        RpcError::invalid_params(format!(
+            "{} has no controller installed: controller.set one first",
+            gait.name()
+        ))
+    })?;
+    let cmd = ControllerCommand::SetHeading { heading_rad };
+    shared
+        .router
+        .call(LoopRequest::ControllerCommand(gait, cmd))
+        .await?;
+    Ok(json!({
+        "gait": gait,
+        "controller": info.controller,
+        "heading_rad": heading_rad.map_or(json!("here"), |h| json!(h)),
+    }))
+}

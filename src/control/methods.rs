@@ -14,7 +14,7 @@ use crate::gait::{GaitKind, ParamPatch};
 use crate::rt::messages::LoopRequest;
 
 /// Every method the server knows (listed in the unknown-method error).
-pub const METHODS: [&str; 18] = [
+pub const METHODS: [&str; 19] = [
     "auth",
     "status",
     "gait.list",
@@ -25,6 +25,7 @@ pub const METHODS: [&str; 18] = [
     "controller.get",
     "controller.set",
     "controller.calibrate",
+    "controller.heading",
     "hold",
     "limp",
     "estop",
@@ -133,6 +134,27 @@ pub(crate) async fn dispatch(
                 (false, s) => controllers::Calibration::Run(s),
             };
             controllers::calibrate(shared, gait, what).await
+        }
+        "controller.heading" => {
+            let gait = p.take_gait("gait")?;
+            let lim = 2.0 * std::f64::consts::PI;
+            let heading = p.take_f64_in("heading_rad", -lim, lim)?;
+            let here = match p.take_json("here")? {
+                None | Some(Value::Bool(false)) => false,
+                Some(Value::Bool(true)) => true,
+                Some(_) => return Err(RpcError::invalid_params("`here` must be true or false")),
+            };
+            p.finish(&["gait", "heading_rad", "here"])?;
+            let heading = match (heading, here) {
+                (Some(h), false) => Some(h),
+                (None, true) => None,
+                _ => {
+                    return Err(RpcError::invalid_params(
+                        "give `heading_rad` (rad, in the pose estimate's world) or `here: true`",
+                    ));
+                }
+            };
+            controllers::set_heading(shared, gait, heading).await
         }
         "hold" => act(shared, p, LoopRequest::Hold).await,
         "limp" => act(shared, p, LoopRequest::Limp).await,
