@@ -14,6 +14,8 @@ use serde_json::{Map, Value, json};
 use snaked::control::api::PATCH_FIELDS;
 use snaked::control::client::{Client, ClientError, Endpoint};
 
+use controller::ControllerCmd;
+
 /// Control a running snaked through its control socket.
 #[derive(Parser, Debug)]
 #[command(name = "snakectl", version)]
@@ -90,52 +92,6 @@ enum GaitCmd {
     List,
     /// Blend into gait NAME.
     Set { name: String },
-}
-
-#[derive(Subcommand, Debug)]
-enum ControllerCmd {
-    /// Every gait's controllers with their presets and signals (or one gait's).
-    List { gait: Option<String> },
-    /// What each gait runs, with its configuration (or one gait).
-    Get { gait: Option<String> },
-    /// Run controller NAME (a controller or a preset) for GAIT, e.g.
-    /// `controller set slithering a_ws_omega amplitude.gains.stiffness=6`.
-    Set {
-        gait: String,
-        name: String,
-        /// A preset of the controller.
-        #[arg(long)]
-        preset: Option<String>,
-        /// Configuration overrides as a JSON object.
-        #[arg(long, value_name = "JSON")]
-        config: Option<String>,
-        /// Configuration overrides, KEY.PATH=VALUE (merged onto --config).
-        #[arg(value_name = "KEY=VALUE", allow_hyphen_values = true)]
-        assignments: Vec<String>,
-    },
-    /// Calibrate GAIT's controller (default: the running gait's) on open ground:
-    /// directional compliance measures the ground's friction offset over a few gait
-    /// cycles. Waits until it is done and prints what was measured.
-    Calibrate {
-        gait: Option<String>,
-        /// Measure this long (default: 3 gait cycles).
-        #[arg(long, value_name = "S")]
-        seconds: Option<f64>,
-        /// Forget the calibration instead.
-        #[arg(long, conflicts_with = "seconds")]
-        clear: bool,
-    },
-    /// The nominal heading GAIT's controller steers to (anti-compliant sidewinding):
-    /// RAD in the pose estimate's world (yaw 0 where the daemon started), or `here`
-    /// for the heading now.
-    Heading {
-        /// Radians, or `here`.
-        #[arg(allow_hyphen_values = true)]
-        heading: String,
-        /// The gait (default: the running one).
-        #[arg(long)]
-        gait: Option<String>,
-    },
 }
 
 #[derive(Subcommand, Debug)]
@@ -284,79 +240,7 @@ fn request(cmd: &Cmd) -> Result<(&str, Option<Value>), Failure> {
             "params.set",
             Some(params_set(*blend_time, compliance, gait, assignments)?),
         ),
-        Cmd::Controller {
-            cmd: ControllerCmd::List { gait },
-        } => (
-            "controller.list",
-            gait.as_ref().map(|g| json!({ "gait": g })),
-        ),
-        Cmd::Controller {
-            cmd: ControllerCmd::Get { gait },
-        } => (
-            "controller.get",
-            gait.as_ref().map(|g| json!({ "gait": g })),
-        ),
-        Cmd::Controller {
-            cmd:
-                ControllerCmd::Set {
-                    gait,
-                    name,
-                    preset,
-                    config,
-                    assignments,
-                },
-        } => {
-            let mut p = json!({ "gait": gait, "controller": name });
-            if let Some(preset) = preset {
-                p["preset"] = json!(preset);
-            }
-            if config.is_some() || !assignments.is_empty() {
-                p["config"] = controller::config_overrides(config.as_deref(), assignments)
-                    .map_err(Failure::Usage)?;
-            }
-            ("controller.set", Some(p))
-        }
-        Cmd::Controller {
-            cmd:
-                ControllerCmd::Calibrate {
-                    gait,
-                    seconds,
-                    clear,
-                },
-        } => {
-            let mut p = json!({});
-            if let Some(g) = gait {
-                p["gait"] = json!(g);
-            }
-            if let Some(s) = seconds {
-                p["seconds"] = json!(s);
-            }
-            if *clear {
-                p["clear"] = json!(true);
-            }
-            ("controller.calibrate", Some(p))
-        }
-        Cmd::Controller {
-            cmd: ControllerCmd::Heading { heading, gait },
-        } => {
-            let mut p = json!({});
-            if heading == "here" {
-                p["here"] = json!(true);
-            } else {
-                let h: f64 = heading
-                    .parse()
-                    .ok()
-                    .filter(|h: &f64| h.is_finite())
-                    .ok_or_else(|| {
-                        Failure::Usage(format!("heading {heading:?}: radians or `here`"))
-                    })?;
-                p["heading_rad"] = json!(h);
-            }
-            if let Some(g) = gait {
-                p["gait"] = json!(g);
-            }
-            ("controller.heading", Some(p))
-        }
+        Cmd::Controller { cmd } => controller::request(cmd).map_err(Failure::Usage)?,
         Cmd::Hold => ("hold", None),
         Cmd::Limp => ("limp", None),
         Cmd::Estop => ("estop", None),

@@ -1,9 +1,120 @@
-//! snakectl's view of controllers, with no per-gait code: `controller list|get|set`
+//! snakectl's view of controllers, with no per-gait code: `controller list|get|set|calibrate|heading`
 //! and the `controller` part of `status`, printed from the names and units the daemon
 //! reports.
+use clap::Subcommand;
 use serde_json::{Map, Value, json};
 
 use super::{num, text};
+
+#[derive(Subcommand, Debug)]
+pub enum ControllerCmd {
+    /// Every gait's controllers with their presets and signals (or one gait's).
+    List { gait: Option<String> },
+    /// What each gait runs, with its configuration (or one gait).
+    Get { gait: Option<String> },
+    /// Run controller NAME (a controller or a preset) for GAIT, e.g.
+    /// `controller set slithering a_ws_omega amplitude.gains.stiffness=6`.
+    Set {
+        gait: String,
+        name: String,
+        /// A preset of the controller.
+        #[arg(long)]
+        preset: Option<String>,
+        /// Configuration overrides as a JSON object.
+        #[arg(long, value_name = "JSON")]
+        config: Option<String>,
+        /// Configuration overrides, KEY.PATH=VALUE (merged onto --config).
+        #[arg(value_name = "KEY=VALUE", allow_hyphen_values = true)]
+        assignments: Vec<String>,
+    },
+    /// Calibrate GAIT's controller (default: the running gait's) on open ground:
+    /// directional compliance measures the ground's friction offset over a few gait
+    /// cycles. Waits until it is done and prints what was measured.
+    Calibrate {
+        gait: Option<String>,
+        /// Measure this long (default: 3 gait cycles).
+        #[arg(long, value_name = "S")]
+        seconds: Option<f64>,
+        /// Forget the calibration instead.
+        #[arg(long, conflicts_with = "seconds")]
+        clear: bool,
+    },
+    /// The nominal heading GAIT's controller steers to (anti-compliant sidewinding):
+    /// RAD in the pose estimate's world (yaw 0 where the daemon started), or `here`
+    /// for the heading now.
+    Heading {
+        /// Radians, or `here`.
+        #[arg(allow_hyphen_values = true)]
+        heading: String,
+        /// The gait (default: the running one).
+        #[arg(long)]
+        gait: Option<String>,
+    },
+}
+
+/// The method and params of a `controller` command (usage errors as text).
+pub fn request(cmd: &ControllerCmd) -> Result<(&'static str, Option<Value>), String> {
+    Ok(match cmd {
+        ControllerCmd::List { gait } => (
+            "controller.list",
+            gait.as_ref().map(|g| json!({ "gait": g })),
+        ),
+        ControllerCmd::Get { gait } => (
+            "controller.get",
+            gait.as_ref().map(|g| json!({ "gait": g })),
+        ),
+        ControllerCmd::Set {
+            gait,
+            name,
+            preset,
+            config,
+            assignments,
+        } => {
+            let mut p = json!({ "gait": gait, "controller": name });
+            if let Some(preset) = preset {
+                p["preset"] = json!(preset);
+            }
+            if config.is_some() || !assignments.is_empty() {
+                p["config"] = config_overrides(config.as_deref(), assignments)?;
+            }
+            ("controller.set", Some(p))
+        }
+        ControllerCmd::Calibrate {
+            gait,
+            seconds,
+            clear,
+        } => {
+            let mut p = json!({});
+            if let Some(g) = gait {
+                p["gait"] = json!(g);
+            }
+            if let Some(s) = seconds {
+                p["seconds"] = json!(s);
+            }
+            if *clear {
+                p["clear"] = json!(true);
+            }
+            ("controller.calibrate", Some(p))
+        }
+        ControllerCmd::Heading { heading, gait } => {
+            let mut p = json!({});
+            if heading == "here" {
+                p["here"] = json!(true);
+            } else {
+                let h: f64 = heading
+                    .parse()
+                    .ok()
+                    .filter(|h: &f64| h.is_finite())
+                    .ok_or_else(|| format!("heading {heading:?}: radians or `here`"))?;
+                p["heading_rad"] = json!(h);
+            }
+            if let Some(g) = gait {
+                p["gait"] = json!(g);
+            }
+            ("controller.heading", Some(p))
+        }
+    })
+}
 
 /// `KEY.PATH=VALUE` assignments as a nested JSON object: the value is read as JSON
 /// (number, boolean, null, quoted string), else taken as a string.
