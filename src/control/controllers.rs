@@ -16,6 +16,7 @@ use crate::gait::{BodyLayout, GaitKind, GaitParams, ParamPatch};
 use crate::rt::controller_slots::Engagement;
 use crate::rt::controller_slots::{ControllerTelemetry, Installed};
 use crate::rt::messages::LoopRequest;
+use crate::rt::telemetry::Snapshot;
 
 /// `controller.list`: per gait, every controller that runs it with its presets,
 /// default configuration and report names, and which one is installed.
@@ -155,15 +156,7 @@ pub(crate) async fn calibrate(
     gait: Option<GaitKind>,
     what: Calibration,
 ) -> Result<Value, RpcError> {
-    let snap = shared.telemetry.latest();
-    let gait = gait.unwrap_or(snap.gait);
-    let id = snap.controller.installed[gait.index()];
-    let info = shared.catalog.get(id).ok_or_else(|| {
-        RpcError::invalid_params(format!(
-            "{} has no controller installed: controller.set one first",
-            gait.name()
-        ))
-    })?;
+    let (snap, gait, id, info) = installed_controller(shared, gait)?;
     let seconds = match what {
         Calibration::Clear => {
             let cmd = LoopRequest::ControllerCommand(gait, ControllerCommand::ClearCalibration);
@@ -355,14 +348,12 @@ pub(crate) fn telemetry_view(c: &ControllerTelemetry, catalog: &Catalog) -> Valu
     v
 }
 
-/// `controller.heading`: the nominal heading of `gait`'s controller (the running gait's
-/// by default), rad in the pose estimate's world, or (`None`) the heading now. The loop
-/// refuses it, saying why, when that controller does not steer by a heading.
-pub(crate) async fn set_heading(
+/// The latest snapshot, `gait` (the running one by default), its installed
+/// controller's id and info; an error naming the gait when it has none.
+fn installed_controller(
     shared: &Shared,
     gait: Option<GaitKind>,
-    heading_rad: Option<f64>,
-) -> Result<Value, RpcError> {
+) -> Result<(Snapshot, GaitKind, u64, std::sync::Arc<ControllerInfo>), RpcError> {
     let snap = shared.telemetry.latest();
     let gait = gait.unwrap_or(snap.gait);
     let id = snap.controller.installed[gait.index()];
@@ -372,6 +363,18 @@ pub(crate) async fn set_heading(
             gait.name()
         ))
     })?;
+    Ok((snap, gait, id, info))
+}
+
+/// `controller.heading`: the nominal heading of `gait`'s controller (the running gait's
+/// by default), rad in the pose estimate's world, or (`None`) the heading now. The loop
+/// refuses it, saying why, when that controller does not steer by a heading.
+pub(crate) async fn set_heading(
+    shared: &Shared,
+    gait: Option<GaitKind>,
+    heading_rad: Option<f64>,
+) -> Result<Value, RpcError> {
+    let (_, gait, _, info) = installed_controller(shared, gait)?;
     let cmd = ControllerCommand::SetHeading { heading_rad };
     shared
         .router

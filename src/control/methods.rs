@@ -118,11 +118,7 @@ pub(crate) async fn dispatch(
             let gait = p.take_gait("gait")?;
             let (min, max) = (0.1, controllers::CALIBRATION_MAX_S);
             let seconds = p.take_f64_in("seconds", min, max)?;
-            let clear = match p.take_json("clear")? {
-                None | Some(Value::Bool(false)) => false,
-                Some(Value::Bool(true)) => true,
-                Some(_) => return Err(RpcError::invalid_params("`clear` must be true or false")),
-            };
+            let clear = take_flag(&mut p, "clear")?;
             p.finish(&["gait", "seconds", "clear"])?;
             let what = match (clear, seconds) {
                 (true, Some(_)) => {
@@ -139,11 +135,7 @@ pub(crate) async fn dispatch(
             let gait = p.take_gait("gait")?;
             let lim = 2.0 * std::f64::consts::PI;
             let heading = p.take_f64_in("heading_rad", -lim, lim)?;
-            let here = match p.take_json("here")? {
-                None | Some(Value::Bool(false)) => false,
-                Some(Value::Bool(true)) => true,
-                Some(_) => return Err(RpcError::invalid_params("`here` must be true or false")),
-            };
+            let here = take_flag(&mut p, "here")?;
             p.finish(&["gait", "heading_rad", "here"])?;
             let heading = match (heading, here) {
                 (Some(h), false) => Some(h),
@@ -267,4 +259,15 @@ async fn params_set(shared: &Shared, mut p: Params) -> Result<Value, RpcError> {
         .call(LoopRequest::SetParams(gait, patch))
         .await?;
     Ok(json!({ "gait": gait, "params": new }))
+}
+
+/// An optional boolean param (absent: false).
+fn take_flag(p: &mut Params, name: &str) -> Result<bool, RpcError> {
+    match p.take_json(name)? {
+        None | Some(Value::Bool(false)) => Ok(false),
+        Some(Value::Bool(true)) => Ok(true),
+        Some(_) => Err(RpcError::invalid_params(format!(
+            "`{name}` must be true or false"
+        ))),
+    }
 }
