@@ -34,6 +34,7 @@ fn every_example_scenario_generates() {
             "pole.toml",
             "rock-pile-3d.toml",
             "rock-pile.toml",
+            "sidewinding-pegs.toml",
             "walls.toml"
         ]
     );

@@ -10,6 +10,8 @@ use snaked::lab::displacement::Terrain;
 
 #[path = "snake_lab/displacement.rs"]
 mod displacement;
+#[path = "snake_lab/sidewinding.rs"]
+mod sidewinding;
 use snaked::emu::servo::PositionLoop;
 use snaked::emu::world::scenario::WorldScenario;
 use snaked::gait::GaitKind;
@@ -40,6 +42,8 @@ enum Cmd {
     PegArray(displacement::Args),
     /// Directional compliance in 3-D over the reference's rock pile (SPEC §8).
     RockPile(displacement::Args),
+    /// Anti-compliant sidewinding through an irregular peg array (SPEC §7).
+    Sidewinding(sidewinding::Args),
 }
 
 #[derive(Debug, clap::Args)]
@@ -110,6 +114,7 @@ fn main() -> ExitCode {
         Cmd::Pegboard(args) => pegboard(args),
         Cmd::PegArray(args) => displacement::run(Terrain::PegArray, args),
         Cmd::RockPile(args) => displacement::run(Terrain::RockPile, args),
+        Cmd::Sidewinding(args) => sidewinding::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

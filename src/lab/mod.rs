@@ -27,6 +27,7 @@ pub mod pegboard;
 pub mod plots;
 pub mod report;
 pub mod runner;
+pub mod sidewinding;
 pub mod trial;
 
 pub use pegboard::CONTROLLERS as PEGBOARD_CONTROLLERS;

@@ -18,6 +18,7 @@ fn record(signals: usize) -> TrialRecord {
         .collect();
     let body = |x0: f64| (0..19).map(|k| [x0 - 0.064 * k as f64, 0.0]).collect();
     TrialRecord {
+        links_m: Vec::new(),
         sample_dt_s: 0.05,
         start_links_m: body(0.3),
         end_links_m: body(2.3),

@@ -92,6 +92,9 @@ pub struct TrialRecord {
     pub centre_m: Vec<[f64; 2]>,
     /// Link positions at the start and at the end (head first), m.
     pub start_links_m: Vec<[f64; 2]>,
+    /// Every link's position at every sample, head first, flattened: sample `k`'s
+    /// links are [`TrialRecord::links_at`]`(k)`, m.
+    pub links_m: Vec<[f64; 2]>,
     pub end_links_m: Vec<[f64; 2]>,
     /// The controller's signals (names from its report), one series each, sampled
     /// with the centre; NaN while the selector drives (before the takeover).
@@ -108,6 +111,14 @@ pub struct TrialRecord {
     pub cycles_not_running: u64,
     /// Contact onsets between non-adjacent links during the trial (`Plant::self_contacts`).
     pub self_contacts: u64,
+}
+
+impl TrialRecord {
+    /// The links (head first) at sample `k`; empty past the end.
+    pub fn links_at(&self, k: usize) -> &[[f64; 2]] {
+        let n = self.start_links_m.len();
+        self.links_m.get(k * n..(k + 1) * n).unwrap_or(&[])
+    }
 }
 
 /// The body layout and nominal parameters every slithering controller gets.
@@ -261,6 +272,7 @@ pub fn run_trial(
     let mut rec = TrialRecord {
         sample_dt_s: config.sample_dt_s(),
         centre_m: Vec::with_capacity(samples),
+        links_m: Vec::with_capacity(samples * start_links_m.len()),
         start_links_m,
         end_links_m: Vec::new(),
         signals: vec![Vec::with_capacity(samples); signal_names.len()],
@@ -306,8 +318,10 @@ pub(crate) fn plant_of(lp: &ControlLoop) -> &dyn Plant {
 }
 
 fn record(lp: &ControlLoop, rec: &mut TrialRecord) {
-    let c = centre(plant_of(lp));
-    rec.centre_m.push(c);
+    let plant = plant_of(lp);
+    rec.centre_m.push(centre(plant));
+    rec.links_m
+        .extend((0..plant.link_count()).map(|k| ground(plant.link_pose(k).position_m)));
     let report = lp.controllers().report();
     for (k, series) in rec.signals.iter_mut().enumerate() {
         series.push(report.map_or(f64::NAN, |(_, r)| r.signals[k]));
@@ -328,11 +342,12 @@ fn centre(plant: &dyn Plant) -> [f64; 2] {
 /// Ground-plane positions of the links, head first, m.
 fn links(plant: &dyn Plant) -> Vec<[f64; 2]> {
     (0..plant.link_count())
-        .map(|k| {
-            let p = plant.link_pose(k).position_m;
-            [p[0], p[1]]
-        })
+        .map(|k| ground(plant.link_pose(k).position_m))
         .collect()
+}
+
+fn ground([x, y, _]: [f64; 3]) -> [f64; 2] {
+    [x, y]
 }
 
 /// Mean ground-plane position of the front half of the links (`0 .. links/2`), m.

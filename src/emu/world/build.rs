@@ -41,6 +41,10 @@ pub(crate) fn build(
     for (i, r) in s.peg_rows.iter().enumerate() {
         peg_row(s, &format!("peg_row[{i}]"), r, modules, &mut w.pegs)?;
     }
+    for (i, f) in s.peg_fences.iter().enumerate() {
+        let mut rng = g::rng_for(s.seed, f.seed, Kind::PegFence, i as u64);
+        w.pegs.extend(g::fence_pegs(&mut rng, f));
+    }
     for (i, b) in s.peg_boards.iter().enumerate() {
         let mut rng = g::rng_for(s.seed, b.seed, Kind::PegBoard, i as u64);
         let centres =

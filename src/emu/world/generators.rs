@@ -4,7 +4,7 @@
 use rand::{Rng, RngExt, SeedableRng};
 use rand_pcg::Pcg64;
 
-use super::scenario::{MODULE_LENGTH_M, MODULE_RADIUS_M, Region};
+use super::scenario::{MODULE_LENGTH_M, MODULE_RADIUS_M, PegFence, Region};
 use super::spec::{Peg, Rock, WorldSpec};
 
 /// Generator kinds, mixed into the derived seeds so kinds never share a stream.
@@ -14,6 +14,7 @@ pub enum Kind {
     PegBoard = 1,
     RockPile = 2,
     Start = 3,
+    PegFence = 4,
 }
 
 /// An RNG for generator `index` of `kind` from the master `seed` (or `over`ride):
@@ -34,6 +35,26 @@ fn splitmix(x: u64) -> u64 {
 /// Uniform in `[a, b)`.
 pub fn uniform<R: Rng + ?Sized>(rng: &mut R, [a, b]: [f64; 2]) -> f64 {
     a + (b - a) * rng.random::<f64>()
+}
+
+/// The pegs of a fence: the first at `start_m`, each next one a free gap drawn from
+/// `gap_m` further along, while within `length_m`; each pushed off the line by up to
+/// `±jitter_m`.
+pub fn fence_pegs<R: Rng + ?Sized>(rng: &mut R, f: &PegFence) -> Vec<Peg> {
+    let (sin, cos) = f.direction_rad.sin_cos();
+    let mut pegs = Vec::new();
+    let mut along = 0.0;
+    while along <= f.length_m {
+        let off = uniform(rng, [-f.jitter_m, f.jitter_m]);
+        pegs.push(Peg {
+            x_m: f.start_m[0] + along * cos - off * sin,
+            y_m: f.start_m[1] + along * sin + off * cos,
+            diameter_m: f.diameter_m,
+            height_m: f.height_m,
+        });
+        along += f.diameter_m + uniform(rng, f.gap_m);
+    }
+    pegs
 }
 
 /// Consecutive rejected darts after which a layout counts as saturated.

@@ -36,6 +36,9 @@ pub struct WorldScenario {
     /// `[[peg_row]]`: straight rows of pegs, optionally alternating sides.
     #[serde(default, rename = "peg_row")]
     pub peg_rows: Vec<PegRow>,
+    /// `[[peg_fence]]`: seeded irregular rows of pegs with openings between them.
+    #[serde(default, rename = "peg_fence")]
+    pub peg_fences: Vec<PegFence>,
     /// `[[peg]]`: explicit pegs.
     #[serde(default, rename = "peg")]
     pub pegs: Vec<ExplicitPeg>,
@@ -150,6 +153,28 @@ pub struct PegRow {
     /// Pegs inside the bends of the serpenoid this robot makes.
     #[serde(default)]
     pub serpenoid: Option<SerpenoidWave>,
+}
+
+/// `[[peg_fence]]`: pegs along a line from `start_m` in `direction_rad`, `length_m`
+/// long, the free gap between neighbours uniform in `gap_m` and each peg pushed off the
+/// line by up to `jitter_m` either way: an irregular array with openings of random
+/// width (thesis §4.3.7, the sidewinding experiment).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PegFence {
+    pub start_m: [f64; 2],
+    #[serde(default)]
+    pub direction_rad: f64,
+    pub length_m: f64,
+    pub diameter_m: f64,
+    #[serde(default = "default_peg_height")]
+    pub height_m: f64,
+    /// `[min, max]` free gap between neighbouring pegs (surface to surface), m.
+    pub gap_m: [f64; 2],
+    #[serde(default)]
+    pub jitter_m: f64,
+    #[serde(default)]
+    pub seed: Option<u64>,
 }
 
 /// A planar wave of the body axis: wavelength along the row, amplitude across it.

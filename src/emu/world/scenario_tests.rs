@@ -267,6 +267,38 @@ fn random_starts_avoid_pegs_and_vary_by_trial() {
 }
 
 #[test]
+fn a_peg_fence_has_random_openings_within_its_gaps() {
+    let fence = "seed = 3\n[[peg_fence]]\nstart_m = [-2.0, 0.5]\nlength_m = 4.0\n\
+                 diameter_m = 0.05\ngap_m = [0.1, 0.4]\njitter_m = 0.02\n";
+    let w = parse(fence).generate(18).unwrap();
+    assert!(
+        w.pegs.len() >= 4.0f64.div_euclid(0.45) as usize,
+        "{}",
+        w.pegs.len()
+    );
+    let mut gaps = Vec::new();
+    for pair in w.pegs.windows(2) {
+        let (a, b) = (&pair[0], &pair[1]);
+        assert!((a.y_m - 0.5).abs() <= 0.02 && (b.y_m - 0.5).abs() <= 0.02);
+        let free = b.x_m - a.x_m - 0.05;
+        assert!((0.1..0.4).contains(&free), "{free}");
+        gaps.push(free);
+    }
+    assert!(w.pegs.last().unwrap().x_m <= 2.0);
+    // Irregular: the openings differ; another seed draws others; the same one the same.
+    let spread =
+        gaps.iter().cloned().fold(0.0, f64::max) - gaps.iter().cloned().fold(1.0, f64::min);
+    assert!(spread > 0.15, "{gaps:?}");
+    let other = parse(&fence.replace("seed = 3", "seed = 4"))
+        .generate(18)
+        .unwrap();
+    assert_ne!(other.pegs, w.pegs);
+    assert_eq!(parse(fence).generate(18).unwrap().pegs, w.pegs);
+    assert!(err(&fence.replace("[0.1, 0.4]", "[0.4, 0.1]")).contains("peg_fence[0].gap_m"));
+    assert!(err(&fence.replace("[0.1, 0.4]", "[0.0, 0.1]")).contains("peg_fence[0].gap_m"));
+}
+
+#[test]
 fn peg_row_follows_the_serpenoid() {
     let (lambda, amp) = serpenoid_geometry(18, 1.5, std::f64::consts::FRAC_PI_4);
     // Arc wavelength 0.768 m; the wave is shorter along x and ~8.5 cm wide.

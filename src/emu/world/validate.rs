@@ -2,7 +2,7 @@
 //! non-empty, pole sections increasing. Errors name the file and the key.
 
 use super::scenario::{
-    PegBoard, PegRow, PoleGen, Region, RockPile, ScenarioError, StartGen, WorldScenario,
+    PegBoard, PegFence, PegRow, PoleGen, Region, RockPile, ScenarioError, StartGen, WorldScenario,
 };
 
 /// Most pegs or rocks one generator may make (keeps a typo from hanging the sampler).
@@ -27,6 +27,9 @@ impl WorldScenario {
         }
         for (i, r) in self.peg_rows.iter().enumerate() {
             self.peg_row(&format!("peg_row[{i}]"), r)?;
+        }
+        for (i, f) in self.peg_fences.iter().enumerate() {
+            self.peg_fence(&format!("peg_fence[{i}]"), f)?;
         }
         for (i, p) in self.pegs.iter().enumerate() {
             let k = format!("peg[{i}]");
@@ -120,6 +123,32 @@ impl WorldScenario {
                     "must be below π/2",
                 ));
             }
+        }
+        Ok(())
+    }
+
+    fn peg_fence(&self, k: &str, f: &PegFence) -> R {
+        self.finite(&format!("{k}.start_m"), f.start_m[0])?;
+        self.finite(&format!("{k}.start_m"), f.start_m[1])?;
+        self.finite(&format!("{k}.direction_rad"), f.direction_rad)?;
+        self.positive(&format!("{k}.length_m"), f.length_m)?;
+        self.positive(&format!("{k}.diameter_m"), f.diameter_m)?;
+        self.positive(&format!("{k}.height_m"), f.height_m)?;
+        self.non_negative(&format!("{k}.jitter_m"), f.jitter_m)?;
+        let [lo, hi] = f.gap_m;
+        self.positive(&format!("{k}.gap_m"), lo)?;
+        self.finite(&format!("{k}.gap_m"), hi)?;
+        if hi < lo {
+            return Err(self.invalid(
+                format!("{k}.gap_m"),
+                format!("[{lo}, {hi}]: the maximum is below the minimum"),
+            ));
+        }
+        if f.length_m / (lo + f.diameter_m) > MAX_COUNT as f64 {
+            return Err(self.invalid(
+                format!("{k}.length_m"),
+                format!("more than {MAX_COUNT} pegs at the smallest gap"),
+            ));
         }
         Ok(())
     }

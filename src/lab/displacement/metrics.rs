@@ -164,6 +164,7 @@ mod tests {
 
     fn record(centre: Vec<[f64; 2]>, seconds: f64) -> TrialRecord {
         TrialRecord {
+            links_m: Vec::new(),
             sample_dt_s: 0.05,
             centre_m: centre,
             start_links_m: vec![[0.0; 2]; 17],

@@ -289,6 +289,7 @@ mod tests {
             signals.push((0..n).map(|k| if k > 60 { 1.0 } else { 0.0 }).collect());
         }
         TrialRecord {
+            links_m: Vec::new(),
             sample_dt_s: 0.05,
             centre_m: vec![[0.0; 2]; n],
             start_links_m: vec![[0.0; 2]; 17],

@@ -1,0 +1,338 @@
+//! A sidewinding trial's figures (thesis §4.3.7): whether and where the body passed
+//! the peg array, how many openings it slid past first, when β reversed, and how far
+//! the heading (true, and the estimate against the truth) was off. Pure functions of
+//! the trial's record, tested on synthetic ones.
+
+use std::f64::consts::{PI, TAU};
+
+use super::fence::Fence;
+use crate::controllers::sidewinding::wrap_pi;
+use crate::lab::metrics::mean_sd_median;
+use crate::lab::runner::TrialResult;
+use crate::lab::trial::TrialRecord;
+
+/// How a trial ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Outcome {
+    /// Every link passed the array.
+    Through,
+    /// The body went round an end of the array or back from it (a failed attempt).
+    OffBoard,
+    /// The time limit came first (also a failed attempt).
+    Timeout,
+}
+
+impl Outcome {
+    pub fn name(self) -> &'static str {
+        match self {
+            Outcome::Through => "through",
+            Outcome::OffBoard => "off_board",
+            Outcome::Timeout => "timeout",
+        }
+    }
+}
+
+/// One trial's figures.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SidewindingMetrics {
+    pub outcome: Outcome,
+    /// Simulated time of the trial (until through, off the board or the limit), s.
+    pub seconds: f64,
+    /// The opening the body first came up to (a link within touching distance of the
+    /// array), and the one it went through.
+    pub first_opening: Option<usize>,
+    pub opening: Option<usize>,
+    /// Openings between those two: passed over before entering one (through only).
+    pub openings_passed: Option<usize>,
+    /// Width of the opening it went through, m (NaN otherwise).
+    pub opening_width_m: f64,
+    /// β's crossings from one well to the other, and the time of the first (NaN if none).
+    pub reversals: u64,
+    pub first_reversal_s: f64,
+    /// The time until the body had reversed beyond the array: through, and β reversed
+    /// (NaN otherwise): the later of the two.
+    pub reverse_beyond_s: f64,
+    /// Heading error at the end: the true body heading (tail to head, over the last gait
+    /// cycle) against the nominal one for the well β is in, rad, wrapped (NaN before a
+    /// valid estimate).
+    pub heading_error_end_rad: f64,
+    /// The estimate's heading against the true one low-passed alike, aligned where the
+    /// controller first had it: mean and largest absolute error over the trial, rad.
+    pub estimate_error_mean_rad: f64,
+    pub estimate_error_max_rad: f64,
+    /// Centre's displacement towards the far side, m.
+    pub progress_m: f64,
+    pub self_contacts: u64,
+}
+
+impl SidewindingMetrics {
+    /// A failed attempt: not through.
+    pub fn failed(&self) -> bool {
+        self.outcome != Outcome::Through
+    }
+}
+
+fn series<'a>(rec: &'a TrialRecord, name: &str) -> Option<&'a [f64]> {
+    let k = rec.signal_names.iter().position(|n| n == name)?;
+    Some(&rec.signals[k])
+}
+
+/// The true heading (tail to head) at every sample.
+fn true_headings(rec: &TrialRecord) -> Vec<f64> {
+    (0..rec.centre_m.len())
+        .map(|k| {
+            let l = rec.links_at(k);
+            match (l.first(), l.last()) {
+                (Some(h), Some(t)) => (h[1] - t[1]).atan2(h[0] - t[0]),
+                _ => f64::NAN,
+            }
+        })
+        .collect()
+}
+
+/// `headings` low-passed with time constant `tau_s` as unit vectors (as the
+/// controller filters its estimate).
+fn low_passed(headings: &[f64], dt_s: f64, tau_s: f64) -> Vec<f64> {
+    let a = if tau_s > 0.0 {
+        (dt_s / tau_s).min(1.0)
+    } else {
+        1.0
+    };
+    let mut v: Option<[f64; 2]> = None;
+    headings
+        .iter()
+        .map(|h| {
+            let now = [h.cos(), h.sin()];
+            let f = match v {
+                None => now,
+                Some(p) => [p[0] + a * (now[0] - p[0]), p[1] + a * (now[1] - p[1])],
+            };
+            v = Some(f);
+            f[1].atan2(f[0])
+        })
+        .collect()
+}
+
+fn circular_mean(a: &[f64]) -> f64 {
+    let (c, s) = a
+        .iter()
+        .filter(|x| x.is_finite())
+        .fold((0.0, 0.0), |(c, s), x| (c + x.cos(), s + x.sin()));
+    s.atan2(c)
+}
+
+/// The well β is in: 0 or π.
+fn well_of(beta: f64) -> f64 {
+    if wrap_pi(beta - PI).abs() < PI / 2.0 {
+        PI
+    } else {
+        0.0
+    }
+}
+
+/// Per link, where (arc length along the array) it last crossed the line to the far
+/// side; the opening most links went through.
+fn opening_passed(fence: &Fence, rec: &TrialRecord) -> Option<usize> {
+    let n = rec.start_links_m.len();
+    let samples = rec.centre_m.len();
+    let mut votes = vec![0usize; fence.openings.len()];
+    for link in 0..n {
+        let mut last = None;
+        for k in 1..samples {
+            let (a, b) = (rec.links_at(k - 1), rec.links_at(k));
+            let ((ua, da), (ub, db)) = (fence.coords(a[link]), fence.coords(b[link]));
+            if da < 0.0 && db >= 0.0 {
+                let t = -da / (db - da);
+                last = Some(ua + t * (ub - ua));
+            }
+        }
+        if let Some(o) = last.and_then(|u| fence.opening_at(u)) {
+            votes[o] += 1;
+        }
+    }
+    (0..votes.len())
+        .filter(|&o| votes[o] > 0)
+        .max_by_key(|&o| (votes[o], std::cmp::Reverse(o)))
+}
+
+/// The opening nearest the first link to come within touching distance of the array.
+fn first_opening(fence: &Fence, rec: &TrialRecord) -> Option<usize> {
+    let touch = fence.clear_m + 0.02;
+    (0..rec.centre_m.len()).find_map(|k| {
+        rec.links_at(k)
+            .iter()
+            .map(|p| fence.coords(*p))
+            .filter(|(_, d)| *d > -touch)
+            .max_by(|a, b| a.1.total_cmp(&b.1))
+            .and_then(|(u, _)| fence.opening_at(u))
+    })
+}
+
+/// The figures of `rec` on `fence`; `heading_filter_s` is the controller's heading
+/// low-pass (the true heading is filtered alike before comparing).
+pub fn sidewinding_metrics(
+    fence: &Fence,
+    rec: &TrialRecord,
+    heading_filter_s: f64,
+) -> SidewindingMetrics {
+    let last = rec.centre_m.len().saturating_sub(1);
+    let through = rec.success && fence.through(rec.links_at(last).iter().copied());
+    let outcome = if through {
+        Outcome::Through
+    } else if rec.success {
+        Outcome::OffBoard
+    } else {
+        Outcome::Timeout
+    };
+    let opening = if through {
+        opening_passed(fence, rec)
+    } else {
+        None
+    };
+    let first = first_opening(fence, rec);
+    let openings_passed = match (first, opening) {
+        (Some(a), Some(b)) => Some(a.abs_diff(b)),
+        _ => None,
+    };
+    let dt = rec.sample_dt_s;
+    let reversals_s = series(rec, "reversals").unwrap_or(&[]);
+    let first_rev = reversals_s.iter().position(|&r| r >= 1.0);
+    let reversals = reversals_s
+        .iter()
+        .rev()
+        .find(|v| v.is_finite())
+        .map_or(0, |&r| r as u64);
+    let first_reversal_s = first_rev.map_or(f64::NAN, |k| k as f64 * dt);
+    let reverse_beyond_s = if through && first_rev.is_some() {
+        first_reversal_s.max(rec.seconds)
+    } else {
+        f64::NAN
+    };
+
+    // Headings: the estimate aligned to the truth where the controller first had one.
+    let truth = low_passed(&true_headings(rec), dt, heading_filter_s);
+    let est = series(rec, "heading_rad").unwrap_or(&[]);
+    let nominal = series(rec, "heading_nominal_rad").unwrap_or(&[]);
+    let beta = series(rec, "beta_rad").unwrap_or(&[]);
+    let aligned = est.iter().position(|h| h.is_finite());
+    let (mut sum, mut max, mut count) = (0.0, 0.0_f64, 0usize);
+    let mut heading_error_end_rad = f64::NAN;
+    if let Some(k0) = aligned {
+        let offset = wrap_pi(truth[k0] - est[k0]);
+        for k in k0..est.len().min(truth.len()) {
+            if est[k].is_finite() {
+                let e = wrap_pi(est[k] + offset - truth[k]).abs();
+                sum += e;
+                max = max.max(e);
+                count += 1;
+            }
+        }
+        let cycle = ((TAU / rec.temporal_freq_rad_s.abs()) / dt)
+            .round()
+            .max(1.0) as usize;
+        let raw = true_headings(rec);
+        let from = raw.len().saturating_sub(cycle);
+        let end = circular_mean(&raw[from..]);
+        if let (Some(n), Some(b)) = (nominal.last(), beta.last())
+            && n.is_finite()
+        {
+            heading_error_end_rad = wrap_pi(end - (n + offset) - well_of(*b));
+        }
+    }
+    let progress_m = match (rec.centre_m.first(), rec.centre_m.last()) {
+        (Some(a), Some(b)) => {
+            let f = fence.forward();
+            (b[0] - a[0]) * f[0] + (b[1] - a[1]) * f[1]
+        }
+        _ => 0.0,
+    };
+    SidewindingMetrics {
+        outcome,
+        seconds: rec.seconds,
+        first_opening: first,
+        opening,
+        openings_passed,
+        opening_width_m: opening.map_or(f64::NAN, |o| fence.openings[o].width_m()),
+        reversals,
+        first_reversal_s,
+        reverse_beyond_s,
+        heading_error_end_rad,
+        estimate_error_mean_rad: if count > 0 {
+            sum / count as f64
+        } else {
+            f64::NAN
+        },
+        estimate_error_max_rad: if count > 0 { max } else { f64::NAN },
+        progress_m,
+        self_contacts: rec.self_contacts,
+    }
+}
+
+/// One controller's trials.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ControllerSummary {
+    pub controller: String,
+    pub trials: usize,
+    pub through: usize,
+    pub off_board: usize,
+    pub timeouts: usize,
+    /// Openings passed before entering, over the trials that went through: mean, sd,
+    /// median.
+    pub openings_passed: Option<(f64, f64, f64)>,
+    /// Time to reverse beyond the array, over the trials that did.
+    pub reverse_beyond_s: Option<(f64, f64, f64)>,
+    /// Trials whose β reversed at least once.
+    pub reversed: usize,
+    /// |heading error| at the end, mean over the trials that had an estimate.
+    pub heading_error_end_rad: Option<(f64, f64, f64)>,
+    /// Mean and worst estimate error over the trials.
+    pub estimate_error_mean_rad: f64,
+    pub estimate_error_max_rad: f64,
+    pub progress_m: (f64, f64, f64),
+}
+
+/// Per controller, in the order they appear.
+pub fn summarise(results: &[TrialResult<super::SidewindingPegs>]) -> Vec<ControllerSummary> {
+    crate::lab::runner::controller_names(results)
+        .into_iter()
+        .map(|name| {
+            let ms: Vec<&SidewindingMetrics> = results
+                .iter()
+                .filter(|r| r.controller == name)
+                .map(|r| &r.metrics)
+                .collect();
+            let stat = |f: &dyn Fn(&SidewindingMetrics) -> f64| {
+                let v: Vec<f64> = ms.iter().map(|m| f(m)).filter(|v| v.is_finite()).collect();
+                mean_sd_median(&v)
+            };
+            let count = |o: Outcome| ms.iter().filter(|m| m.outcome == o).count();
+            let est: Vec<f64> = ms
+                .iter()
+                .map(|m| m.estimate_error_mean_rad)
+                .filter(|v| v.is_finite())
+                .collect();
+            ControllerSummary {
+                controller: name.to_owned(),
+                trials: ms.len(),
+                through: count(Outcome::Through),
+                off_board: count(Outcome::OffBoard),
+                timeouts: count(Outcome::Timeout),
+                openings_passed: stat(&|m| m.openings_passed.map_or(f64::NAN, |o| o as f64)),
+                reverse_beyond_s: stat(&|m| m.reverse_beyond_s),
+                reversed: ms.iter().filter(|m| m.reversals > 0).count(),
+                heading_error_end_rad: stat(&|m| m.heading_error_end_rad.abs()),
+                estimate_error_mean_rad: mean_sd_median(&est).map_or(f64::NAN, |s| s.0),
+                estimate_error_max_rad: ms
+                    .iter()
+                    .map(|m| m.estimate_error_max_rad)
+                    .filter(|v| v.is_finite())
+                    .fold(f64::NAN, f64::max),
+                progress_m: stat(&|m| m.progress_m).unwrap_or((f64::NAN, f64::NAN, f64::NAN)),
+            }
+        })
+        .collect()
+}
+
+#[cfg(test)]
+#[path = "metrics_tests.rs"]
+mod tests;

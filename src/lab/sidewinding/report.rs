@@ -1,0 +1,126 @@
+//! `results.csv` (one row per trial) and `summary.md` of the sidewinding experiment:
+//! per controller its failed attempts, openings passed before entering, time to
+//! reverse beyond the array, the reversals and the heading errors (the thesis's
+//! Fig. 4.15 and 4.16 as a table).
+
+use std::fmt::Write as _;
+
+use super::SidewindingPegs;
+use super::metrics::summarise;
+use crate::lab::report::{SummaryContext, csv_field};
+use crate::lab::runner::TrialResult;
+
+/// The CSV header; one row per trial follows in plan order.
+pub const CSV_HEADER: &str = "controller,layout,start,repeat,outcome,seconds,first_opening,\
+opening,openings_passed,opening_width_m,reversals,first_reversal_s,reverse_beyond_s,\
+heading_error_end_rad,estimate_error_mean_rad,estimate_error_max_rad,progress_m,self_contacts";
+
+fn opt(v: Option<usize>) -> String {
+    v.map_or_else(String::new, |v| v.to_string())
+}
+
+/// `results.csv` as text.
+pub fn results_csv(results: &[TrialResult<SidewindingPegs>]) -> String {
+    let mut out = String::with_capacity(120 * (results.len() + 1));
+    out.push_str(CSV_HEADER);
+    out.push('\n');
+    for r in results {
+        let m = &r.metrics;
+        let _ = writeln!(
+            out,
+            "{},{},{},{},{},{:.2},{},{},{},{:.3},{},{:.2},{:.2},{:.3},{:.3},{:.3},{:.3},{}",
+            csv_field(&r.controller),
+            csv_field(&r.layout),
+            r.start,
+            r.repeat,
+            m.outcome.name(),
+            m.seconds,
+            opt(m.first_opening),
+            opt(m.opening),
+            opt(m.openings_passed),
+            m.opening_width_m,
+            m.reversals,
+            m.first_reversal_s,
+            m.reverse_beyond_s,
+            m.heading_error_end_rad,
+            m.estimate_error_mean_rad,
+            m.estimate_error_max_rad,
+            m.progress_m,
+            m.self_contacts
+        );
+    }
+    out
+}
+
+fn stat(s: Option<(f64, f64, f64)>, digits: usize) -> String {
+    s.map_or_else(
+        || "–".into(),
+        |(m, sd, _)| format!("{m:.digits$} ± {sd:.digits$}"),
+    )
+}
+
+/// `summary.md` as text.
+pub fn summary_markdown(results: &[TrialResult<SidewindingPegs>], ctx: &SummaryContext) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "# Sidewinding through an irregular peg array (SPEC §7, thesis §4.3.7)\n"
+    );
+    let _ = writeln!(s, "Command:\n\n```sh\n{}\n```\n", ctx.command);
+    let _ = writeln!(
+        s,
+        "{} layout(s) ({}), {} start(s) each, {} trial(s) per start (sensor-noise seeds), \
+         at most {} s per trial.\n",
+        ctx.layouts.len(),
+        ctx.layouts.join(", "),
+        ctx.starts,
+        ctx.repeats,
+        ctx.limit_s
+    );
+    s.push_str(
+        "| controller | trials | through | failed: off board | failed: time | openings passed \
+         | reverse beyond s | β reversed | end heading error rad | estimate error rad (mean / max) \
+         | progress m |\n\
+         | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n",
+    );
+    for c in summarise(results) {
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.3} / {:.3} | {:.2} ± {:.2} |",
+            c.controller,
+            c.trials,
+            c.through,
+            c.off_board,
+            c.timeouts,
+            stat(c.openings_passed, 2),
+            stat(c.reverse_beyond_s, 1),
+            c.reversed,
+            stat(c.heading_error_end_rad, 2),
+            c.estimate_error_mean_rad,
+            c.estimate_error_max_rad,
+            c.progress_m.0,
+            c.progress_m.1
+        );
+    }
+    let _ = writeln!(
+        s,
+        "\nThrough = every link beyond the pegs (peg radius + jitter + module radius past \
+         the array's line). Failed attempt = not through: the body went round an end of the \
+         array or 1 m back from it (off board), or the time ran out. Openings passed = \
+         openings between the one nearest the first link to come up to the array and the \
+         one most links last crossed through (through trials only). Reverse beyond = the \
+         later of the first β reversal and passing the array (trials that did both). End \
+         heading error = the true heading (tail to head, mean over the last gait cycle) \
+         against the nominal one for β's well. Estimate error = the controller's low-passed \
+         heading estimate against the true heading low-passed alike, aligned at the first \
+         estimate. Mean ± sample sd. Definitions: docs/lab.md."
+    );
+    let _ = writeln!(s, "\nPer trial: `results.csv`.");
+    if !ctx.plots.is_empty() {
+        s.push_str("\nPlots:\n\n");
+        for p in &ctx.plots {
+            let _ = writeln!(s, "- `{p}`");
+        }
+    }
+    s
+}
