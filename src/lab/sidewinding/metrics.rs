@@ -210,7 +210,8 @@ pub fn sidewinding_metrics(
     };
 
     // Headings: the estimate aligned to the truth where the controller first had one.
-    let truth = low_passed(&true_headings(rec), dt, heading_filter_s);
+    let raw = true_headings(rec);
+    let truth = low_passed(&raw, dt, heading_filter_s);
     let est = series(rec, "heading_rad").unwrap_or(&[]);
     let nominal = series(rec, "heading_nominal_rad").unwrap_or(&[]);
     let beta = series(rec, "beta_rad").unwrap_or(&[]);
@@ -230,7 +231,6 @@ pub fn sidewinding_metrics(
         let cycle = ((TAU / rec.temporal_freq_rad_s.abs()) / dt)
             .round()
             .max(1.0) as usize;
-        let raw = true_headings(rec);
         let from = raw.len().saturating_sub(cycle);
         let end = circular_mean(&raw[from..]);
         if let (Some(n), Some(b)) = (nominal.last(), beta.last())

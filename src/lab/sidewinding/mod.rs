@@ -71,7 +71,6 @@ impl ExperimentModule for SidewindingPegs {
 /// Writes `results.csv`, `summary.md` and per controller its first trial's
 /// `path-*.png` and `signals-*.png` into `dir` (created if missing); returns the files.
 pub fn write_report(
-    module: &SidewindingPegs,
     dir: &std::path::Path,
     results: &[super::runner::TrialResult<SidewindingPegs>],
     ctx: &super::report::SummaryContext,
@@ -104,7 +103,6 @@ pub fn write_report(
         .filter_map(|p| p.file_name().map(|n| n.to_string_lossy().into_owned()))
         .collect();
     let md = dir.join("summary.md");
-    let _ = module;
     super::report::write_text(&md, &report::summary_markdown(results, &ctx))?;
     written.push(md);
     Ok(written)
