@@ -366,3 +366,63 @@ fn rock_pile_runs_the_3d_controllers() {
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("unknown controller"));
 }
+
+#[test]
+fn sidewinding_runs_starts_times_repeats_and_writes_its_figures() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("sw");
+    let o = lab(&[
+        "sidewinding",
+        "--controllers",
+        "ac_sfc,sw_open_loop",
+        "--starts",
+        "1",
+        "--repeats",
+        "2",
+        "--seconds",
+        "3",
+        "--quiet",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let csv = read(&out.join("results.csv"));
+    let rows: Vec<&str> = csv.lines().collect();
+    assert!(
+        rows[0].starts_with("controller,layout,start,repeat,outcome,seconds,first_opening"),
+        "{csv}"
+    );
+    assert_eq!(rows.len(), 1 + 2 * 2, "{csv}");
+    // Three seconds cannot get the body through the array: a time-out each.
+    assert!(
+        rows[1].starts_with("ac_sfc,") && rows[1].contains(",timeout,"),
+        "{csv}"
+    );
+    assert!(rows[3].starts_with("sw_open_loop,"), "{csv}");
+    let md = read(&out.join("summary.md"));
+    assert!(md.contains("| ac_sfc | 2 | 0 |"), "{md}");
+    for f in [
+        "metrics.png",
+        "trial-ac_sfc.png",
+        "signals-sw_open_loop.png",
+    ] {
+        let bytes = std::fs::read(out.join(f)).unwrap();
+        assert_eq!(bytes[..8], PNG_SIGNATURE, "{f}");
+    }
+    // A scenario without a peg array is refused before any trial.
+    let o = lab(&[
+        "sidewinding",
+        "--scenario",
+        concat!(env!("CARGO_MANIFEST_DIR"), "/scenarios/flat.toml"),
+        "--quiet",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(
+        o.status.code(),
+        Some(2),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(String::from_utf8_lossy(&o.stderr).contains("peg_fence"));
+}

@@ -8,6 +8,7 @@ use std::path::Path;
 use std::sync::Once;
 
 use plotters::coord::Shift;
+use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 use plotters::style::{FontStyle, register_font};
@@ -74,16 +75,24 @@ pub fn path_plot(
     rec: &TrialRecord,
 ) -> Result<(), LabError> {
     register_fonts();
+    let width = 1100u32;
+    let height = path_height(width, world, region, rec);
+    let root = BitMapBackend::new(path, (width, height)).into_drawing_area();
+    draw_path(&root, path, title, world, region, rec)?;
+    root.present().map_err(plot_err(path))
+}
+
+/// The chart [`draw_path`] draws on: metres on both axes.
+pub(crate) type PathChart<'a, 'b> =
+    ChartContext<'a, BitMapBackend<'b>, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
+
+const PATH_MARGINS: (u32, u32, u32) = (70, 50, 50);
+
+fn path_bounds(world: &WorldSpec, region: Option<&Region>, rec: &TrialRecord) -> [f64; 4] {
     let corners: Vec<[f64; 2]> = region
         .map(|r| vec![[r.x_m[0], r.y_m[0]], [r.x_m[1], r.y_m[1]]])
         .unwrap_or_default();
-    let reach = |k: &crate::emu::world::Rock| {
-        k.points_m
-            .iter()
-            .map(|q| q[0].hypot(q[1]))
-            .fold(0.0, f64::max)
-    };
-    let b = bounds(
+    bounds(
         corners
             .into_iter()
             .chain(world.pegs.iter().map(|p| [p.x_m, p.y_m]))
@@ -91,17 +100,45 @@ pub fn path_plot(
             .chain(rec.start_links_m.iter().copied())
             .chain(rec.end_links_m.iter().copied()),
         0.1,
-    );
-    // Equal scales on both axes: the plot area's aspect follows the data's.
-    let width = 1100u32;
-    let (left, bottom, top) = (70u32, 50u32, 50u32);
+    )
+}
+
+/// The height in pixels a path figure `width` wide needs for equal scales on both axes.
+pub(crate) fn path_height(
+    width: u32,
+    world: &WorldSpec,
+    region: Option<&Region>,
+    rec: &TrialRecord,
+) -> u32 {
+    let b = path_bounds(world, region, rec);
+    let (left, bottom, top) = PATH_MARGINS;
     let area_w = f64::from(width - left - 20);
     let area_h = (area_w * (b[3] - b[2]) / (b[1] - b[0])).clamp(200.0, 1400.0);
-    let height = area_h as u32 + bottom + top;
-    let root = BitMapBackend::new(path, (width, height)).into_drawing_area();
+    area_h as u32 + bottom + top
+}
+
+/// [`path_plot`]'s drawing on `root` (sized by [`path_height`]); returns the chart so a
+/// caller can draw more on it. `path` names the file in errors.
+pub(crate) fn draw_path<'a, 'b>(
+    root: &'a DrawingArea<BitMapBackend<'b>, Shift>,
+    path: &Path,
+    title: &str,
+    world: &WorldSpec,
+    region: Option<&Region>,
+    rec: &TrialRecord,
+) -> Result<PathChart<'a, 'b>, LabError> {
+    let reach = |k: &crate::emu::world::Rock| {
+        k.points_m
+            .iter()
+            .map(|q| q[0].hypot(q[1]))
+            .fold(0.0, f64::max)
+    };
+    // Equal scales on both axes: the plot area's aspect follows the data's.
+    let b = path_bounds(world, region, rec);
+    let (left, bottom, _) = PATH_MARGINS;
     let err = plot_err(path);
     root.fill(&WHITE).map_err(&err)?;
-    let mut chart = ChartBuilder::on(&root)
+    let mut chart = ChartBuilder::on(root)
         .caption(title, (FONT, 22))
         .margin_right(20)
         .x_label_area_size(bottom)
@@ -189,7 +226,7 @@ pub fn path_plot(
         .label_font((FONT, 14))
         .draw()
         .map_err(&err)?;
-    root.present().map_err(&err)
+    Ok(chart)
 }
 
 /// The controller's signals over the trial, one panel per signal (at most

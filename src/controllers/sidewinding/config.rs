@@ -6,7 +6,8 @@ use std::f64::consts::PI;
 
 use serde::{Deserialize, Serialize};
 
-use super::steering::{HeadingConfig, ReversalConfig};
+use super::heading::HeadingConfig;
+use super::reversal::ReversalConfig;
 use crate::controller::config::{ConfigError, check_range};
 use crate::controllers::compliant_slithering::{
     Centralization, CompliantSlitheringConfig, ParamConfig,
@@ -165,6 +166,9 @@ impl SidewindingConfig {
         check_range("heading.deadband_rad", h.deadband_rad, 0.0, PI)?;
         check_range("heading.turn_taper", h.turn_taper, 0.0, 0.8)?;
         check_range("heading.taper_rate_per_s", h.taper_rate_per_s, 1e-3, 10.0)?;
+        check_range("heading.settle_rad", h.settle_rad, 0.0, h.deadband_rad)?;
+        check_range("heading.trim_gain", h.trim_gain, 0.0, 100.0)?;
+        check_range("heading.trim_max", h.trim_max, 0.0, h.turn_taper)?;
         if h.turn_sign != 1.0 && h.turn_sign != -1.0 {
             return Err(ConfigError::invalid("heading.turn_sign", "must be 1 or -1"));
         }
@@ -192,6 +196,9 @@ mod tests {
         let mut c = SidewindingConfig::full();
         c.heading.turn_taper = f64::NAN;
         assert!(c.check().unwrap_err().to_string().contains("turn_taper"));
+        let mut c = SidewindingConfig::full();
+        c.heading.trim_max = c.heading.turn_taper + 0.1;
+        assert!(c.check().unwrap_err().to_string().contains("trim_max"));
         let mut c = SidewindingConfig::full();
         c.amplitude.gains.max = 9.0;
         assert!(

@@ -1,11 +1,13 @@
 //! Anti-compliant sidewinding (SPEC §7): the lateral wave from compliant slithering's
 //! admittance engine (windowed amplitude, central spatial frequency, sign −1), the
 //! dorsal wave on the lateral one's phase shifted by `δ + β`, β from the reversal, and
-//! both amplitudes tapered by the heading adjustment (conical sidewinding,
-//! [`taper_factor`]).
+//! both amplitudes graded along the body by the heading adjustment ([`taper_factor`]).
 
 use super::config::SidewindingConfig;
-use super::steering::{HeadingAdjust, Reversal, taper_factor, wrap_pi};
+use std::f64::consts::TAU;
+
+use super::heading::{HeadingAdjust, taper_factor};
+use super::reversal::{Reversal, wrap_pi};
 use crate::controller::nominal::{Nominal, lateral_room, within};
 use crate::controller::report::ControllerReport;
 use crate::controller::{
@@ -15,7 +17,7 @@ use crate::controllers::compliant_slithering::CompliantSlithering;
 use crate::gait::{BodyLayout, GaitParams, JOINT_LIMIT_RAD, Plane};
 
 /// Signals reported, in order (names and units in `super::report_spec`).
-pub(super) const SIGNALS: usize = 11;
+pub(super) const SIGNALS: usize = 12;
 
 /// The controller. Construction allocates; nothing else does.
 pub struct AntiCompliantSidewinding {
@@ -75,6 +77,11 @@ impl AntiCompliantSidewinding {
         self.adjust.taper
     }
 
+    /// The heading adjustment's learnt trim (the taper that goes straight).
+    pub fn trim(&self) -> f64 {
+        self.adjust.trim
+    }
+
     /// The low-passed heading, rad (`None` before a valid estimate).
     pub fn heading_rad(&self) -> Option<f64> {
         self.heading.map(|[c, s]| s.atan2(c))
@@ -111,7 +118,7 @@ impl AntiCompliantSidewinding {
 
 impl Controller for AntiCompliantSidewinding {
     /// The lateral engine's checks, with room in the joints' range for the amplitudes
-    /// the heading adjustment's taper can reach.
+    /// the heading adjustment's taper can reach (`1 + turn_taper` at one end).
     fn accepts(&self, params: &GaitParams) -> Result<(), NominalMismatch> {
         self.lateral.accepts(params)?;
         let grow = if self.config.heading.enabled {
@@ -135,7 +142,7 @@ impl Controller for AntiCompliantSidewinding {
         self.nominal = Nominal::engaged(h);
         // The selector's wave has β = 0 and no taper: start there, so nothing jumps.
         self.reversal = Reversal::default();
-        self.adjust = HeadingAdjust::default();
+        self.adjust = HeadingAdjust::new(TAU / self.nominal.params.temporal_freq_rad_s.abs());
         self.heading = None;
         self.last_t = None;
     }
@@ -185,6 +192,7 @@ impl Controller for AntiCompliantSidewinding {
             spatial_freq,
             force_a,
             force_ws,
+            self.adjust.trim,
         ];
         out.signals.fill(0.0);
         out.signals[..SIGNALS].copy_from_slice(&signals);

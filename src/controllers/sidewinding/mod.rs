@@ -1,16 +1,18 @@
 //! Anti-compliant sidewinding with inertial steering (thesis §4.3, SPEC §7): the lateral
 //! amplitude (windowed) and spatial frequency (central) push back against what pushes
 //! the body; the dorsal offset β reverses the gait when the pose estimate's heading has
-//! been turned round, and a conical taper turns the body back to its nominal heading.
+//! been turned round, and an amplitude gradient along the body turns it back to its nominal heading.
 //! See docs/compliance.md, "Sidewinding".
 
 mod config;
 mod controller;
-mod steering;
+mod heading;
+mod reversal;
 
 pub use config::SidewindingConfig;
 pub use controller::AntiCompliantSidewinding;
-pub use steering::{HeadingAdjust, HeadingConfig, Reversal, ReversalConfig, wrap_pi};
+pub use heading::{HeadingAdjust, HeadingConfig, taper_factor};
+pub use reversal::{Reversal, ReversalConfig, wrap_pi};
 
 use crate::controller::report::{ReportSpec, SignalSpec};
 use crate::controller::{BuildContext, ConfigError, Controller, ControllerKind};
@@ -50,6 +52,7 @@ impl ControllerKind for SidewindingKind {
             s("spatial_freq_rad", "rad/body length"),
             s("force_amplitude_peak", "N·m"),
             s("force_spatial_freq_peak", "N·m·body length"),
+            s("taper_trim", "1"),
         ];
         debug_assert_eq!(signals.len(), controller::SIGNALS);
         // The windows are the lateral engine's (amplitude, spatial frequency, phase).

@@ -130,6 +130,52 @@ fn well_of(beta: f64) -> f64 {
     }
 }
 
+/// A trial's headings in the true world frame, per sample.
+pub struct HeadingTraces {
+    /// Tail to head.
+    pub raw: Vec<f64>,
+    /// `raw` low-passed as the controller filters its estimate.
+    pub truth: Vec<f64>,
+    /// The controller's low-passed estimate, turned onto the truth where it first had
+    /// one (the estimate's yaw is its own); NaN before.
+    pub estimate: Vec<f64>,
+    /// The heading the controller steers to: its nominal plus the well β is in, turned
+    /// alike; NaN before an estimate.
+    pub target: Vec<f64>,
+    pub beta: Vec<f64>,
+}
+
+impl HeadingTraces {
+    /// Of `rec`, with the controller's heading low-pass `heading_filter_s`.
+    pub fn of(rec: &TrialRecord, heading_filter_s: f64) -> Self {
+        let raw = true_headings(rec);
+        let truth = low_passed(&raw, rec.sample_dt_s, heading_filter_s);
+        let est = series(rec, "heading_rad").unwrap_or(&[]);
+        let nominal = series(rec, "heading_nominal_rad").unwrap_or(&[]);
+        let beta: Vec<f64> = series(rec, "beta_rad").unwrap_or(&[]).to_vec();
+        let n = truth.len();
+        let (mut estimate, mut target) = (vec![f64::NAN; n], vec![f64::NAN; n]);
+        if let Some(k0) = est.iter().position(|h| h.is_finite())
+            && k0 < n
+        {
+            let offset = wrap_pi(truth[k0] - est[k0]);
+            for k in k0..n.min(est.len()) {
+                estimate[k] = wrap_pi(est[k] + offset);
+                if let (Some(m), Some(b)) = (nominal.get(k), beta.get(k)) {
+                    target[k] = wrap_pi(m + offset + well_of(*b));
+                }
+            }
+        }
+        Self {
+            raw,
+            truth,
+            estimate,
+            target,
+            beta,
+        }
+    }
+}
+
 /// Per link, where (arc length along the array) it last crossed the line to the far
 /// side; the opening most links went through.
 fn opening_passed(fence: &Fence, rec: &TrialRecord) -> Option<usize> {
@@ -209,35 +255,23 @@ pub fn sidewinding_metrics(
         f64::NAN
     };
 
-    // Headings: the estimate aligned to the truth where the controller first had one.
-    let raw = true_headings(rec);
-    let truth = low_passed(&raw, dt, heading_filter_s);
-    let est = series(rec, "heading_rad").unwrap_or(&[]);
-    let nominal = series(rec, "heading_nominal_rad").unwrap_or(&[]);
-    let beta = series(rec, "beta_rad").unwrap_or(&[]);
-    let aligned = est.iter().position(|h| h.is_finite());
+    let h = HeadingTraces::of(rec, heading_filter_s);
     let (mut sum, mut max, mut count) = (0.0, 0.0_f64, 0usize);
-    let mut heading_error_end_rad = f64::NAN;
-    if let Some(k0) = aligned {
-        let offset = wrap_pi(truth[k0] - est[k0]);
-        for k in k0..est.len().min(truth.len()) {
-            if est[k].is_finite() {
-                let e = wrap_pi(est[k] + offset - truth[k]).abs();
-                sum += e;
-                max = max.max(e);
-                count += 1;
-            }
+    for (e, t) in h.estimate.iter().zip(&h.truth) {
+        if e.is_finite() {
+            let e = wrap_pi(e - t).abs();
+            sum += e;
+            max = max.max(e);
+            count += 1;
         }
+    }
+    let mut heading_error_end_rad = f64::NAN;
+    if let Some(n) = h.target.last().filter(|n| n.is_finite()) {
         let cycle = ((TAU / rec.temporal_freq_rad_s.abs()) / dt)
             .round()
             .max(1.0) as usize;
-        let from = raw.len().saturating_sub(cycle);
-        let end = circular_mean(&raw[from..]);
-        if let (Some(n), Some(b)) = (nominal.last(), beta.last())
-            && n.is_finite()
-        {
-            heading_error_end_rad = wrap_pi(end - (n + offset) - well_of(*b));
-        }
+        let from = h.raw.len().saturating_sub(cycle);
+        heading_error_end_rad = wrap_pi(circular_mean(&h.raw[from..]) - n);
     }
     let progress_m = match (rec.centre_m.first(), rec.centre_m.last()) {
         (Some(a), Some(b)) => {

@@ -8,6 +8,7 @@
 
 pub mod fence;
 pub mod metrics;
+pub mod plots;
 pub mod report;
 
 use super::LabError;
@@ -68,8 +69,9 @@ impl ExperimentModule for SidewindingPegs {
     }
 }
 
-/// Writes `results.csv`, `summary.md` and per controller its first trial's
-/// `path-*.png` and `signals-*.png` into `dir` (created if missing); returns the files.
+/// Writes `results.csv`, `summary.md`, `metrics.png` and per controller its first
+/// trial's `trial-*.png` (path, headings, β) and `signals-*.png` into `dir` (created if
+/// missing); returns the files.
 pub fn write_report(
     dir: &std::path::Path,
     results: &[super::runner::TrialResult<SidewindingPegs>],
@@ -84,14 +86,18 @@ pub fn write_report(
     let csv = dir.join("results.csv");
     super::report::write_text(&csv, &report::results_csv(results))?;
     written.push(csv);
+    let p = dir.join("metrics.png");
+    plots::metrics_plot(&p, results)?;
+    written.push(p);
+    let tau = crate::controllers::sidewinding::SidewindingConfig::full().heading_filter_s;
     for r in results {
         let Some((world, _, rec)) = &r.plotted else {
             continue;
         };
         let stem = file_stem(&r.controller);
         let title = format!("{}: layout {}, start {}", r.controller, r.layout, r.start);
-        let p = dir.join(format!("path-{stem}.png"));
-        common::path_plot(&p, &title, world, None, rec)?;
+        let p = dir.join(format!("trial-{stem}.png"));
+        plots::trial_plot(&p, &title, world, rec, tau)?;
         written.push(p);
         let p = dir.join(format!("signals-{stem}.png"));
         common::signals_plot(&p, &title, rec)?;

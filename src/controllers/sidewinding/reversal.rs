@@ -1,7 +1,6 @@
-//! The sidewinding controller's inertial steering (thesis §4.3.3, SPEC §7), pure and
-//! with time as an argument: the **direction reversal** (the dorsal offset β follows a
-//! bistable system driven by the heading) and the **heading adjustment** (a taper that
-//! blends into conical sidewinding while the heading is outside a dead-band).
+//! The sidewinding controller's **direction reversal** (thesis §4.3.3, SPEC §7), pure
+//! and with time as an argument: the dorsal offset β follows a bistable system driven
+//! by the heading, so a body turned round reverses its gait.
 
 use std::f64::consts::{FRAC_PI_2, PI, TAU};
 
@@ -108,73 +107,6 @@ impl Reversal {
     }
 }
 
-/// The amplitude factor of the turning taper `c` at normalised arc length `s`: the
-/// amplitude grows towards the head (`1 + c·(1 − s)`, c > 0) or the tail (`1 − c·s`,
-/// c < 0), a cone with its apex beyond the other end. Never below 1: in this emulator
-/// a cone that only shrinks the amplitude (the gait table's `1 − c·s` with c > 0)
-/// hardly turns (`physics_tests`). Continuous in `c`.
-pub fn taper_factor(c: f64, s: f64) -> f64 {
-    if c >= 0.0 {
-        1.0 + c * (1.0 - s)
-    } else {
-        1.0 - c * s
-    }
-}
-
-/// The heading adjustment's settings.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct HeadingConfig {
-    pub enabled: bool,
-    /// Half-width of the dead-band around the nominal heading, rad.
-    pub deadband_rad: f64,
-    /// How much the turning cone grows the amplitude at one end ([`taper_factor`]),
-    /// ≤ 0.8.
-    pub turn_taper: f64,
-    /// How fast the taper blends in and out, per second.
-    pub taper_rate_per_s: f64,
-    /// Which way a positive (head-heavy) taper turns the body's heading while β is in
-    /// its 0 well: +1 (counter-clockwise) or −1. Measured in the physics
-    /// (`physics_tests`: clockwise; the tail-heavy one turns it the other way, and
-    /// both swap with β at π).
-    pub turn_sign: f64,
-}
-
-impl HeadingConfig {
-    pub const DEFAULT: Self = Self {
-        enabled: true,
-        deadband_rad: 0.35,
-        turn_taper: 0.4,
-        taper_rate_per_s: 0.2,
-        turn_sign: -1.0,
-    };
-}
-
-/// The taper now: blends toward the one that turns back while the heading error is
-/// outside the dead-band, toward 0 (straight sidewinding) inside it or without a valid
-/// estimate.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct HeadingAdjust {
-    pub taper: f64,
-}
-
-impl HeadingAdjust {
-    /// `error_rad`: heading minus the nominal (for the well β is in), wrapped; `well`:
-    /// 0 or π (reversed sidewinding turns the other way for the same taper).
-    pub fn step(&mut self, c: &HeadingConfig, dt_s: f64, error_rad: Option<f64>, well: f64) {
-        let target = match error_rad.filter(|_| c.enabled) {
-            Some(e) if e.abs() > c.deadband_rad => {
-                let reversed = if well == 0.0 { 1.0 } else { -1.0 };
-                // Turn against the error: the heading must fall when e > 0.
-                -e.signum() * c.turn_sign * reversed * c.turn_taper
-            }
-            _ => 0.0,
-        };
-        let step = c.taper_rate_per_s * dt_s;
-        self.taper += (target - self.taper).clamp(-step, step);
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -241,38 +173,6 @@ mod tests {
             assert!(d <= c.max_rate_rad_s * 1e-3 + 1e-12, "{d}");
             last = r.beta_rad;
         }
-    }
-
-    #[test]
-    fn the_taper_blends_in_outside_the_deadband_and_out_inside() {
-        let c = HeadingConfig {
-            turn_sign: 1.0,
-            ..HeadingConfig::DEFAULT
-        };
-        let mut a = HeadingAdjust::default();
-        for _ in 0..1000 {
-            a.step(&c, 1e-3, Some(0.1), 0.0);
-        }
-        assert_eq!(a.taper, 0.0, "inside the dead-band");
-        for _ in 0..1000 {
-            a.step(&c, 1e-3, Some(0.8), 0.0);
-        }
-        assert!((a.taper + 0.2).abs() < 1e-9, "1 s at 0.2/s: {}", a.taper);
-        for _ in 0..5000 {
-            a.step(&c, 1e-3, Some(0.8), 0.0);
-        }
-        assert!((a.taper + c.turn_taper).abs() < 1e-9);
-        // Reversed, the same error turns with the opposite taper.
-        let mut r = HeadingAdjust::default();
-        for _ in 0..5000 {
-            r.step(&c, 1e-3, Some(0.8), PI);
-        }
-        assert!((r.taper - c.turn_taper).abs() < 1e-9);
-        // Back inside, or no estimate: straight again, smoothly.
-        for _ in 0..1000 {
-            a.step(&c, 1e-3, None, 0.0);
-        }
-        assert!((a.taper + c.turn_taper - 0.2).abs() < 1e-9);
     }
 
     #[test]
