@@ -5,8 +5,9 @@
 //! made perpendicular to it, so the frame is defined whatever the other two spreads
 //! are (a straight body has no second axis; a body lying flat has its least spread
 //! vertical anyway). Signs and degenerate shapes:
-//! - x keeps the sign of the last frame's x (at the first, it points to the head's
-//!   side of the centroid), so the frame does not flip as the wave travels;
+//! - x points from the tail half's centroid to the head half's, which does not swing
+//!   as the wave travels; where that is unclear (a U, the halves side by side) x keeps
+//!   the sign of the last frame's (at the first, the head's side of the centroid);
 //! - a shape with no clear main axis (coiled, or a circle: the two largest spreads
 //!   within [`ROUND_RATIO`]) keeps the last frame's x and
 //!   is reported `round`; with no last frame the head's direction is taken;
@@ -17,6 +18,11 @@ use nalgebra::{Matrix3, Rotation3, SymmetricEigen, Unit, Vector3};
 /// Largest second spread, as a fraction of the first, at which the main axis is
 /// still taken from the shape.
 pub const ROUND_RATIO: f64 = 0.8;
+
+/// The head half's centroid must lie this far ahead of the tail half's along the main
+/// axis, in units of the spread along it (√λ₁; a straight body: 1.73), for the axis's
+/// sign to come from the shape rather than the last frame.
+pub const SIGN_FROM_SHAPE: f64 = 0.5;
 
 /// A body frame in the world (z up) and how it was found.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -66,7 +72,24 @@ pub fn chassis(points: &[Vector3<f64>], previous: Option<&Chassis>) -> Chassis {
         x = Vector3::x();
     }
     x.normalize_mut();
-    if x.dot(&previous_x.unwrap_or(head_side)) < 0.0 {
+    // The sign: towards the head half's centroid from the tail half's where the shape
+    // says so clearly; otherwise the last frame's (or the head's side at the first).
+    // Only the last frame's would carry a flip for good once a main axis swapped.
+    let half = points.len() / 2;
+    let along = if half > 0 {
+        let head: Vector3<f64> = points[..half].iter().sum();
+        let tail: Vector3<f64> = points[points.len() - half..].iter().sum();
+        (head - tail) / half as f64
+    } else {
+        Vector3::zeros()
+    };
+    let clear = !round && x.dot(&along).abs() > SIGN_FROM_SHAPE * l1.max(0.0).sqrt();
+    let reference = if clear {
+        along
+    } else {
+        previous_x.unwrap_or(head_side)
+    };
+    if x.dot(&reference) < 0.0 {
         x = -x;
     }
     let up = Vector3::z();
@@ -123,6 +146,35 @@ mod tests {
             let c = chassis(&pts, last.as_ref());
             assert!((c.rotation * Vector3::x()).x > 0.9, "flipped at {k}");
             last = Some(c);
+        }
+    }
+
+    /// A last frame pointing the wrong way (as after a swap of the main axes) does not
+    /// carry over to a shape whose head half is clearly ahead; a U (halves side by
+    /// side) keeps the last frame's sign.
+    #[test]
+    fn the_shape_sets_the_sign_where_it_is_clear() {
+        let body = line(19, Vector3::x());
+        let wrong = chassis(&line(19, -Vector3::x()), None);
+        let c = chassis(&body, Some(&wrong));
+        assert!((c.rotation * Vector3::x() - Vector3::x()).norm() < 1e-9);
+        // A U: arms along y, 0.15 m apart, the head at the end of one arm.
+        let u: Vec<_> = (0..19)
+            .map(|i| {
+                let k = i as f64;
+                if i < 8 {
+                    Vector3::new(0.0, 0.5 - 0.064 * k, 0.0)
+                } else if i < 11 {
+                    Vector3::new(0.05 * (k - 7.0), 0.0, 0.0)
+                } else {
+                    Vector3::new(0.15, 0.064 * (k - 11.0), 0.0)
+                }
+            })
+            .collect();
+        for last in [Vector3::y(), -Vector3::y()] {
+            let previous = chassis(&line(19, last), None);
+            let c = chassis(&u, Some(&previous));
+            assert!((c.rotation * Vector3::x()).dot(&last) > 0.9, "{last}");
         }
     }
 
