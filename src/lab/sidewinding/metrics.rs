@@ -90,7 +90,11 @@ fn true_headings(rec: &TrialRecord) -> Vec<f64> {
     (0..rec.centre_m.len())
         .map(|k| {
             points.clear();
-            points.extend(rec.links_at(k).iter().map(|p| Vector3::new(p[0], p[1], 0.0)));
+            points.extend(
+                rec.links_at(k)
+                    .iter()
+                    .map(|p| Vector3::new(p[0], p[1], 0.0)),
+            );
             if points.is_empty() {
                 return f64::NAN;
             }
