@@ -16,6 +16,7 @@ use super::SidewindingPegs;
 use super::metrics::{HeadingTraces, summarise};
 use crate::emu::world::WorldSpec;
 use crate::lab::LabError;
+use crate::lab::metrics::mean_sd_median;
 use crate::lab::plots::{FONT, draw_path, path_height, plot_err, register_fonts};
 use crate::lab::runner::TrialResult;
 use crate::lab::trial::TrialRecord;
@@ -59,10 +60,10 @@ pub fn trial_plot(
                     c[1] + ARROW_M * heading.sin(),
                 );
                 chart
-                    .draw_series([
-                        PathElement::new([(c[0], c[1]), tip], colour.stroke_width(2)),
-                        PathElement::new([tip, tip], colour.stroke_width(1)),
-                    ])
+                    .draw_series(std::iter::once(PathElement::new(
+                        [(c[0], c[1]), tip],
+                        colour.stroke_width(2),
+                    )))
                     .map_err(&err)?;
                 chart
                     .draw_series(std::iter::once(Circle::new(tip, 3, colour.filled())))
@@ -230,19 +231,6 @@ pub fn metrics_plot(path: &Path, results: &[TrialResult<SidewindingPegs>]) -> Re
     root.present().map_err(&err)
 }
 
-fn mean_sd(v: &[f64]) -> Option<(f64, f64)> {
-    if v.is_empty() {
-        return None;
-    }
-    let m = v.iter().sum::<f64>() / v.len() as f64;
-    let var = if v.len() > 1 {
-        v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (v.len() - 1) as f64
-    } else {
-        0.0
-    };
-    Some((m, var.sqrt()))
-}
-
 fn dots_panel(
     area: &DrawingArea<BitMapBackend<'_>, Shift>,
     label: &str,
@@ -266,7 +254,7 @@ fn dots_panel(
     for (i, (name, v)) in names.iter().zip(per).enumerate() {
         let x = i as f64;
         let colour = Palette99::pick(i).to_rgba();
-        if let Some((m, sd)) = mean_sd(v) {
+        if let Some((m, sd, _)) = mean_sd_median(v) {
             chart.draw_series(std::iter::once(Rectangle::new(
                 [(x - 0.3, 0.0), (x + 0.3, m)],
                 colour.mix(0.35).filled(),
