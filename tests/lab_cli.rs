@@ -229,6 +229,20 @@ fn bad_input_exits_2_with_a_clear_message() {
         err.contains("config.amplitude.gains") && err.contains("stifness"),
         "{err}"
     );
+    // The nominal gait is checked as the daemon checks `params.set`.
+    let err = bad_input(&[
+        "pegboard",
+        "--nominal",
+        r#"{"amplitude_lat_rad":2.0}"#,
+        "--out",
+        out,
+    ]);
+    assert!(
+        err.contains("--nominal") && err.contains("amplitude_lat_rad"),
+        "{err}"
+    );
+    let err = bad_input(&["peg-array", "--nominal", r#"{"amp":1}"#, "--out", out]);
+    assert!(err.contains("--nominal") && err.contains("amp"), "{err}");
     assert!(
         !dir.path().join("results.csv").exists(),
         "nothing written on bad input"

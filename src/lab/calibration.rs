@@ -57,10 +57,7 @@ pub fn calibrate(
         trial: format!("calibration of {}", controller.label),
         source,
     })?;
-    let omega = crate::gait::GaitTable::default()
-        .get(controller.gait)
-        .temporal_freq_rad_s
-        .abs();
+    let omega = config.gaits.get(controller.gait).temporal_freq_rad_s.abs();
     let seconds = CALIBRATION_CYCLES * std::f64::consts::TAU / omega.max(1e-3);
     let request = LoopRequest::ControllerCommand(
         controller.gait,

@@ -17,7 +17,7 @@ use super::pegboard::Pegboard;
 use super::trial::{TrialConfig, TrialRecord, TrialRecording, run_trial};
 use crate::emu::world::WorldSpec;
 use crate::emu::world::scenario::MODULE_LENGTH_M;
-use crate::gait::{BodyLayout, GaitTable, Plane};
+use crate::gait::{BodyLayout, Plane};
 
 /// What to run.
 #[derive(Debug, Clone)]
@@ -94,7 +94,7 @@ pub fn plan<E: ExperimentModule>(
         });
     }
     let layout = BodyLayout::alternating(exp.trial.modules, Plane::Lateral, MODULE_LENGTH_M);
-    let params = *GaitTable::default().get(module.gait());
+    let params = *exp.trial.gaits.get(module.gait());
     for (i, c) in exp.controllers.iter().enumerate() {
         if exp.controllers[..i].iter().any(|o| o.label == c.label) {
             return Err(LabError::BadValue(format!(

@@ -45,6 +45,9 @@ pub struct TrialConfig {
     pub blend_time_s: f64,
     /// The emulated servos' position loop.
     pub servo_loop: PositionLoop,
+    /// Every gait's nominal parameters (the daemon's defaults unless the experiment
+    /// was given `--nominal`): what the selector runs and the controllers are built on.
+    pub gaits: GaitTable,
 }
 
 impl Default for TrialConfig {
@@ -56,6 +59,7 @@ impl Default for TrialConfig {
             sample_hz: 20.0,
             blend_time_s: DEFAULT_BLEND_TIME_S,
             servo_loop: PositionLoop::default(),
+            gaits: GaitTable::default(),
         }
     }
 }
@@ -121,6 +125,23 @@ impl TrialRecord {
     }
 }
 
+/// The daemon's gait table with `gait`'s nominal parameters patched by `json`, a
+/// partial parameter set as the socket's `params.set` takes it (e.g.
+/// `{"amplitude_lat_rad":1.1}`), checked as the daemon checks it.
+pub fn nominal_gaits(gait: GaitKind, json: Option<&str>) -> Result<GaitTable, LabError> {
+    let mut table = GaitTable::default();
+    if let Some(json) = json {
+        let patch: crate::gait::ParamPatch = serde_json::from_str(json)
+            .map_err(|e| LabError::BadValue(format!("--nominal {json:?}: {e}")))?;
+        let params = table
+            .get(gait)
+            .patched(gait, &patch)
+            .map_err(|e| LabError::BadValue(format!("--nominal {json:?}: {e}")))?;
+        *table.get_mut(gait) = params;
+    }
+    Ok(table)
+}
+
 /// The body layout and nominal parameters every slithering controller gets.
 pub fn slithering_setup(modules: usize) -> (BodyLayout, GaitParams) {
     (
@@ -153,7 +174,7 @@ pub(crate) fn trial_loop(
     let gait = controller.gait;
     let layout = BodyLayout::alternating(n, Plane::Lateral, MODULE_LENGTH_M);
     let estimators = crate::estimation::standard_estimators(&layout);
-    let table = GaitTable::default();
+    let table = config.gaits;
     let built = controller.build(&layout, table.get(gait))?;
     let names = built
         .info
@@ -256,9 +277,7 @@ pub fn run_trial(
         trial: format!("{} (seed {noise_seed})", controller.label),
         source,
     })?;
-    let temporal_freq_rad_s = GaitTable::default()
-        .get(controller.gait)
-        .temporal_freq_rad_s;
+    let temporal_freq_rad_s = config.gaits.get(controller.gait).temporal_freq_rad_s;
     let start_links_m = links(&plant);
     let record_path = recording
         .as_ref()
@@ -373,6 +392,30 @@ mod tests {
     use super::*;
     use crate::emu::world::scenario::Region;
     use crate::lab::board::Board;
+
+    #[test]
+    fn nominal_patches_the_gait_as_the_daemon_checks_it() {
+        let table =
+            nominal_gaits(GaitKind::Slithering, Some(r#"{"amplitude_lat_rad":1.1}"#)).unwrap();
+        let p = table.get(GaitKind::Slithering);
+        assert_eq!(p.amplitude_lat_rad, 1.1);
+        let d = GaitTable::default();
+        assert_eq!(
+            p.spatial_freq_rad,
+            d.get(GaitKind::Slithering).spatial_freq_rad
+        );
+        assert_eq!(table.get(GaitKind::Rolling), d.get(GaitKind::Rolling));
+        assert_eq!(nominal_gaits(GaitKind::Slithering, None).unwrap(), d);
+        for bad in [
+            r#"{"amplitude_lat_rad":2.0}"#,
+            r#"{"amplitude":1.0}"#,
+            r#"{"amplitude_dor_rad":0.3}"#,
+            "not json",
+        ] {
+            let e = nominal_gaits(GaitKind::Slithering, Some(bad)).unwrap_err();
+            assert!(e.to_string().contains("--nominal"), "{bad}: {e}");
+        }
+    }
 
     #[test]
     fn sampling_cadence() {

@@ -16,6 +16,10 @@ pub struct DisplacementMetrics {
     pub displacement_m: f64,
     /// `displacement / body length / minutes` (body length: the modules' total length).
     pub velocity_bl_min: f64,
+    /// The centre's displacement along the body's start heading (tail to head), signed
+    /// (negative: it slid tail first), per body length per minute. The reference's
+    /// metric has no sign, so a body drifting backwards scores as if it travelled.
+    pub forward_bl_min: f64,
     /// Contact onsets between non-adjacent links.
     pub self_contacts: u64,
     /// Window mode switches the controller reported (NaN if it reports none).
@@ -31,6 +35,14 @@ fn last(rec: &TrialRecord, name: &str) -> Option<f64> {
     rec.signals[k].iter().rev().copied().find(|v| v.is_finite())
 }
 
+/// Unit vector from the tail to the head at the start, if the body had length.
+fn start_heading(rec: &TrialRecord) -> Option<[f64; 2]> {
+    let (h, t) = (rec.start_links_m.first()?, rec.start_links_m.last()?);
+    let d = [h[0] - t[0], h[1] - t[1]];
+    let l = d[0].hypot(d[1]);
+    (l > 1e-9).then(|| [d[0] / l, d[1] / l])
+}
+
 /// The figures of `rec` for a body `body_length_m` long.
 pub fn displacement_metrics(rec: &TrialRecord, body_length_m: f64) -> DisplacementMetrics {
     let (a, b) = (
@@ -38,6 +50,8 @@ pub fn displacement_metrics(rec: &TrialRecord, body_length_m: f64) -> Displaceme
         rec.centre_m.last().copied().unwrap_or_default(),
     );
     let displacement_m = (b[0] - a[0]).hypot(b[1] - a[1]);
+    let forward_m =
+        start_heading(rec).map_or(f64::NAN, |h| (b[0] - a[0]) * h[0] + (b[1] - a[1]) * h[1]);
     let minutes = (rec.seconds / 60.0).max(1e-9);
     let series = |name: &str| {
         rec.signal_names
@@ -68,6 +82,7 @@ pub fn displacement_metrics(rec: &TrialRecord, body_length_m: f64) -> Displaceme
         seconds: rec.seconds,
         displacement_m,
         velocity_bl_min: displacement_m / body_length_m / minutes,
+        forward_bl_min: forward_m / body_length_m / minutes,
         self_contacts: rec.self_contacts,
         mode_switches: last(rec, "mode_switches").unwrap_or(f64::NAN),
         directional_share,
@@ -91,6 +106,8 @@ pub struct ControllerSummary {
     pub trials: usize,
     /// Mean, sample sd and median of the velocity over every trial, BL/min.
     pub velocity: (f64, f64, f64),
+    /// Mean and sample sd of the signed forward velocity over every trial, BL/min.
+    pub forward: (f64, f64),
     /// The pose means in plan order, and their sample sd (the spread across poses).
     pub poses: Vec<PoseSummary>,
     pub pose_sd: f64,
@@ -118,6 +135,8 @@ pub fn summarise(results: &[TrialResult<Displacement>]) -> Vec<ControllerSummary
             let mine: Vec<_> = results.iter().filter(|r| r.controller == name).collect();
             let v: Vec<f64> = mine.iter().map(|r| r.metrics.velocity_bl_min).collect();
             let velocity = mean_sd_median(&v).unwrap_or((f64::NAN, f64::NAN, f64::NAN));
+            let f: Vec<f64> = mine.iter().map(|r| r.metrics.forward_bl_min).collect();
+            let forward = mean_sd_median(&f).map_or((f64::NAN, f64::NAN), |(m, sd, _)| (m, sd));
             let mut poses: Vec<PoseSummary> = Vec::new();
             for r in &mine {
                 if poses
@@ -145,6 +164,7 @@ pub fn summarise(results: &[TrialResult<Displacement>]) -> Vec<ControllerSummary
                 controller: name.to_owned(),
                 trials: mine.len(),
                 velocity,
+                forward,
                 pose_sd,
                 worst_pose: pose_means.iter().copied().fold(f64::INFINITY, f64::min),
                 poses,
@@ -205,6 +225,26 @@ mod tests {
             (m.velocity_bl_min - 1.3 / 1.024 / 2.0).abs() < 1e-12,
             "16 modules"
         );
+    }
+
+    #[test]
+    fn forward_is_signed_along_the_start_heading() {
+        // Head at +x: 1.2 m forward and 0.5 m sideways counts 1.2 m; sliding tail first
+        // counts negative although the unsigned displacement is the same.
+        let mut rec = record(vec![[0.0, 0.0], [1.2, 0.5]], 120.0);
+        rec.start_links_m = (0..17).map(|k| [-0.064 * k as f64, 0.0]).collect();
+        let m = displacement_metrics(&rec, 1.024);
+        assert!(
+            (m.forward_bl_min - 1.2 / 1.024 / 2.0).abs() < 1e-12,
+            "{m:?}"
+        );
+        rec.centre_m = vec![[0.0, 0.0], [-1.2, 0.5]];
+        let back = displacement_metrics(&rec, 1.024);
+        assert!((back.forward_bl_min + 1.2 / 1.024 / 2.0).abs() < 1e-12);
+        assert_eq!(back.velocity_bl_min, m.velocity_bl_min);
+        // A body with no length has no heading.
+        rec.start_links_m = vec![[0.0; 2]; 17];
+        assert!(displacement_metrics(&rec, 1.024).forward_bl_min.is_nan());
     }
 
     fn result(controller: &str, start: usize, repeat: usize, v: f64) -> TrialResult<Displacement> {
