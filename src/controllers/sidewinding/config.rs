@@ -79,7 +79,15 @@ impl SidewindingConfig {
             torque_deadband_nm: 0.3,
             edge_width_modules: 0.5,
             heading_filter_s: 1.0,
-            reversal: ReversalConfig::DEFAULT,
+            // K_h 6, not the bistable 2: among the pegs β then follows the heading
+            // (through a steep step at 90°, no hysteresis, `ReversalConfig::bistable`)
+            // instead of holding its well until 110°. It got `ac_sfc` through in 15 of
+            // the thesis protocol's 21 trials against 6 (docs/lab-results/sidewinding/
+            // REPORT.md, sessions 3-4); the thesis's snap between the wells is lost.
+            reversal: ReversalConfig {
+                k_h: 6.0,
+                ..ReversalConfig::DEFAULT
+            },
             heading: HeadingConfig::DEFAULT,
         }
     }

@@ -37,8 +37,18 @@ impl ReversalConfig {
         max_rate_rad_s: 2.0,
     };
 
+    /// Whether β has two stable states near the hill: the heading's pull `K_h` is
+    /// weaker than the hill's push there, `|K_b|·π²/4` at π/2 (4.1 with `K_b` −1.66).
+    /// Beyond it β has one equilibrium for every heading: it follows the heading
+    /// through a step about 90° that is the steeper the nearer `K_h` is to the bound,
+    /// and comes back when the heading does.
+    pub fn bistable(&self) -> bool {
+        self.k_h < self.k_b.abs() * PI * PI / 4.0
+    }
+
     /// The heading |h − well| beyond which β leaves its well (the hill's pull is
-    /// `|K_b|·1.49` at β ≈ 0.66 rad from the well).
+    /// `|K_b|·1.49` at β ≈ 0.66 rad from the well); meaningful only when
+    /// [`Self::bistable`] (otherwise β leaves no well: it follows).
     pub fn switch_heading_rad(&self) -> f64 {
         const STEEPEST_AT: f64 = FRAC_PI_2 - FRAC_PI_2 / 1.732_050_807_568_877_2;
         let pull = (self.k_b * STEEPEST_AT * (STEEPEST_AT - FRAC_PI_2) * (STEEPEST_AT - PI)).abs();
@@ -158,6 +168,54 @@ mod tests {
         let before = r.beta_rad;
         r.step(&ReversalConfig::DEFAULT, 1.0, None);
         assert_eq!(r.beta_rad, before);
+    }
+
+    /// β's state after `seconds` at the heading `h` with `c`, from `r`.
+    fn settle(c: &ReversalConfig, r: &mut Reversal, h: f64, seconds: f64) -> f64 {
+        for _ in 0..(seconds * 1000.0) as usize {
+            r.step(c, 1e-3, Some(h));
+        }
+        wrap_pi(r.beta_rad)
+    }
+
+    /// The default is bistable: a heading between the two switches leaves β where it
+    /// came from (hysteresis). `K_h` 6 (the sidewinding presets') is not: β follows the
+    /// heading, past π/2 only once the heading is, and back when the heading comes back.
+    #[test]
+    fn past_the_bound_beta_follows_the_heading_without_hysteresis() {
+        let bi = ReversalConfig::DEFAULT;
+        assert!(bi.bistable());
+        let (mut up, mut down) = (Reversal::default(), Reversal::default());
+        settle(&bi, &mut down, PI, 6.0);
+        let h = 1.5; // between π − 1.90 and 1.90
+        let (u, d) = (settle(&bi, &mut up, h, 20.0), settle(&bi, &mut down, h, 20.0));
+        assert!(u.abs() < 0.6 && (d - PI).abs() < 0.6, "hysteresis: {u} / {d}");
+
+        let follow = ReversalConfig {
+            k_h: 6.0,
+            ..ReversalConfig::DEFAULT
+        };
+        assert!(!follow.bistable());
+        let (mut up, mut down) = (Reversal::default(), Reversal::default());
+        settle(&follow, &mut down, PI, 6.0);
+        let (u, d) = (
+            settle(&follow, &mut up, h, 20.0),
+            settle(&follow, &mut down, h, 20.0),
+        );
+        assert!((u - d).abs() < 1e-3, "one equilibrium: {u} / {d}");
+        assert!((u - FRAC_PI_2).abs() < 0.3, "near the hill: {u}");
+        // Off the step it stays near a well, short of counting a reversal: a heading
+        // of 0.6 rad moves β by about half of it.
+        let mut r = Reversal::default();
+        let b = settle(&follow, &mut r, 0.6, 20.0);
+        assert!(b > 0.2 && b < 0.4, "{b}");
+        assert_eq!(r.reversals, 0);
+        // Turned round, it reverses; turned back, it comes back.
+        settle(&follow, &mut r, PI, 6.0);
+        assert_eq!((r.reversals, r.well()), (1, PI));
+        let b = settle(&follow, &mut r, 0.0, 6.0);
+        assert!(b.abs() < 0.05, "{b}");
+        assert_eq!((r.reversals, r.well()), (2, 0.0));
     }
 
     #[test]
