@@ -188,8 +188,14 @@ mod tests {
         let (mut up, mut down) = (Reversal::default(), Reversal::default());
         settle(&bi, &mut down, PI, 6.0);
         let h = 1.5; // between π − 1.90 and 1.90
-        let (u, d) = (settle(&bi, &mut up, h, 20.0), settle(&bi, &mut down, h, 20.0));
-        assert!(u.abs() < 0.6 && (d - PI).abs() < 0.6, "hysteresis: {u} / {d}");
+        let (u, d) = (
+            settle(&bi, &mut up, h, 20.0),
+            settle(&bi, &mut down, h, 20.0),
+        );
+        assert!(
+            u.abs() < 0.6 && (d - PI).abs() < 0.6,
+            "hysteresis: {u} / {d}"
+        );
 
         let follow = ReversalConfig {
             k_h: 6.0,
