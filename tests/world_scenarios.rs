@@ -29,6 +29,7 @@ fn every_example_scenario_generates() {
             "flat.toml",
             "peg-array.toml",
             "peg-board-40-inside.toml",
+            "peg-board-40-sleeve.toml",
             "peg-board-40.toml",
             "peg-row.toml",
             "pole.toml",
@@ -49,6 +50,10 @@ fn examples_have_what_they_say() {
         WorldScenario::load(&p).unwrap().generate(18).unwrap()
     };
     assert_eq!(load("peg-board-40.toml").pegs.len(), 40);
+    // The sleeve's board is the thesis board with smooth pegs.
+    let sleeve = load("peg-board-40-sleeve.toml");
+    assert_eq!(sleeve.friction.peg_mu, Some(0.2));
+    assert_eq!(sleeve.pegs, load("peg-board-40-inside.toml").pegs);
     assert_eq!(load("peg-row.toml").pegs.len(), 10);
     let pole = load("pole.toml");
     let d: Vec<f64> = pole.poles[0]
