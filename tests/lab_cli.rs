@@ -243,6 +243,17 @@ fn bad_input_exits_2_with_a_clear_message() {
     );
     let err = bad_input(&["peg-array", "--nominal", r#"{"amp":1}"#, "--out", out]);
     assert!(err.contains("--nominal") && err.contains("amp"), "{err}");
+    let err = bad_input(&[
+        "sidewinding",
+        "--nominal",
+        r#"{"temporal_freq_rad_s":1e9}"#,
+        "--out",
+        out,
+    ]);
+    assert!(
+        err.contains("--nominal") && err.contains("temporal_freq_rad_s"),
+        "{err}"
+    );
     assert!(
         !dir.path().join("results.csv").exists(),
         "nothing written on bad input"
