@@ -11,6 +11,7 @@ use snaked::emu::servo::MODULE_LENGTH_M;
 use snaked::emu::world::physics::{PhysicsConfig, PhysicsPlant};
 use snaked::emu::world::scenario::WorldScenario;
 use snaked::gait::{BodyLayout, GaitKind, GaitSelector, GaitTable, Plane};
+use snaked::lab::trial::centre;
 use snaked::protocol::Command;
 
 fn env(name: &str, d: f64) -> f64 {
@@ -55,13 +56,6 @@ fn main() {
     .unwrap();
     let (mut pos, mut vel) = (vec![0.0; n_mod], vec![0.0; n_mod]);
     let mut cmds = vec![Command::LIMP; n_mod];
-    let centre = |p: &PhysicsPlant| {
-        let n = p.link_count();
-        (0..n).fold([0.0, 0.0], |c, k| {
-            let q = p.link_pose(k).position_m;
-            [c[0] + q[0] / n as f64, c[1] + q[1] / n as f64]
-        })
-    };
     let c0 = centre(&plant);
     let h0 = {
         let (h, t) = (

@@ -11,6 +11,7 @@ use snaked::emu::servo::MODULE_LENGTH_M;
 use snaked::emu::world::WorldSpec;
 use snaked::emu::world::physics::{PhysicsConfig, PhysicsPlant};
 use snaked::gait::{BodyLayout, GaitKind, GaitSelector, GaitTable, Plane};
+use snaked::lab::trial::centre;
 use snaked::protocol::Command;
 
 const N: usize = 18;
@@ -54,13 +55,6 @@ fn turn(profile: Profile, c: f64, beta: f64, scale: f64) -> (f64, f64) {
     let (mut pos, mut vel) = (vec![0.0; N], vec![0.0; N]);
     let mut cmds = vec![Command::LIMP; N];
     let mut headings = Vec::new();
-    let centre = |p: &PhysicsPlant| {
-        let n = p.link_count();
-        (0..n).fold([0.0, 0.0], |c, k| {
-            let q = p.link_pose(k).position_m;
-            [c[0] + q[0] / n as f64, c[1] + q[1] / n as f64]
-        })
-    };
     let mut c0 = [0.0, 0.0];
     for k in 1..=26_000 {
         sel.update(plant.time_s(), &mut pos, &mut vel);

@@ -100,11 +100,25 @@ struct Pegboard {
     /// lab results were measured with it: docs/emulator.md, "The servo loop").
     #[arg(long, value_enum, default_value = "profiled")]
     servo_loop: PositionLoop,
-    /// The slithering gait's nominal parameters, a partial set as the socket's
+    #[command(flatten)]
+    nominal: crate::NominalArg,
+}
+
+/// `--nominal`, shared by every experiment.
+#[derive(Debug, clap::Args)]
+pub(crate) struct NominalArg {
+    /// The experiment's gait's nominal parameters, a partial set as the socket's
     /// `params.set` takes it, checked as the daemon checks it (default: the daemon's,
     /// docs/gaits.md), e.g. '{"amplitude_lat_rad":1.1,"spatial_freq_rad":6.28}'.
-    #[arg(long, value_name = "JSON")]
-    nominal: Option<String>,
+    #[arg(long = "nominal", value_name = "JSON")]
+    json: Option<String>,
+}
+
+impl NominalArg {
+    /// The gait table the trials run on.
+    pub(crate) fn gaits(&self, gait: GaitKind) -> Result<snaked::gait::GaitTable, LabError> {
+        snaked::lab::trial::nominal_gaits(gait, self.json.as_deref())
+    }
 }
 
 fn main() -> ExitCode {
@@ -166,7 +180,7 @@ fn pegboard(args: Pegboard) -> Result<(), LabError> {
     let trial = TrialConfig {
         limit_s: args.seconds,
         servo_loop: args.servo_loop,
-        gaits: snaked::lab::trial::nominal_gaits(GaitKind::Slithering, args.nominal.as_deref())?,
+        gaits: args.nominal.gaits(GaitKind::Slithering)?,
         ..TrialConfig::default()
     };
     let calibrations = if args.no_calibrate {

@@ -347,8 +347,8 @@ fn record(lp: &ControlLoop, rec: &mut TrialRecord) {
     }
 }
 
-/// Mean ground-plane position of the links, m.
-fn centre(plant: &dyn Plant) -> [f64; 2] {
+/// Mean ground-plane position of the links (the body's geometric centre), m.
+pub fn centre(plant: &dyn Plant) -> [f64; 2] {
     let n = plant.link_count().max(1);
     let mut c = [0.0, 0.0];
     for k in 0..plant.link_count() {

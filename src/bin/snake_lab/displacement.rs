@@ -69,11 +69,8 @@ pub struct Args {
     /// lab results were measured with it: docs/emulator.md, "The servo loop").
     #[arg(long, value_enum, default_value = "profiled")]
     servo_loop: PositionLoop,
-    /// The slithering gait's nominal parameters, a partial set as the socket's
-    /// `params.set` takes it, checked as the daemon checks it (default: the daemon's,
-    /// docs/gaits.md), e.g. '{"amplitude_lat_rad":1.1,"spatial_freq_rad":6.28}'.
-    #[arg(long, value_name = "JSON")]
-    nominal: Option<String>,
+    #[command(flatten)]
+    nominal: crate::NominalArg,
 }
 
 pub fn run(terrain: Terrain, args: Args) -> Result<(), LabError> {
@@ -133,7 +130,7 @@ pub fn run(terrain: Terrain, args: Args) -> Result<(), LabError> {
         modules: args.modules,
         limit_s: args.seconds,
         servo_loop: args.servo_loop,
-        gaits: snaked::lab::trial::nominal_gaits(GaitKind::Slithering, args.nominal.as_deref())?,
+        gaits: args.nominal.gaits(GaitKind::Slithering)?,
         ..TrialConfig::default()
     };
     let calibrations = if args.no_calibrate {

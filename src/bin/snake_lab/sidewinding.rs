@@ -58,11 +58,8 @@ pub struct Args {
     /// The emulated servos' position loop.
     #[arg(long, value_enum, default_value = "profiled")]
     servo_loop: PositionLoop,
-    /// The sidewinding gait's nominal parameters, a partial set as the socket's
-    /// `params.set` takes it, checked as the daemon checks it (default: the daemon's,
-    /// docs/gaits.md), e.g. '{"temporal_freq_rad_s":1.5}'.
-    #[arg(long, value_name = "JSON")]
-    nominal: Option<String>,
+    #[command(flatten)]
+    nominal: crate::NominalArg,
 }
 
 pub fn run(args: Args) -> Result<(), LabError> {
@@ -100,7 +97,7 @@ pub fn run(args: Args) -> Result<(), LabError> {
     let trial = TrialConfig {
         limit_s: args.seconds,
         servo_loop: args.servo_loop,
-        gaits: snaked::lab::trial::nominal_gaits(gait, args.nominal.as_deref())?,
+        gaits: args.nominal.gaits(gait)?,
         ..TrialConfig::default()
     };
     let exp = Experiment {
