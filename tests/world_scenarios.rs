@@ -50,9 +50,11 @@ fn examples_have_what_they_say() {
         WorldScenario::load(&p).unwrap().generate(18).unwrap()
     };
     assert_eq!(load("peg-board-40.toml").pegs.len(), 40);
-    // The sleeve's board is the thesis board with smooth pegs.
+    // The sleeve's board is the thesis board with the sleeve's low friction on the
+    // pegs and the ground alike.
     let sleeve = load("peg-board-40-sleeve.toml");
     assert_eq!(sleeve.friction.peg_mu, Some(0.2));
+    assert_eq!(sleeve.friction.mu, 0.2);
     assert_eq!(sleeve.pegs, load("peg-board-40-inside.toml").pegs);
     assert_eq!(load("peg-row.toml").pegs.len(), 10);
     let pole = load("pole.toml");

@@ -17,8 +17,9 @@ const MAX_STEP_RAD: f64 = 3.46e-3 * 1.001;
 fn table() -> GaitTable {
     let mut t = GaitTable::default();
     let s = t.get_mut(GaitKind::Slithering);
-    // Steering offsets too: the controller's wave is added to them.
-    s.offset_lat_rad = 0.1;
+    // Steering offsets too: the controller's wave is added to them (within what every
+    // controller takes: directional compliance's 1.5 rad windows leave 0.07 rad).
+    s.offset_lat_rad = 0.05;
     s.offset_dor_rad = -0.05;
     t
 }

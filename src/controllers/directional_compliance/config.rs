@@ -150,7 +150,11 @@ impl DirectionalComplianceConfig {
         };
         Self {
             strategy,
-            lateral: amplitude(0.1, 1.2),
+            // Up to 1.5 rad (joint reach under the π/2 limit), not compliant
+            // slithering's 1.2: the peg terrains need nominals of 1.2 rad and more
+            // (docs/measurements.md, "Slithering among pegs"), and a range that ends at
+            // the nominal lets no window open wider, so NDC would never be entered.
+            lateral: amplitude(0.1, 1.5),
             dorsal: DorsalWave {
                 enabled: three_d,
                 amplitude_rad: 0.3,

@@ -304,5 +304,11 @@ fn the_configuration_is_checked_field_by_field() {
     // A nominal amplitude outside the windows' range is refused.
     let (c, _, mut params) = engaged("dc_nc");
     params.amplitude_lat_rad = 1.4;
+    c.accepts(&params).unwrap();
+    params.amplitude_lat_rad = 1.55;
     assert_eq!(c.accepts(&params).unwrap_err().field, "amplitude_lat_rad");
+    // A steering offset the widest window would carry past the joint limit is too.
+    params.amplitude_lat_rad = 1.2;
+    params.offset_lat_rad = 0.1;
+    assert_eq!(c.accepts(&params).unwrap_err().field, "offset_lat_rad");
 }
