@@ -136,7 +136,7 @@ fn circular_mean(a: &[f64]) -> f64 {
     s.atan2(c)
 }
 
-/// The well β is in: 0 or π.
+/// The well β is nearest: 0 or π (recordings without the reversal count).
 fn well_of(beta: f64) -> f64 {
     if wrap_pi(beta - PI).abs() < PI / 2.0 {
         PI
@@ -154,8 +154,10 @@ pub struct HeadingTraces {
     /// The controller's low-passed estimate, turned onto the truth where it first had
     /// one (the estimate's yaw is its own); NaN before.
     pub estimate: Vec<f64>,
-    /// The heading the controller steers to: its nominal plus the well β is in, turned
-    /// alike; NaN before an estimate.
+    /// The heading the controller steers to: its nominal plus its well, turned alike;
+    /// NaN before an estimate. The well is the controller's (0 after an even number of
+    /// reported reversals, π after an odd one), which holds until β is within 0.2 rad of
+    /// the other well, not the one β is nearest.
     pub target: Vec<f64>,
     pub beta: Vec<f64>,
 }
@@ -168,6 +170,17 @@ impl HeadingTraces {
         let est = series(rec, "heading_rad").unwrap_or(&[]);
         let nominal = series(rec, "heading_nominal_rad").unwrap_or(&[]);
         let beta: Vec<f64> = series(rec, "beta_rad").unwrap_or(&[]).to_vec();
+        let reversals = series(rec, "reversals").unwrap_or(&[]);
+        let well = |k: usize, b: f64| match reversals.get(k) {
+            Some(r) if r.is_finite() => {
+                if (r.round() as i64).rem_euclid(2) == 1 {
+                    PI
+                } else {
+                    0.0
+                }
+            }
+            _ => well_of(b),
+        };
         let n = truth.len();
         let (mut estimate, mut target) = (vec![f64::NAN; n], vec![f64::NAN; n]);
         if let Some(k0) = est.iter().position(|h| h.is_finite())
@@ -177,7 +190,7 @@ impl HeadingTraces {
             for k in k0..n.min(est.len()) {
                 estimate[k] = wrap_pi(est[k] + offset);
                 if let (Some(m), Some(b)) = (nominal.get(k), beta.get(k)) {
-                    target[k] = wrap_pi(m + offset + well_of(*b));
+                    target[k] = wrap_pi(m + offset + well(k, *b));
                 }
             }
         }

@@ -87,6 +87,22 @@ fn a_body_through_an_opening_counts_it_and_the_reversal() {
 }
 
 #[test]
+fn the_target_is_the_controllers_well_not_the_one_beta_is_nearest() {
+    // β past the hill (2.0 rad) but never within 0.2 rad of π: the controller still
+    // steers to its 0 well, and so does the target.
+    let (fence, mut rec) = record(0.0, false, None);
+    rec.signals[0] = vec![2.0; rec.signals[0].len()];
+    let h = HeadingTraces::of(&rec, 1.0);
+    assert!(h.target.iter().all(|t| t.abs() < 1e-9));
+    let m = sidewinding_metrics(&fence, &rec, 1.0);
+    assert!(m.heading_error_end_rad.abs() < 1e-6, "{m:?}");
+    // A recording without the count falls back to the nearer well.
+    rec.signal_names[3] = "other".into();
+    let h = HeadingTraces::of(&rec, 1.0);
+    assert!(h.target.iter().all(|t| (t.abs() - PI).abs() < 1e-9));
+}
+
+#[test]
 fn a_body_that_never_gets_through_is_a_failed_attempt() {
     let (fence, rec) = record(0.0, false, None);
     let m = sidewinding_metrics(&fence, &rec, 1.0);

@@ -30,7 +30,7 @@ const ESTIMATE_COLOUR: RGBColor = RGBColor(230, 120, 0);
 const TARGET_COLOUR: RGBColor = RGBColor(0, 150, 60);
 
 /// A trial: its path with heading arrows (true black, estimated orange) over the array,
-/// then its headings over time (true, estimated, and the nominal for β's well, all in
+/// then its headings over time (true, estimated, and the nominal for the controller's well, all in
 /// the true world frame) and β over time with its wells.
 pub fn trial_plot(
     path: &Path,
@@ -90,7 +90,11 @@ pub fn trial_plot(
         &[
             (&h.truth, TRUE_COLOUR, "true"),
             (&h.estimate, ESTIMATE_COLOUR, "estimated"),
-            (&h.target, TARGET_COLOUR, "nominal for β's well"),
+            (
+                &h.target,
+                TARGET_COLOUR,
+                "nominal for the controller's well",
+            ),
         ],
         dt,
         &[],

@@ -110,8 +110,9 @@ pub fn summary_markdown(results: &[TrialResult<SidewindingPegs>], ctx: &SummaryC
          openings between the one nearest the first link to come up to the array and the \
          one most links last crossed through (through trials only). Reverse beyond = the \
          later of the first β reversal and passing the array (trials that did both). End \
-         heading error = the true heading (the virtual chassis of the true links, mean over the last gait cycle) \
-         against the nominal one for β's well. Estimate error = the controller's low-passed \
+         heading error = the true heading (the virtual chassis of the true links, mean \
+         over the last gait cycle) against the nominal one for the controller's well \
+         (flipped by each counted reversal). Estimate error = the controller's low-passed \
          heading estimate against the true heading low-passed alike, aligned at the first \
          estimate. Mean ± sample sd. Definitions: docs/lab.md."
     );
