@@ -75,12 +75,24 @@ pub struct Handover<'a> {
 /// A nominal parameter a controller cannot follow (built without allocating, so the
 /// loop can refuse a request with it).
 #[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
-#[error("the nominal {field} = {value} is outside the controller's range [{min}, {max}]")]
+#[error("the nominal {field} = {value} is outside the controller's range {}", range(*.min, *.max))]
 pub struct NominalMismatch {
     pub field: &'static str,
     pub value: f64,
     pub min: f64,
     pub max: f64,
+}
+
+/// `[min, max]`, or why there is none (an offset's room is the joint limit minus the
+/// controller's reach, which can exceed it).
+fn range(min: f64, max: f64) -> String {
+    if min <= max {
+        format!("[{min}, {max}]")
+    } else {
+        "(none: the controller's amplitude reach alone exceeds the joint limit; \
+         lower its amplitude bound or turning reach)"
+            .to_string()
+    }
 }
 
 /// An operator's command to a running controller (`controller.calibrate` on the

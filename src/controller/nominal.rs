@@ -68,3 +68,24 @@ pub fn lateral_room(params: &GaitParams, reach_rad: f64) -> Result<(), NominalMi
     let room = JOINT_LIMIT_RAD - reach_rad + 1e-12;
     within("offset_lat_rad", params.offset_lat_rad, -room, room)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_offset_with_no_room_says_why_not_an_inverted_range() {
+        let mut p = GaitParams::default();
+        let ok = lateral_room(&p, 1.2);
+        assert!(ok.is_ok());
+        p.offset_lat_rad = 0.5;
+        let e = lateral_room(&p, 1.2).unwrap_err().to_string();
+        assert!(
+            e.contains("offset_lat_rad = 0.5") && e.contains("[-0.37"),
+            "{e}"
+        );
+        p.offset_lat_rad = 0.0;
+        let e = lateral_room(&p, 1.8).unwrap_err().to_string();
+        assert!(e.contains("exceeds the joint limit"), "{e}");
+    }
+}
