@@ -171,14 +171,9 @@ impl HeadingTraces {
         let nominal = series(rec, "heading_nominal_rad").unwrap_or(&[]);
         let beta: Vec<f64> = series(rec, "beta_rad").unwrap_or(&[]).to_vec();
         let reversals = series(rec, "reversals").unwrap_or(&[]);
+        // π after an odd count, 0 after an even one.
         let well = |k: usize, b: f64| match reversals.get(k) {
-            Some(r) if r.is_finite() => {
-                if (r.round() as i64).rem_euclid(2) == 1 {
-                    PI
-                } else {
-                    0.0
-                }
-            }
+            Some(r) if r.is_finite() => PI * r.round().rem_euclid(2.0),
             _ => well_of(b),
         };
         let n = truth.len();

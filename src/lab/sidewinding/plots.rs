@@ -30,8 +30,8 @@ const ESTIMATE_COLOUR: RGBColor = RGBColor(230, 120, 0);
 const TARGET_COLOUR: RGBColor = RGBColor(0, 150, 60);
 
 /// A trial: its path with heading arrows (true black, estimated orange) over the array,
-/// then its headings over time (true, estimated, and the nominal for the controller's well, all in
-/// the true world frame) and β over time with its wells.
+/// then its headings over time (true, estimated, and the nominal for the controller's
+/// well, all in the true world frame) and β over time with its wells.
 pub fn trial_plot(
     path: &Path,
     title: &str,
