@@ -2,7 +2,8 @@
 //! in the physics plant on flat ground, open loop: the data behind the heading
 //! adjustment's choice of turning cone (docs/compliance.md, "Sidewinding").
 //! Each row: the true heading's turn per 16 s (mean of the last cycle minus mean of
-//! the cycle from 4 s, over 26 s), for β = 0 and β = π.
+//! the cycle from 4 s, over 26 s), for β = 0 and β = π; then the gradient's turn and
+//! the speed for β across the wells, for δ = π/2 and the thesis's 3π/4.
 //!     cargo run --release --example sidewinding_turns
 use std::f64::consts::{PI, TAU};
 
@@ -37,11 +38,21 @@ fn wrap(x: f64) -> f64 {
     if y > PI { y - TAU } else { y }
 }
 
-/// Turn per 16 s and mean speed (m/s) with `profile(plane, s, c)` scaling each joint.
+/// Turn per 16 s and mean speed (m/s) with `profile(plane, s, c)` scaling each joint,
+/// the default gait with its phase shift δ + `beta`.
 fn turn(profile: Profile, c: f64, beta: f64, scale: f64) -> (f64, f64) {
+    turn_at(None, profile, c, beta, scale)
+}
+
+/// As [`turn`], with the phase shift `delta` instead of the default's (`None`).
+fn turn_at(delta: Option<f64>, profile: Profile, c: f64, beta: f64, scale: f64) -> (f64, f64) {
     let layout = BodyLayout::alternating(N, Plane::Lateral, MODULE_LENGTH_M);
     let mut table = GaitTable::default();
-    table.get_mut(GaitKind::Sidewinding).phase_shift_rad += beta;
+    let sw = table.get_mut(GaitKind::Sidewinding);
+    if let Some(d) = delta {
+        sw.phase_shift_rad = d;
+    }
+    sw.phase_shift_rad += beta;
     let mut sel = GaitSelector::new(layout.clone(), table, GaitKind::Sidewinding, 0.5, 3.46);
     let mut plant = PhysicsPlant::new(
         &WorldSpec::default(),
@@ -143,6 +154,21 @@ fn main() {
             let (a, va) = turn(f, c, 0.0, 1.0);
             let (b, vb) = turn(f, c, PI, 1.0);
             println!("{name} | {c:+.1} | {a:+.3} {va:.3} | {b:+.3} {vb:.3}");
+        }
+    }
+    // Between the wells (β follows the heading with the presets' K_h 6): how much turn
+    // the gradient still has, which way, and where the travel stalls (δ + β ≡ 0 mod π:
+    // on the reversal's hill π/2 for the default δ = π/2, at β = π/4, inside the 0
+    // well, for the thesis's δ = 3π/4).
+    for delta in [0.5 * PI, 0.75 * PI] {
+        println!("δ {delta:.3}: β | turn at c −0.4, speed | turn at c +0.4, speed | straight");
+        for k in 0..=8 {
+            let beta = k as f64 * PI / 8.0;
+            let g = |_: Plane, s: f64, c: f64| 1.0 + c * (1.0 - 2.0 * s);
+            let (a, va) = turn_at(Some(delta), g, -0.4, beta, 1.0);
+            let (b, vb) = turn_at(Some(delta), g, 0.4, beta, 1.0);
+            let (z, vz) = turn_at(Some(delta), g, 0.0, beta, 1.0);
+            println!("| {beta:.3} | {a:+.3} {va:.3} | {b:+.3} {vb:.3} | {z:+.3} {vz:.3}");
         }
     }
     for scale in [0.7, 1.3] {

@@ -417,13 +417,17 @@ impl GaitParams {
                 temporal_freq_rad_s: 1.0,
                 ..base
             },
-            // Thesis §4.3: δ = 3π/4; the dorsal wave only lifts, so half the lateral one.
+            // δ = π/2 (the thesis's robot used 3π/4): the waves in quadrature, so the
+            // reversal's wells β = 0, π run forward and backward alike and its hill
+            // π/2 is where the travel stops (δ + β ≡ 0 mod π); with 3π/4 the travel
+            // stalls at β = π/4, inside the 0 well (docs/compliance.md, "Sidewinding").
+            // The dorsal wave only lifts, so half the lateral one.
             GaitKind::Sidewinding => GaitParams {
                 amplitude_lat_rad: FRAC_PI_4,
                 amplitude_dor_rad: FRAC_PI_8,
                 spatial_freq_rad: 3.0 * PI,
                 temporal_freq_rad_s: 1.0,
-                phase_shift_rad: 3.0 * FRAC_PI_4,
+                phase_shift_rad: FRAC_PI_2,
                 ..base
             },
             GaitKind::ConicalSidewinding => GaitParams {

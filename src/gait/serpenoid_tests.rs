@@ -75,7 +75,7 @@ fn sidewinding_dorsal_wave_leads_by_the_phase_shift() {
     // A joint pair at the same s: the dorsal wave equals the lateral one shifted by δ.
     let p = *GaitTable::default().get(GaitKind::Sidewinding);
     let w = Serpenoid::for_layout(GaitKind::Sidewinding, &p, &sea());
-    assert_eq!(w.dorsal.phase_rad, 3.0 * PI / 4.0);
+    assert_eq!(w.dorsal.phase_rad, p.phase_shift_rad);
     for s in [0.1, 0.37, 0.8] {
         for psi in [0.0, 1.0, 4.0] {
             let (lat, _) = w.joint(Plane::Lateral, s, psi);

@@ -84,6 +84,8 @@ impl SidewindingConfig {
             // instead of holding its well until 110°. It got `ac_sfc` through in 15 of
             // the thesis protocol's 21 trials against 6 (docs/lab-results/sidewinding/
             // REPORT.md, sessions 3-4); the thesis's snap between the wells is lost.
+            // With the gait's δ = π/2 (2026-12-03) still the better: 21 of 21 against
+            // 19 with K_h 2 (REPORT.md, "Session 5").
             reversal: ReversalConfig {
                 k_h: 6.0,
                 ..ReversalConfig::DEFAULT

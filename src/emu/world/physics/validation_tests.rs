@@ -476,7 +476,9 @@ fn three_d_gaits_stay_within_the_no_slip_bound() {
             "{kind:?} hardly moves: {per_cycle}"
         );
     }
-    // A held sidewinding pose comes to rest.
+    // A held sidewinding pose comes to rest. Released onto flat ground it may first
+    // topple onto the side it rests on (δ = π/2's pose at phase 0 does, in about 3 s),
+    // so the last 2 of 8 s are judged: thrashing (the speed-clamped loop's) goes on.
     let params = GaitParams::default_for(GaitKind::Sidewinding);
     let pose = gait_pose(GaitKind::Sidewinding, &params, 0.0);
     let spec = WorldSpec {
@@ -489,9 +491,9 @@ fn three_d_gaits_stay_within_the_no_slip_bound() {
     let fastest = |config: PhysicsConfig| {
         let mut plant = PhysicsPlant::new(&spec, config).unwrap();
         let mut fastest = 0.0f64;
-        for k in 0..4000 {
+        for k in 0..8000 {
             plant.step(1e-3, &hold(&pose));
-            if k >= 2000 {
+            if k >= 6000 {
                 for l in 0..plant.link_count() {
                     fastest = fastest.max(plant.link_angvel_rad_s(l).norm());
                 }
@@ -501,7 +503,7 @@ fn three_d_gaits_stay_within_the_no_slip_bound() {
     };
     let (profiled_w, clamped_w) = (fastest(quiet(N)), fastest(speed_clamped(N)));
     println!(
-        "held sidewinding pose, 2-4 s: links up to {profiled_w:.3} rad/s ({clamped_w:.1} \
+        "held sidewinding pose, 6-8 s: links up to {profiled_w:.3} rad/s ({clamped_w:.1} \
          with the speed-clamped loop)"
     );
     assert!(
