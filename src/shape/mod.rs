@@ -4,6 +4,7 @@
 
 pub mod admittance;
 pub mod function;
+pub mod helix_shape;
 mod joint_samples;
 pub mod slithering_shape;
 pub mod torque;
