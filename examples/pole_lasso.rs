@@ -8,7 +8,9 @@
 //! of its surface) and the highest link. Tries both senses of the lap (ψ 0: away from
 //! the pole; π: round it) and of the twist (±pitch).
 //!     cargo run --release --example pole_lasso
-//! Environment: POLE_D (pole diameter, m; 0.2), PITCH (0.03), FLAT (0.008), SQUEEZE
+//! Environment: POLE_D (pole diameter, m; 0.2; with STEPPED set, the foot's, then
+//! 0.8× from 0.4 m and 1.2× from 0.8 m, as `scenarios/pole.toml`), ROLL_DEG (the body
+//! rolled about its axis at the start, °; 0), PSI_SWEEP (set: ψ0 in steps of π/4), PITCH (0.03), FLAT (0.008), SQUEEZE
 //! (0.02), WT (−1), SECS (40), HEAD_X (−0.58: the middle at the pole), LAP_S (0: a
 //! delay per joint, s, to lap from the head instead).
 //! Measured 2026-12-03: on a 0.20 m pole the lap round it (ψ π) touches with all 19
@@ -16,12 +18,18 @@
 //! in 36 s, 16 links still touching, either twist; at ωT +1 it stays at the foot. On
 //! 0.14 m and 0.10 m poles the lap does not hold (0-4 links touch): a flat lap that
 //! tight needs more than the ±π/2 a joint can bend when one joint family carries it
-//! (docs/compliance.md, "Rolling helix").
+//! (docs/compliance.md, "Rolling helix"). With the body rolled 45° (`ROLL_DEG=45
+//! POLE_D=0.1 PITCH=0.015 SQUEEZE=0.015`) the 0.10 m pole is lapped (16 links) and
+//! climbed to 1.24 m in 40 s; on the stepped pole (`STEPPED=1`, 0.10 / 0.08 / 0.12 m)
+//! the same open-loop coil loosens on the thin section and falls from 0.8 m at the
+//! thick one (twist +1), or climbs off the top (−1).
 use std::f64::consts::PI;
 
+use nalgebra::{UnitQuaternion, Vector3};
 use snaked::emu::Plant;
 use snaked::emu::servo::MODULE_LENGTH_M;
 use snaked::emu::world::physics::build::MODULE_DIAMETER_M;
+use snaked::emu::world::physics::kinematics::head_pose;
 use snaked::emu::world::physics::{PhysicsConfig, PhysicsPlant};
 use snaked::emu::world::{Pole, PoleSection, StartPose, WorldSpec};
 use snaked::gait::{BodyLayout, GaitKind, GaitParams, Plane, Serpenoid};
@@ -62,11 +70,22 @@ fn run(psi0: f64, twist: f64) {
         poles: vec![Pole {
             x_m: 0.0,
             y_m: 0.0,
-            sections: vec![PoleSection {
-                z0_m: 0.0,
-                z1_m: 1.5,
-                diameter_m: 2.0 * pole_r,
-            }],
+            sections: if std::env::var("STEPPED").is_ok() {
+                // scenarios/pole.toml's: the foot's diameter, then 0.8× and 1.2× it.
+                [(0.0, 0.4, 1.0), (0.4, 0.8, 0.8), (0.8, 1.5, 1.2)]
+                    .map(|(z0_m, z1_m, f)| PoleSection {
+                        z0_m,
+                        z1_m,
+                        diameter_m: 2.0 * pole_r * f,
+                    })
+                    .to_vec()
+            } else {
+                vec![PoleSection {
+                    z0_m: 0.0,
+                    z1_m: 1.5,
+                    diameter_m: 2.0 * pole_r,
+                }]
+            },
             mu: 0.6,
         }],
         start: StartPose {
@@ -76,13 +95,20 @@ fn run(psi0: f64, twist: f64) {
         },
         ..WorldSpec::default()
     };
-    let mut plant = PhysicsPlant::new(
+    // The body rolled `ROLL_DEG` about its own axis (both joint families then bend
+    // across the ground plane).
+    let mut h = spec.start.head_m;
+    h[2] += MODULE_RADIUS_M;
+    let head = head_pose(h, spec.start.yaw_rad, MODULE_LENGTH_M)
+        * UnitQuaternion::from_axis_angle(&Vector3::x_axis(), env("ROLL_DEG", 0.0).to_radians());
+    let mut plant = PhysicsPlant::with_head_pose(
         &spec,
         PhysicsConfig {
             modules: N,
             seed: 7,
             ..PhysicsConfig::default()
         },
+        Some(head),
     )
     .unwrap();
     let (mut a, mut b) = (vec![0.0; N], vec![0.0; N]);
@@ -138,6 +164,12 @@ fn run(psi0: f64, twist: f64) {
 }
 
 fn main() {
+    if std::env::var("PSI_SWEEP").is_ok() {
+        for k in 0..8 {
+            run(k as f64 * PI / 4.0, 1.0);
+        }
+        return;
+    }
     for psi0 in [0.0, PI] {
         for twist in [1.0, -1.0] {
             run(psi0, twist);
