@@ -208,3 +208,96 @@ fn a_squeezing_helix_rolls_up_the_pole_and_back_down() {
         assert!(w[0] - w[1] < 0.1, "fell: {z_down:?}");
     }
 }
+
+/// The radius admittance (SPEC §6) closed round the physics: a coil loose on the pole,
+/// one `R` for the body, compliant, `M·R̈ + B·Ṙ + K·(R − R_0) = F_R + τ_D` with
+/// `F_R = Jᵀ·τ_ext`. Without the squeeze τ_D the coil slides down; with it `R` grows
+/// (the coil tightens) until the pole pushes back (`F_R < 0`) and it holds. Returns the
+/// centre's drop over s 2-6, R at the end over R_0, and the mean shape force then.
+fn squeeze_on_the_pole(squeeze: f64) -> (f64, f64, f64, f64) {
+    use crate::shape::ShapeFunction;
+    use crate::shape::admittance::{AdmittanceGains, AdmittanceSign, ParamState};
+    use crate::shape::helix_shape::HelixShape;
+    use crate::shape::torque::TorqueFilter;
+    use crate::shape::window::Window;
+
+    let l = BodyLayout::alternating(N, Plane::Lateral, MODULE_LENGTH_M);
+    let wave = *Serpenoid::for_layout(
+        GaitKind::RollingHelix,
+        &GaitParams::default_for(GaitKind::RollingHelix),
+        &l,
+    )
+    .wave(Plane::Dorsal);
+    let r0 = wave.spatial_freq_rad;
+    let shape = HelixShape::new(
+        &l,
+        &[Window::EVERYWHERE],
+        10.0,
+        HelixShape::tie(wave.amplitude_rad, r0),
+    );
+    // R ∝ 1/radius: up to 1.5 R_0 (a coil of 2/3 the radius) free, within the joints'
+    // reach (A = R/k ≤ 1.5 rad).
+    let gains = AdmittanceGains {
+        mass: 0.1,
+        damping: 1.5,
+        stiffness: 2.0,
+        min: 0.5 * r0,
+        max: 1.5 * shape.k(),
+        bias_force: squeeze,
+    };
+    let (mut plant, _) = coiled(0.10, 0.006, 0.5, quiet(N));
+    let mut state = ParamState::default();
+    let mut filter = TorqueFilter::new(N, 5.0, 0.1);
+    let (mut reported, mut ext, mut jac, mut set) =
+        (vec![0.0; N], vec![0.0; N], vec![0.0; N], vec![0.0; N]);
+    let z0 = plant.centre_of_mass_m()[2];
+    let (mut z2, mut force_sum, mut force_n) = (0.0, 0.0, 0);
+    for k in 0..6000 {
+        for (i, r) in reported.iter_mut().enumerate() {
+            *r = plant.ground_truth(i).torque_nm;
+        }
+        filter.update(1e-3, &reported, &mut ext);
+        let r = state.value(r0);
+        shape.jacobian(&[r], &mut jac);
+        let force: f64 = jac.iter().zip(&ext).map(|(j, t)| j * t).sum();
+        state.step(&gains, AdmittanceSign::Compliant, force, r0, 1e-3);
+        shape.value(&[state.value(r0)], &mut set);
+        plant.step(1e-3, &hold(&set));
+        if k == 2000 {
+            z2 = plant.centre_of_mass_m()[2];
+        }
+        if k >= 4000 {
+            force_sum += force;
+            force_n += 1;
+        }
+    }
+    let z = plant.centre_of_mass_m()[2];
+    (
+        z0 - z,
+        z2 - z,
+        state.value(r0) / r0,
+        force_sum / force_n as f64,
+    )
+}
+
+#[test]
+fn the_radius_admittance_squeezes_the_coil_onto_the_pole() {
+    let (loose_drop, _, loose_r, _) = squeeze_on_the_pole(0.0);
+    let (drop, late_drop, r, force) = squeeze_on_the_pole(4.0);
+    println!(
+        "radius admittance on the pole: no squeeze: drop {loose_drop:.3} m in 6 s, \
+         R/R0 {loose_r:.3}; squeeze 4: drop {drop:.4} m in 6 s ({late_drop:.4} over s 2-6), \
+         R/R0 {r:.3}, shape force {force:.3}"
+    );
+    assert!(loose_drop > 0.2, "the loose coil held: {loose_drop}");
+    assert!(drop < 0.1, "the squeezed coil slid {drop} m");
+    assert!(
+        late_drop.abs() < 0.01,
+        "the squeezed coil creeps {late_drop} m"
+    );
+    // Tighter than nominal, but the pole pushes back with nearly all of the squeeze:
+    // R stops far short of R_0 + τ_D/K = 1.5 R_0 (its bound 1.36 R_0) it would reach in
+    // the air.
+    assert!(r > 1.0 && r < 1.1, "{r}");
+    assert!(force < -0.8 * 4.0, "{force}");
+}
