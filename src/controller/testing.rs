@@ -34,6 +34,23 @@ impl ObservationBuf {
     }
 }
 
+/// Runs `c` for `seconds` at 1 kHz from t = 0 with the body held straight and the
+/// reported torques of each step `torque(set_points)` of the one before; returns the
+/// last set-points.
+pub fn run_with_torques<const N: usize>(
+    c: &mut dyn Controller,
+    seconds: f64,
+    torque: impl Fn(&[f64]) -> [f64; N],
+) -> Vec<f64> {
+    let buf = ObservationBuf::new(N);
+    let (pos, mut tau, mut out) = ([0.0; N], [0.0; N], vec![0.0; N]);
+    for k in 0..(seconds * 1000.0) as usize {
+        c.step(k as f64 * 1e-3, &buf.observe(&pos, &tau), &mut out);
+        tau = torque(&out);
+    }
+    out
+}
+
 /// Handed-over set-points of a straight body (up to this many joints).
 static STRAIGHT: [f64; 1024] = [0.0; 1024];
 

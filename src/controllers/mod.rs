@@ -5,6 +5,7 @@
 pub mod compliant_slithering;
 pub mod cpg;
 pub mod directional_compliance;
+pub mod helix_radius;
 pub mod open_loop;
 pub mod serpenoid_admittance;
 pub mod sidewinding;
@@ -19,4 +20,5 @@ pub static REGISTRY: &[&dyn Family] = &[
     &Entry::<serpenoid_admittance::SerpenoidAdmittanceKind>::NEW,
     &Entry::<directional_compliance::DirectionalComplianceKind>::NEW,
     &Entry::<sidewinding::SidewindingKind>::NEW,
+    &Entry::<helix_radius::HelixRadiusKind>::NEW,
 ];

@@ -55,6 +55,12 @@ impl HelixShape {
         self.k
     }
 
+    /// Sets the tie `k` (> 0), as a new nominal helix does; allocation-free.
+    pub fn set_tie(&mut self, k: f64) {
+        debug_assert!(k > 0.0 && k.is_finite(), "k = {k}");
+        self.k = k;
+    }
+
     /// Sets Ω, rad (the wave's travel; `ωT·t` for a steady roll).
     pub fn set_phase(&mut self, phase_rad: f64) {
         self.phase_rad = phase_rad;

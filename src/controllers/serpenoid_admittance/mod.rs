@@ -293,7 +293,7 @@ impl Controller for SerpenoidAdmittance {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::controller::testing::{ObservationBuf, engage_at};
+    use crate::controller::testing::{engage_at, run_with_torques};
     use crate::controllers::open_loop::OpenLoop;
 
     const N: usize = 18;
@@ -309,17 +309,6 @@ mod tests {
         SerpenoidAdmittanceKind::preset(name).expect("a preset")
     }
 
-    /// Runs `c` for `seconds` with reported torques `torque(set_points)` per joint.
-    fn run(c: &mut dyn Controller, seconds: f64, torque: impl Fn(&[f64]) -> [f64; N]) -> Vec<f64> {
-        let buf = ObservationBuf::new(N);
-        let (pos, mut tau, mut out) = ([0.0; N], [0.0; N], vec![0.0; N]);
-        for k in 0..(seconds * 1000.0) as usize {
-            c.step(k as f64 * 1e-3, &buf.observe(&pos, &tau), &mut out);
-            tau = torque(&out);
-        }
-        out
-    }
-
     #[test]
     fn without_torque_it_is_the_open_loop_gait() {
         for gait in SerpenoidAdmittanceKind::GAITS {
@@ -328,8 +317,8 @@ mod tests {
             let mut c = SerpenoidAdmittance::new(preset("compliant"), *gait, &layout, &params);
             engage_at(&mut open, &layout, &params, 0.0);
             engage_at(&mut c, &layout, &params, 0.0);
-            let a = run(&mut open, 3.0, |_| [0.0; N]);
-            let b = run(&mut c, 3.0, |_| [0.0; N]);
+            let a = run_with_torques(&mut open, 3.0, |_| [0.0; N]);
+            let b = run_with_torques(&mut c, 3.0, |_| [0.0; N]);
             for (x, y) in a.iter().zip(&b) {
                 assert!((x - y).abs() < 1e-12, "{gait:?}: {x} vs {y}");
             }
@@ -353,7 +342,7 @@ mod tests {
             let mut c =
                 SerpenoidAdmittance::new(preset(name), GaitKind::Sidewinding, &layout, &params);
             engage_at(&mut c, &layout, &params, 0.0);
-            run(&mut c, 3.0, push);
+            run_with_torques(&mut c, 3.0, push);
             for plane in [Plane::Lateral, Plane::Dorsal] {
                 let k = c.scale(plane);
                 assert_eq!(k > 1.05, wider, "{name} {plane:?}: {k}");

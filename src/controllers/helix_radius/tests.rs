@@ -1,0 +1,85 @@
+use super::*;
+use crate::controller::testing::{engage_at, run_with_torques};
+use crate::controllers::open_loop::OpenLoop;
+
+const N: usize = 18;
+
+fn setup() -> (BodyLayout, GaitParams) {
+    (
+        BodyLayout::alternating(N, Plane::Lateral, 0.064),
+        GaitParams::default_for(GaitKind::RollingHelix),
+    )
+}
+
+#[test]
+fn without_torque_or_squeeze_it_is_the_open_loop_helix() {
+    let (layout, params) = setup();
+    let mut config = HelixRadiusConfig::central();
+    config.gains.bias_force = 0.0;
+    let mut open = OpenLoop::new(GaitKind::RollingHelix, &layout, &params);
+    let mut c = HelixRadius::new(config, &layout, &params);
+    engage_at(&mut open, &layout, &params, 0.0);
+    engage_at(&mut c, &layout, &params, 0.0);
+    let a = run_with_torques(&mut open, 3.0, |_| [0.0; N]);
+    let b = run_with_torques(&mut c, 3.0, |_| [0.0; N]);
+    for (x, y) in a.iter().zip(&b) {
+        assert!((x - y).abs() < 1e-9, "{x} vs {y}");
+    }
+}
+
+/// In the air the squeeze tightens the coil to `1 + τ_D/K` (here past its bound, so to
+/// the bound); a pole pushing back on the bend stops it short, and the harder it
+/// pushes the less the coil tightens.
+#[test]
+fn the_squeeze_tightens_the_coil_until_the_pole_pushes_back() {
+    let (layout, params) = setup();
+    let config = HelixRadiusConfig::central();
+    let tightened = |push_nm: f64| {
+        let mut c = HelixRadius::new(config, &layout, &params);
+        engage_at(&mut c, &layout, &params, 0.0);
+        // The pole resists the bend: the environment's torque opposes each joint's
+        // angle, so the reported (spring) torque is along it.
+        run_with_torques(&mut c, 6.0, |sp| {
+            let mut tau = [0.0; N];
+            for (t, &x) in tau.iter_mut().zip(sp) {
+                *t = push_nm * x.signum() * f64::from(u8::from(x.abs() > 0.05));
+            }
+            tau
+        });
+        c.radius_scale()
+    };
+    let (air, soft, hard) = (tightened(0.0), tightened(0.5), tightened(1.5));
+    assert!((air - config.gains.max).abs() < 1e-9, "{air}");
+    assert!(soft > 1.0 && soft < air, "{soft} vs {air}");
+    assert!(hard < soft, "{hard} vs {soft}");
+}
+
+#[test]
+fn a_coil_the_bound_would_tighten_past_the_joints_is_refused() {
+    let (layout, mut params) = setup();
+    let c = HelixRadius::new(HelixRadiusConfig::central(), &layout, &params);
+    assert!(c.accepts(&params).is_ok());
+    params.helix_radius_m = 0.07;
+    params.helix_pitch_m = 0.028;
+    let e = c.accepts(&params).unwrap_err();
+    assert_eq!(e.field, "helix_radius_m");
+    assert!(e.min > 0.07 && e.min < 0.1, "{e}");
+    // The suggested radius is accepted.
+    params.helix_pitch_m *= e.min / params.helix_radius_m;
+    params.helix_radius_m = e.min;
+    assert!(c.accepts(&params).is_ok(), "{:?}", c.accepts(&params));
+}
+
+#[test]
+fn the_configuration_is_checked() {
+    let mut c = HelixRadiusConfig::central();
+    assert!(c.check().is_ok());
+    c.gains.min = 1.1;
+    assert!(c.check().unwrap_err().to_string().contains("gains"));
+    let mut c = HelixRadiusConfig::central();
+    c.gains.max = 5.0;
+    assert!(c.check().unwrap_err().to_string().contains("gains.max"));
+    let mut c = HelixRadiusConfig::central();
+    c.torque_cutoff_hz = f64::NAN;
+    assert!(c.check().is_err());
+}
