@@ -70,6 +70,17 @@ fn coiled(
     pole_mu: f64,
     config: PhysicsConfig,
 ) -> (PhysicsPlant, f64) {
+    coiled_stepped(start_radius_m, clearance_m, pole_mu, config, (1.5, 1.0))
+}
+
+/// As [`coiled`], the pole's diameter times `step.1` above the height `step.0`.
+fn coiled_stepped(
+    start_radius_m: f64,
+    clearance_m: f64,
+    pole_mu: f64,
+    config: PhysicsConfig,
+    step: (f64, f64),
+) -> (PhysicsPlant, f64) {
     let angles = helix_angles(start_radius_m);
     let poses = chain_poses(
         Isometry3::identity(),
@@ -87,11 +98,18 @@ fn coiled(
         poles: vec![Pole {
             x_m: 0.0,
             y_m: 0.0,
-            sections: vec![PoleSection {
-                z0_m: 0.0,
-                z1_m: 1.5,
-                diameter_m: 2.0 * pole_r,
-            }],
+            sections: vec![
+                PoleSection {
+                    z0_m: 0.0,
+                    z1_m: step.0,
+                    diameter_m: 2.0 * pole_r,
+                },
+                PoleSection {
+                    z0_m: step.0,
+                    z1_m: 2.0,
+                    diameter_m: 2.0 * pole_r * step.1,
+                },
+            ],
             mu: pole_mu,
         }],
         start: StartPose {
@@ -343,4 +361,78 @@ fn the_helix_radius_controller_grips_a_loose_coil_and_climbs() {
     assert!(z[10] > z[1] + 0.15, "did not climb: {z:?}");
     assert!(z.windows(2).all(|w| w[1] > w[0] - 0.05), "slid: {z:?}");
     assert!(loose[10] < loose[0] - 0.3, "the loose coil held: {loose:?}");
+}
+
+/// Climbs a pole whose diameter steps by `factor` at 0.8 m, from the coil at 0.6 m
+/// rolling at ωT 0.5 for 40 s: `helix_radius` (its preset) or, `fixed`, the open-loop
+/// helix commanded tight enough to grip the lower section (radius 0.085 m against the
+/// coil's 0.10). The centre's height every 5 s.
+fn climb_a_step(factor: f64, fixed: bool) -> Vec<f64> {
+    use crate::controller::Controller;
+    use crate::controller::testing::{ObservationBuf, engage_at};
+    use crate::controllers::helix_radius::HelixRadius;
+    use crate::controllers::open_loop::OpenLoop;
+    let l = BodyLayout::alternating(N, Plane::Lateral, MODULE_LENGTH_M);
+    let d = GaitParams::default_for(GaitKind::RollingHelix);
+    let (mut c, params): (Box<dyn Controller>, _) = if fixed {
+        let p = GaitParams {
+            helix_radius_m: 0.085,
+            helix_pitch_m: d.helix_pitch_m * 0.85,
+            ..d
+        };
+        (Box::new(OpenLoop::new(GaitKind::RollingHelix, &l, &p)), p)
+    } else {
+        (
+            Box::new(HelixRadius::new(HelixRadiusConfig::central(), &l, &d)),
+            d,
+        )
+    };
+    engage_at(c.as_mut(), &l, &params, 0.0);
+    let (mut plant, _) = coiled_stepped(0.10, 0.006, 0.5, quiet(N), (0.8, factor));
+    let buf = ObservationBuf::new(N);
+    let (pos, mut tau, mut out) = ([0.0; N], [0.0; N], vec![0.0; N]);
+    let mut z = vec![plant.centre_of_mass_m()[2]];
+    for k in 1..=40_000 {
+        c.step(k as f64 * 1e-3, &buf.observe(&pos, &tau), &mut out);
+        plant.step(1e-3, &hold(&out));
+        for (i, t) in tau.iter_mut().enumerate() {
+            *t = plant.ground_truth(i).torque_nm;
+        }
+        if k % 5000 == 0 {
+            z.push(plant.centre_of_mass_m()[2]);
+        }
+    }
+    z
+}
+
+/// Issue 12's premise on one step each way (±25 %), pre-coiled: the radius compliance
+/// climbs through where the fixed coil falls (thicker) or stalls (thinner).
+#[test]
+fn radius_compliance_climbs_a_thicker_section_the_fixed_coil_falls_at() {
+    let (fixed, compliant) = (climb_a_step(1.25, true), climb_a_step(1.25, false));
+    println!("pole x1.25 at 0.8 m, z every 5 s: fixed {fixed:.2?}; helix_radius {compliant:.2?}");
+    assert!(fixed[8] < 0.3, "the fixed coil did not fall: {fixed:?}");
+    assert!(
+        compliant[8] > 0.9,
+        "helix_radius did not pass the step: {compliant:?}"
+    );
+    assert!(
+        compliant.windows(2).all(|w| w[1] > w[0] - 0.05),
+        "slid: {compliant:?}"
+    );
+}
+
+#[test]
+fn radius_compliance_climbs_a_thinner_section_the_fixed_coil_stalls_on() {
+    let (fixed, compliant) = (climb_a_step(0.75, true), climb_a_step(0.75, false));
+    println!("pole x0.75 at 0.8 m, z every 5 s: fixed {fixed:.2?}; helix_radius {compliant:.2?}");
+    assert!(
+        fixed[8] - fixed[6] < 0.03,
+        "the fixed coil did not stall: {fixed:?}"
+    );
+    assert!(
+        compliant[8] - compliant[6] > 0.08,
+        "helix_radius stalled: {compliant:?}"
+    );
+    assert!(compliant[8] > fixed[8], "{compliant:?} vs {fixed:?}");
 }
