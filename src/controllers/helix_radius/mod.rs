@@ -5,9 +5,9 @@
 //! tightens the coil until the pole pushes back hard enough to hold the body by
 //! friction; compliant (`s = +1`), a pole that grows pushes the coil open.
 //!
-//! Issue 12's first controller; the windowed radius (half a coil a window), the
-//! adaptive set point and getting on the pole come next (docs/compliance.md,
-//! "Rolling helix").
+//! The adaptive set point (`central_adaptive`) moves ρ's set point by the grip.
+//! Issue 12's first controller; the windowed radius (half a coil a window) and getting
+//! on the pole come next (docs/compliance.md, "Rolling helix").
 
 use serde::{Deserialize, Serialize};
 
@@ -38,6 +38,22 @@ pub struct HelixRadiusConfig {
     pub torque_cutoff_hz: f64,
     /// Torques below this (after filtering) are ignored, N·m.
     pub torque_deadband_nm: f64,
+    /// The adaptive set point (SPEC §6); off unless given.
+    #[serde(default)]
+    pub adaptive: AdaptiveConfig,
+}
+
+/// The adaptive set point: the grip (the mean |τ_ext| over the joints) below `low_nm`
+/// moves ρ's set point up (tighter) at `rate_per_s`, above `high_nm` down, slowly, so
+/// the compliance answers sudden changes and the set point follows the pole's diameter.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AdaptiveConfig {
+    pub enabled: bool,
+    pub low_nm: f64,
+    pub high_nm: f64,
+    /// ρ's set point per second, 0..1.
+    pub rate_per_s: f64,
 }
 
 /// Range ρ's bounds must lie in: a coil from 1/3 to twice the nominal radius.
@@ -60,6 +76,23 @@ impl HelixRadiusConfig {
             sign: AdmittanceSign::Compliant,
             torque_cutoff_hz: 5.0,
             torque_deadband_nm: 0.1,
+            adaptive: AdaptiveConfig::default(),
+        }
+    }
+
+    /// [`Self::central`] with the adaptive set point: its band around the grip the
+    /// squeeze gives on the physics' pole (0.89 N·m in
+    /// `the_helix_radius_controller_grips_a_loose_coil_and_climbs`; a chosen band, not
+    /// yet tuned on the experiment).
+    pub fn central_adaptive() -> Self {
+        Self {
+            adaptive: AdaptiveConfig {
+                enabled: true,
+                low_nm: 0.8,
+                high_nm: 2.5,
+                rate_per_s: 0.02,
+            },
+            ..Self::central()
         }
     }
 
@@ -75,7 +108,11 @@ impl HelixRadiusConfig {
             ));
         }
         check_range("torque_cutoff_hz", self.torque_cutoff_hz, 0.01, 200.0)?;
-        check_range("torque_deadband_nm", self.torque_deadband_nm, 0.0, 7.0)
+        check_range("torque_deadband_nm", self.torque_deadband_nm, 0.0, 7.0)?;
+        let a = &self.adaptive;
+        check_range("adaptive.low_nm", a.low_nm, 0.0, 7.0)?;
+        check_range("adaptive.high_nm", a.high_nm, a.low_nm, 7.0)?;
+        check_range("adaptive.rate_per_s", a.rate_per_s, 0.0, 1.0)
     }
 }
 
@@ -88,13 +125,23 @@ impl ControllerKind for HelixRadiusKind {
     const SUMMARY: &'static str =
         "the rolling helix's radius follows the torques, squeezed onto the pole (SPEC §6)";
     const GAITS: &'static [GaitKind] = &[GaitKind::RollingHelix];
-    const PRESETS: &'static [(&'static str, &'static str)] = &[(
-        "central",
-        "one radius for the body, compliant, with a virtual squeeze",
-    )];
+    const PRESETS: &'static [(&'static str, &'static str)] = &[
+        (
+            "central",
+            "one radius for the body, compliant, with a virtual squeeze",
+        ),
+        (
+            "central_adaptive",
+            "central, its set point following the grip (the pole's diameter)",
+        ),
+    ];
 
     fn preset(name: &str) -> Option<Self::Config> {
-        (name == "central").then(HelixRadiusConfig::central)
+        match name {
+            "central" => Some(HelixRadiusConfig::central()),
+            "central_adaptive" => Some(HelixRadiusConfig::central_adaptive()),
+            _ => None,
+        }
     }
 
     fn check(config: &Self::Config, _ctx: &BuildContext<'_>) -> Result<(), ConfigError> {
@@ -111,6 +158,8 @@ impl ControllerKind for HelixRadiusKind {
                 s("shape_force", "N·m"),
                 s("squeeze", "N·m"),
                 s("phase_rad", "rad"),
+                s("radius_set_point", ""),
+                s("grip_nm", "N·m"),
             ],
             fields: Vec::new(),
         }
@@ -142,6 +191,9 @@ pub struct HelixRadius {
     r0: f64,
     temporal_freq: f64,
     rho: ParamState,
+    /// ρ's set point (1 unless adaptive) and the grip, the mean |τ_ext|, N·m.
+    set_point: f64,
+    grip: f64,
     force: f64,
     filter: TorqueFilter,
     tau_ext: Vec<f64>,
@@ -164,6 +216,8 @@ impl HelixRadius {
             r0,
             temporal_freq: wt,
             rho: ParamState::default(),
+            set_point: 1.0,
+            grip: 0.0,
             force: 0.0,
             filter: TorqueFilter::new(n, config.torque_cutoff_hz, config.torque_deadband_nm),
             tau_ext: vec![0.0; n],
@@ -177,7 +231,7 @@ impl HelixRadius {
 
     /// ρ = R/R_0 now.
     pub fn radius_scale(&self) -> f64 {
-        self.rho.value(1.0)
+        self.rho.value(self.set_point)
     }
 }
 
@@ -231,6 +285,8 @@ impl Controller for HelixRadius {
         self.r0 = r0;
         self.temporal_freq = wt;
         self.rho = ParamState::default();
+        self.set_point = 1.0;
+        self.grip = 0.0;
         self.force = 0.0;
         self.filter.reset();
         self.phase0 = h.phase_rad;
@@ -255,8 +311,27 @@ impl Controller for HelixRadius {
                 .zip(&self.tau_ext)
                 .map(|(j, t)| j * t)
                 .sum::<f64>();
-        self.rho
-            .step(&self.config.gains, self.config.sign, self.force, 1.0, dt);
+        self.grip = self.tau_ext.iter().map(|t| t.abs()).sum::<f64>() / self.tau_ext.len() as f64;
+        let a = &self.config.adaptive;
+        if a.enabled {
+            let g = &self.config.gains;
+            let dir = if self.grip < a.low_nm {
+                1.0
+            } else if self.grip > a.high_nm {
+                -1.0
+            } else {
+                0.0
+            };
+            // The set point moves, ρ's deviation from it is kept: ρ moves with it.
+            self.set_point = (self.set_point + dir * a.rate_per_s * dt).clamp(g.min, g.max);
+        }
+        self.rho.step(
+            &self.config.gains,
+            self.config.sign,
+            self.force,
+            self.set_point,
+            dt,
+        );
         self.shape
             .value(&[self.r0 * self.radius_scale()], set_points_rad);
         for (x, &plane) in set_points_rad.iter_mut().zip(&self.layout.planes) {
@@ -277,6 +352,8 @@ impl Controller for HelixRadius {
             self.force,
             self.config.gains.bias_force,
             self.phase,
+            self.set_point,
+            self.grip,
         ];
         out.signals[..values.len()].copy_from_slice(&values);
     }

@@ -1,4 +1,5 @@
 use super::*;
+use crate::controller::report::ControllerReport;
 use crate::controller::testing::{engage_at, run_with_torques};
 use crate::controllers::open_loop::OpenLoop;
 
@@ -82,4 +83,66 @@ fn the_configuration_is_checked() {
     let mut c = HelixRadiusConfig::central();
     c.torque_cutoff_hz = f64::NAN;
     assert!(c.check().is_err());
+}
+
+/// A pole the coil fits at ρ = `fit`: tighter than that, every bent joint is pushed
+/// back (reported torque along its bend) in proportion to how much tighter. Returns ρ,
+/// its set point and the grip after `seconds`.
+fn on_a_modelled_pole(config: HelixRadiusConfig, fit: f64, seconds: f64) -> (f64, f64, f64) {
+    let (layout, params) = setup();
+    let a0 = nominal_wave(&layout, &params).0;
+    let mut c = HelixRadius::new(config, &layout, &params);
+    engage_at(&mut c, &layout, &params, 0.0);
+    run_with_torques(&mut c, seconds, |sp| {
+        let rho = sp.iter().fold(0.0f64, |m, x| m.max(x.abs())) / a0;
+        let push = 20.0 * (rho - fit).max(0.0);
+        let mut tau = [0.0; N];
+        for (t, &x) in tau.iter_mut().zip(sp) {
+            *t = push * x.signum() * f64::from(u8::from(x.abs() > 0.05));
+        }
+        tau
+    });
+    let mut report = ControllerReport::EMPTY;
+    c.report(&mut report);
+    (c.radius_scale(), report.signals[6], report.signals[7])
+}
+
+/// The adaptive set point follows the pole: on a thinner one (the coil fits only at
+/// ρ 1.2) the plain squeeze spends much of itself on the spring and grips lightly
+/// (below the band), the adaptive set point tightens until the grip is inside its band;
+/// a crushing grip (every bent joint pushed back by 4 N·m) opens it at its rate.
+#[test]
+fn the_adaptive_set_point_keeps_the_grip_in_its_band() {
+    let (plain, adaptive) = (
+        HelixRadiusConfig::central(),
+        HelixRadiusConfig::central_adaptive(),
+    );
+    let a = adaptive.adaptive;
+    let (_, set_plain, grip_plain) = on_a_modelled_pole(plain, 1.2, 60.0);
+    let (rho, set, grip) = on_a_modelled_pole(adaptive, 1.2, 60.0);
+    assert_eq!(set_plain, 1.0);
+    assert!(grip_plain < a.low_nm, "plain grip {grip_plain}");
+    assert!(
+        (a.low_nm..=a.high_nm).contains(&grip) && set > 1.1,
+        "adaptive grip {grip}, ρ {rho}, set point {set}"
+    );
+
+    let (layout, params) = setup();
+    let mut c = HelixRadius::new(adaptive, &layout, &params);
+    engage_at(&mut c, &layout, &params, 0.0);
+    run_with_torques(&mut c, 5.0, |sp| {
+        let mut tau = [0.0; N];
+        for (t, &x) in tau.iter_mut().zip(sp) {
+            *t = 4.0 * x.signum() * f64::from(u8::from(x.abs() > 0.05));
+        }
+        tau
+    });
+    let mut report = ControllerReport::EMPTY;
+    c.report(&mut report);
+    let (set, grip) = (report.signals[6], report.signals[7]);
+    assert!(grip > a.high_nm, "{grip}");
+    assert!(
+        (set - (1.0 - 5.0 * a.rate_per_s)).abs() < 0.01,
+        "set point {set}"
+    );
 }
