@@ -436,3 +436,50 @@ fn radius_compliance_climbs_a_thinner_section_the_fixed_coil_stalls_on() {
     );
     assert!(compliant[8] > fixed[8], "{compliant:?} vs {fixed:?}");
 }
+
+/// `central_adaptive` through a thinner section (×0.75 at 0.8 m), pre-coiled, ωT 0.5:
+/// its set point follows the pole (tighter on the thin section) while it climbs on,
+/// the grip kept in its band.
+#[test]
+fn the_adaptive_set_point_follows_a_thinner_section() {
+    use crate::controller::Controller;
+    use crate::controller::report::ControllerReport;
+    use crate::controller::testing::{ObservationBuf, engage_at};
+    use crate::controllers::helix_radius::HelixRadius;
+    let l = BodyLayout::alternating(N, Plane::Lateral, MODULE_LENGTH_M);
+    let d = GaitParams::default_for(GaitKind::RollingHelix);
+    let config = HelixRadiusConfig::central_adaptive();
+    let mut c = HelixRadius::new(config, &l, &d);
+    engage_at(&mut c, &l, &d, 0.0);
+    let (mut plant, _) = coiled_stepped(0.10, 0.006, 0.5, quiet(N), (0.8, 0.75));
+    let buf = ObservationBuf::new(N);
+    let (pos, mut tau, mut out) = ([0.0; N], [0.0; N], vec![0.0; N]);
+    let mut report = ControllerReport::EMPTY;
+    let mut at_20s = (0.0, 0.0);
+    for k in 1..=40_000 {
+        c.step(k as f64 * 1e-3, &buf.observe(&pos, &tau), &mut out);
+        plant.step(1e-3, &hold(&out));
+        for (i, t) in tau.iter_mut().enumerate() {
+            *t = plant.ground_truth(i).torque_nm;
+        }
+        if k == 20_000 {
+            c.report(&mut report);
+            at_20s = (plant.centre_of_mass_m()[2], report.signals[6]);
+        }
+    }
+    c.report(&mut report);
+    let (z, set, grip) = (
+        plant.centre_of_mass_m()[2],
+        report.signals[6],
+        report.signals[7],
+    );
+    println!(
+        "adaptive through a ×0.75 section: at 20 s z {:.2} set point {:.3}; at 40 s z {z:.2} \
+         set point {set:.3} grip {grip:.2} N·m",
+        at_20s.0, at_20s.1
+    );
+    assert!(z > 1.0 && z > at_20s.0 + 0.1, "did not climb on: {z}");
+    assert!(set > at_20s.1 + 0.03, "the set point did not follow: {set}");
+    let a = config.adaptive;
+    assert!(grip > 0.5 * a.low_nm && grip < a.high_nm, "grip {grip}");
+}
