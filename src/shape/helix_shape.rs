@@ -66,11 +66,25 @@ impl HelixShape {
         self.phase_rad = phase_rad;
     }
 
-    /// Moves the windows (the same number), e.g. as the coil they are anchored to
-    /// changes; allocation-free.
-    pub fn set_windows(&mut self, windows: &[Window]) {
-        debug_assert_eq!(windows.len(), self.windows.len());
-        self.windows.copy_from_slice(windows);
+    /// A helix with room for up to `max_windows` windows ([`Self::set_windows`]), one
+    /// open window to begin with.
+    pub fn with_capacity(layout: &BodyLayout, max_windows: usize, steepness: f64, k: f64) -> Self {
+        let mut h = Self::new(layout, &[Window::EVERYWHERE], steepness, k);
+        h.windows.reserve(max_windows.saturating_sub(1));
+        h
+    }
+
+    /// Replaces the windows (their number may change, e.g. as the window manager
+    /// re-anchors them to the coil); allocation-free within the capacity it was built
+    /// with (more panics in debug builds: the real-time path must not allocate).
+    pub fn set_windows(&mut self, windows: impl IntoIterator<Item = Window>) {
+        let capacity = self.windows.capacity();
+        self.windows.clear();
+        self.windows.extend(windows);
+        debug_assert!(
+            self.windows.capacity() == capacity,
+            "more windows than room for"
+        );
     }
 
     pub fn windows(&self) -> &[Window] {

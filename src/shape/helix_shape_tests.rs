@@ -143,3 +143,41 @@ fn a_tighter_window_leaves_the_head_side_and_does_not_tear_the_tail_side() {
         last = p;
     }
 }
+
+/// The window manager anchors windows to the helix's phase crossings φ = kπ: each
+/// window is half a coil, and where a window tightens its neighbours shift and it
+/// shortens (the coil's half-turns come sooner).
+#[test]
+fn the_window_manager_cuts_the_coil_into_half_turns() {
+    use crate::shape::window_manager::{Slope, WindowManager};
+    let l = layout();
+    let (a, ws) = nominal();
+    let steep = steepness_for_width(0.5 / 18.0);
+    let mut h = HelixShape::with_capacity(&l, 12, steep, HelixShape::tie(a, ws));
+    let mut manager: WindowManager<f64> = WindowManager::new(18 + 9, 12);
+    // Uniform R: re-anchor a few times (the windows' own edges do not change φ then).
+    h.set_phase(0.4);
+    for _ in 0..3 {
+        let r: Vec<f64> = manager.windows().map(|w| w.payload).collect();
+        let r = if r.is_empty() { vec![ws] } else { r };
+        let probe = h.clone();
+        manager.update(|s| probe.field_at(&r, s).1, ws, Slope::Increasing);
+        h.set_windows(manager.windows().map(|w| w.window));
+    }
+    let windows: Vec<Window> = h.windows().to_vec();
+    let half = std::f64::consts::PI / ws;
+    assert!(windows.len() >= 2, "{windows:?}");
+    for w in &windows[1..windows.len() - 1] {
+        assert!(
+            ((w.b - w.a) - half).abs() < 0.02,
+            "{w:?} vs half a coil {half}"
+        );
+    }
+    // Every edge sits where φ = kπ.
+    let r = vec![ws; windows.len()];
+    for w in &windows[1..] {
+        let phi = h.field_at(&r, w.a).1;
+        let off = (phi / std::f64::consts::PI - (phi / std::f64::consts::PI).round()).abs();
+        assert!(off < 0.02, "edge at {} has φ {phi}", w.a);
+    }
+}
