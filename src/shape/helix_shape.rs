@@ -61,6 +61,11 @@ impl HelixShape {
         self.k = k;
     }
 
+    /// Ω, rad.
+    pub fn phase(&self) -> f64 {
+        self.phase_rad
+    }
+
     /// Sets Ω, rad (the wave's travel; `ωT·t` for a steady roll).
     pub fn set_phase(&mut self, phase_rad: f64) {
         self.phase_rad = phase_rad;
@@ -89,6 +94,20 @@ impl HelixShape {
 
     pub fn windows(&self) -> &[Window] {
         &self.windows
+    }
+
+    /// The windows' edge steepness, per unit normalised arc length.
+    pub fn steepness(&self) -> f64 {
+        self.steepness
+    }
+
+    /// How far round its axis the coil turns per radian of `∫R`: the tangent of a helix
+    /// turns at `√(κ² + τ²)` per metre, and with `A = R/k` (`κ ≈ A/2l` per module of
+    /// length `l`) and `ωS = R` (`τ = R/L` on a body of length `L`) that is
+    /// `R·√((L/2kl)² + 1)` per body length. So the coil's angle at `s` is this ratio
+    /// times `Σ_j R_j·∫₀^s w_j`: half a coil is π of it. `modules` = `L/l`.
+    pub fn coil_ratio(&self, modules: f64) -> f64 {
+        ((modules / (2.0 * self.k)).powi(2) + 1.0).sqrt()
     }
 
     /// `R(s)` and `φ(s)` for the parameters `r`.

@@ -12,7 +12,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::controller::config::{ConfigError, check_range};
-use crate::controller::report::{ControllerReport, ReportSpec, SignalSpec};
+use crate::controller::report::{ControllerReport, FieldSpec, ReportSpec, SignalSpec};
 use crate::controller::{
     BuildContext, Controller, ControllerKind, Handover, NominalMismatch, Observation,
 };
@@ -23,7 +23,10 @@ use crate::shape::ShapeFunction;
 use crate::shape::admittance::{AdmittanceGains, AdmittanceSign, ParamState};
 use crate::shape::helix_shape::HelixShape;
 use crate::shape::torque::TorqueFilter;
-use crate::shape::window::Window;
+use crate::shape::window::{Window, steepness_for_width};
+
+mod windows;
+use windows::{MAX_HALF_TURNS, RadiusWindows, adapt};
 
 /// The controller's configuration.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -41,6 +44,10 @@ pub struct HelixRadiusConfig {
     /// The adaptive set point (SPEC §6); off unless given.
     #[serde(default)]
     pub adaptive: AdaptiveConfig,
+    /// One ρ per half turn of the coil (windows travelling with the roll) instead of
+    /// one for the body.
+    #[serde(default)]
+    pub windowed: bool,
 }
 
 /// The adaptive set point: the grip (the mean |τ_ext| over the joints) below `low_nm`
@@ -58,6 +65,12 @@ pub struct AdaptiveConfig {
 
 /// Range ρ's bounds must lie in: a coil from 1/3 to twice the nominal radius.
 const RHO_RANGE: (f64, f64) = (0.5, 3.0);
+
+impl Default for HelixRadiusConfig {
+    fn default() -> Self {
+        Self::central()
+    }
+}
 
 impl HelixRadiusConfig {
     /// Central radius compliance with a squeeze. The gains are the physics test's
@@ -77,6 +90,24 @@ impl HelixRadiusConfig {
             torque_cutoff_hz: 5.0,
             torque_deadband_nm: 0.1,
             adaptive: AdaptiveConfig::default(),
+            windowed: false,
+        }
+    }
+
+    /// One ρ per half turn.
+    pub fn windowed() -> Self {
+        Self {
+            windowed: true,
+            ..Self::central()
+        }
+    }
+
+    /// One ρ per half turn, each with its adaptive set point: the full
+    /// controller.
+    pub fn windowed_adaptive() -> Self {
+        Self {
+            windowed: true,
+            ..Self::central_adaptive()
         }
     }
 
@@ -134,12 +165,19 @@ impl ControllerKind for HelixRadiusKind {
             "central_adaptive",
             "central, its set point following the grip (the pole's diameter)",
         ),
+        ("windowed", "one radius per half turn of the coil"),
+        (
+            "windowed_adaptive",
+            "one radius and adaptive set point per half turn (the full controller)",
+        ),
     ];
 
     fn preset(name: &str) -> Option<Self::Config> {
         match name {
             "central" => Some(HelixRadiusConfig::central()),
             "central_adaptive" => Some(HelixRadiusConfig::central_adaptive()),
+            "windowed" => Some(HelixRadiusConfig::windowed()),
+            "windowed_adaptive" => Some(HelixRadiusConfig::windowed_adaptive()),
             _ => None,
         }
     }
@@ -148,8 +186,23 @@ impl ControllerKind for HelixRadiusKind {
         config.check()
     }
 
-    fn report_spec(_config: &Self::Config, _ctx: &BuildContext<'_>) -> ReportSpec {
+    fn report_spec(config: &Self::Config, _ctx: &BuildContext<'_>) -> ReportSpec {
         let s = SignalSpec::new;
+        let fields = if config.windowed {
+            vec![FieldSpec {
+                name: "radius".into(),
+                centralization: "windowed".into(),
+                enabled: true,
+                columns: vec![
+                    s("radius_scale", ""),
+                    s("set_point", ""),
+                    s("shape_force", "N·m"),
+                    s("grip_nm", "N·m"),
+                ],
+            }]
+        } else {
+            Vec::new()
+        };
         ReportSpec {
             signals: vec![
                 s("radius_scale", ""),
@@ -160,8 +213,11 @@ impl ControllerKind for HelixRadiusKind {
                 s("phase_rad", "rad"),
                 s("radius_set_point", ""),
                 s("grip_nm", "N·m"),
+                s("windows", "count"),
+                s("radius_scale_min", ""),
+                s("radius_scale_max", ""),
             ],
-            fields: Vec::new(),
+            fields,
         }
     }
 
@@ -191,6 +247,8 @@ pub struct HelixRadius {
     r0: f64,
     temporal_freq: f64,
     rho: ParamState,
+    /// The half turns' state (windowed).
+    windows: RadiusWindows,
     /// ρ's set point (1 unless adaptive) and the grip, the mean |τ_ext|, N·m.
     set_point: f64,
     grip: f64,
@@ -212,10 +270,17 @@ impl HelixRadius {
             config,
             layout: layout.clone(),
             params: *params,
-            shape: HelixShape::new(layout, &[Window::EVERYWHERE], 1.0, HelixShape::tie(a0, r0)),
+            shape: HelixShape::with_capacity(
+                layout,
+                MAX_HALF_TURNS,
+                // Edges about half a module wide (SPEC §4).
+                steepness_for_width(0.5 / n as f64),
+                HelixShape::tie(a0, r0),
+            ),
             r0,
             temporal_freq: wt,
             rho: ParamState::default(),
+            windows: RadiusWindows::new(&layout.s, layout.body_length_m() / layout.module_length_m),
             set_point: 1.0,
             grip: 0.0,
             force: 0.0,
@@ -229,9 +294,53 @@ impl HelixRadius {
         }
     }
 
-    /// ρ = R/R_0 now.
+    /// ρ = R/R_0 now (the mean over the half turns when windowed).
     pub fn radius_scale(&self) -> f64 {
-        self.rho.value(self.set_point)
+        if self.config.windowed {
+            self.windows.summary().0
+        } else {
+            self.rho.value(self.set_point)
+        }
+    }
+
+    /// The half turns on the body (1 when central).
+    pub fn window_count(&self) -> usize {
+        if self.config.windowed {
+            self.windows.len()
+        } else {
+            1
+        }
+    }
+}
+
+impl HelixRadius {
+    /// One ρ for the body: its force, grip, set point and admittance, then the shape.
+    fn step_central(&mut self, dt: f64, set_points_rad: &mut [f64]) {
+        let r = [self.r0 * self.radius_scale()];
+        self.shape.jacobian(&r, &mut self.jacobian);
+        // ∂h/∂ρ = R_0·∂h/∂R.
+        self.force = self.r0
+            * self
+                .jacobian
+                .iter()
+                .zip(&self.tau_ext)
+                .map(|(j, t)| j * t)
+                .sum::<f64>();
+        self.grip = self.tau_ext.iter().map(|t| t.abs()).sum::<f64>() / self.tau_ext.len() as f64;
+        let g = &self.config.gains;
+        // The set point moves, ρ's deviation from it is kept: ρ moves with it.
+        self.set_point = adapt(
+            &self.config.adaptive,
+            self.set_point,
+            self.grip,
+            g.min,
+            g.max,
+            dt,
+        );
+        self.rho
+            .step(g, self.config.sign, self.force, self.set_point, dt);
+        self.shape
+            .value(&[self.r0 * self.radius_scale()], set_points_rad);
     }
 }
 
@@ -282,6 +391,8 @@ impl Controller for HelixRadius {
         self.params = *h.params;
         let (a0, r0, wt) = nominal_wave(&self.layout, h.params);
         self.shape.set_tie(HelixShape::tie(a0, r0));
+        self.shape.set_windows([Window::EVERYWHERE]);
+        self.windows.reset();
         self.r0 = r0;
         self.temporal_freq = wt;
         self.rho = ParamState::default();
@@ -301,39 +412,13 @@ impl Controller for HelixRadius {
         self.phase = self.phase0 + self.temporal_freq * (t_s - self.t0);
         self.shape.set_phase(self.phase);
         self.filter.update(dt, obs.torque_nm, &mut self.tau_ext);
-        let r = [self.r0 * self.radius_scale()];
-        self.shape.jacobian(&r, &mut self.jacobian);
-        // ∂h/∂ρ = R_0·∂h/∂R.
-        self.force = self.r0
-            * self
-                .jacobian
-                .iter()
-                .zip(&self.tau_ext)
-                .map(|(j, t)| j * t)
-                .sum::<f64>();
-        self.grip = self.tau_ext.iter().map(|t| t.abs()).sum::<f64>() / self.tau_ext.len() as f64;
-        let a = &self.config.adaptive;
-        if a.enabled {
-            let g = &self.config.gains;
-            let dir = if self.grip < a.low_nm {
-                1.0
-            } else if self.grip > a.high_nm {
-                -1.0
-            } else {
-                0.0
-            };
-            // The set point moves, ρ's deviation from it is kept: ρ moves with it.
-            self.set_point = (self.set_point + dir * a.rate_per_s * dt).clamp(g.min, g.max);
+        if self.config.windowed {
+            self.windows
+                .step(&mut self.shape, &self.config, self.r0, &self.tau_ext, dt);
+            self.shape.value(self.windows.values(), set_points_rad);
+        } else {
+            self.step_central(dt, set_points_rad);
         }
-        self.rho.step(
-            &self.config.gains,
-            self.config.sign,
-            self.force,
-            self.set_point,
-            dt,
-        );
-        self.shape
-            .value(&[self.r0 * self.radius_scale()], set_points_rad);
         for (x, &plane) in set_points_rad.iter_mut().zip(&self.layout.planes) {
             *x += match plane {
                 Plane::Lateral => self.params.offset_lat_rad,
@@ -344,18 +429,36 @@ impl Controller for HelixRadius {
 
     fn report(&self, out: &mut ControllerReport) {
         out.clear();
-        let r = self.r0 * self.radius_scale();
+        let rho = self.radius_scale();
+        let r = self.r0 * rho;
+        let (lo, hi) = if self.config.windowed {
+            let (_, lo, hi) = self.windows.summary();
+            (lo, hi)
+        } else {
+            (rho, rho)
+        };
+        let (force, set_point, grip) = if self.config.windowed {
+            self.windows.means()
+        } else {
+            (self.force, self.set_point, self.grip)
+        };
         let values = [
-            self.radius_scale(),
+            rho,
             r,
             r / self.shape.k(),
-            self.force,
+            force,
             self.config.gains.bias_force,
             self.phase,
-            self.set_point,
-            self.grip,
+            set_point,
+            grip,
+            self.window_count() as f64,
+            lo,
+            hi,
         ];
         out.signals[..values.len()].copy_from_slice(&values);
+        if self.config.windowed {
+            self.windows.field(&mut out.fields[0]);
+        }
     }
 }
 

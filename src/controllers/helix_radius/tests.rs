@@ -15,17 +15,57 @@ fn setup() -> (BodyLayout, GaitParams) {
 #[test]
 fn without_torque_or_squeeze_it_is_the_open_loop_helix() {
     let (layout, params) = setup();
-    let mut config = HelixRadiusConfig::central();
-    config.gains.bias_force = 0.0;
-    let mut open = OpenLoop::new(GaitKind::RollingHelix, &layout, &params);
-    let mut c = HelixRadius::new(config, &layout, &params);
-    engage_at(&mut open, &layout, &params, 0.0);
-    engage_at(&mut c, &layout, &params, 0.0);
-    let a = run_with_torques(&mut open, 3.0, |_| [0.0; N]);
-    let b = run_with_torques(&mut c, 3.0, |_| [0.0; N]);
-    for (x, y) in a.iter().zip(&b) {
-        assert!((x - y).abs() < 1e-9, "{x} vs {y}");
+    for mut config in [HelixRadiusConfig::central(), HelixRadiusConfig::windowed()] {
+        config.gains.bias_force = 0.0;
+        let mut open = OpenLoop::new(GaitKind::RollingHelix, &layout, &params);
+        let mut c = HelixRadius::new(config, &layout, &params);
+        engage_at(&mut open, &layout, &params, 0.0);
+        engage_at(&mut c, &layout, &params, 0.0);
+        // 13 s: more than a roll period, so half turns are born and dropped.
+        let a = run_with_torques(&mut open, 13.0, |_| [0.0; N]);
+        let b = run_with_torques(&mut c, 13.0, |_| [0.0; N]);
+        for (x, y) in a.iter().zip(&b) {
+            assert!(
+                (x - y).abs() < 1e-9,
+                "windowed {}: {x} vs {y}",
+                config.windowed
+            );
+        }
+        assert!(
+            c.window_count() >= usize::from(config.windowed) * 2 + 1 - usize::from(config.windowed)
+        );
     }
+}
+
+/// Windowed, a push on the head's joints tightens the half turns there, not the
+/// tail's: each window collects only its joints' torques.
+#[test]
+fn a_window_answers_only_its_own_joints() {
+    let (layout, params) = setup();
+    let mut config = HelixRadiusConfig::windowed();
+    config.gains.bias_force = 0.0;
+    let mut c = HelixRadius::new(config, &layout, &params);
+    engage_at(&mut c, &layout, &params, 0.0);
+    // The head's joints bent further by the environment (reported against the bend):
+    // compliant, those windows tighten.
+    run_with_torques(&mut c, 0.5, |sp| {
+        let mut tau = [0.0; N];
+        for (i, (t, &x)) in tau.iter_mut().zip(sp).enumerate() {
+            if i < 6 {
+                *t = -2.0 * x.signum();
+            }
+        }
+        tau
+    });
+    let mut report = ControllerReport::EMPTY;
+    c.report(&mut report);
+    let f = &report.fields[0];
+    assert!(f.len() >= 3, "{}", f.len());
+    let rho = &f.columns[0][..f.len()];
+    // The windows over the pushed joints (s < 0.32) tighten; the tail's stays.
+    let pushed = (0..f.len()).filter(|&k| f.a[k] < 0.3).map(|k| rho[k]);
+    assert!(pushed.fold(0.0f64, f64::max) > 1.05, "{rho:?}");
+    assert!((rho[f.len() - 1] - 1.0).abs() < 1e-3, "tail window {rho:?}");
 }
 
 /// In the air the squeeze tightens the coil to `1 + τ_D/K` (here past its bound, so to

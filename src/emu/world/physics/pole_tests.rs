@@ -368,6 +368,12 @@ fn the_helix_radius_controller_grips_a_loose_coil_and_climbs() {
 /// helix commanded tight enough to grip the lower section (radius 0.085 m against the
 /// coil's 0.10). The centre's height every 5 s.
 fn climb_a_step(factor: f64, fixed: bool) -> Vec<f64> {
+    climb_a_step_with(factor, (!fixed).then(HelixRadiusConfig::central))
+}
+
+/// As [`climb_a_step`] with `helix_radius` in `config` (`None`: the fixed coil).
+fn climb_a_step_with(factor: f64, config: Option<HelixRadiusConfig>) -> Vec<f64> {
+    let fixed = config.is_none();
     use crate::controller::Controller;
     use crate::controller::testing::{ObservationBuf, engage_at};
     use crate::controllers::helix_radius::HelixRadius;
@@ -383,7 +389,7 @@ fn climb_a_step(factor: f64, fixed: bool) -> Vec<f64> {
         (Box::new(OpenLoop::new(GaitKind::RollingHelix, &l, &p)), p)
     } else {
         (
-            Box::new(HelixRadius::new(HelixRadiusConfig::central(), &l, &d)),
+            Box::new(HelixRadius::new(config.unwrap_or_default(), &l, &d)),
             d,
         )
     };
@@ -410,31 +416,34 @@ fn climb_a_step(factor: f64, fixed: bool) -> Vec<f64> {
 #[test]
 fn radius_compliance_climbs_a_thicker_section_the_fixed_coil_falls_at() {
     let (fixed, compliant) = (climb_a_step(1.25, true), climb_a_step(1.25, false));
-    println!("pole x1.25 at 0.8 m, z every 5 s: fixed {fixed:.2?}; helix_radius {compliant:.2?}");
+    let full = climb_a_step_with(1.25, Some(HelixRadiusConfig::windowed_adaptive()));
+    println!(
+        "pole x1.25 at 0.8 m, z every 5 s: fixed {fixed:.2?}; helix_radius central \
+         {compliant:.2?}; windowed_adaptive {full:.2?}"
+    );
     assert!(fixed[8] < 0.3, "the fixed coil did not fall: {fixed:?}");
-    assert!(
-        compliant[8] > 0.9,
-        "helix_radius did not pass the step: {compliant:?}"
-    );
-    assert!(
-        compliant.windows(2).all(|w| w[1] > w[0] - 0.05),
-        "slid: {compliant:?}"
-    );
+    for z in [&compliant, &full] {
+        assert!(z[8] > 0.9, "helix_radius did not pass the step: {z:?}");
+        assert!(z.windows(2).all(|w| w[1] > w[0] - 0.05), "slid: {z:?}");
+    }
 }
 
 #[test]
 fn radius_compliance_climbs_a_thinner_section_the_fixed_coil_stalls_on() {
     let (fixed, compliant) = (climb_a_step(0.75, true), climb_a_step(0.75, false));
-    println!("pole x0.75 at 0.8 m, z every 5 s: fixed {fixed:.2?}; helix_radius {compliant:.2?}");
+    let full = climb_a_step_with(0.75, Some(HelixRadiusConfig::windowed_adaptive()));
+    println!(
+        "pole x0.75 at 0.8 m, z every 5 s: fixed {fixed:.2?}; helix_radius central \
+         {compliant:.2?}; windowed_adaptive {full:.2?}"
+    );
     assert!(
         fixed[8] - fixed[6] < 0.03,
         "the fixed coil did not stall: {fixed:?}"
     );
-    assert!(
-        compliant[8] - compliant[6] > 0.08,
-        "helix_radius stalled: {compliant:?}"
-    );
-    assert!(compliant[8] > fixed[8], "{compliant:?} vs {fixed:?}");
+    for z in [&compliant, &full] {
+        assert!(z[8] - z[6] > 0.08, "helix_radius stalled: {z:?}");
+        assert!(z[8] > fixed[8], "{z:?} vs {fixed:?}");
+    }
 }
 
 /// `central_adaptive` through a thinner section (×0.75 at 0.8 m), pre-coiled, ωT 0.5:
