@@ -8,6 +8,8 @@ use nalgebra::{Isometry3, Matrix3, Translation3, UnitQuaternion, Vector3};
 use super::kinematics::chain_poses;
 use super::tests::{hold, quiet};
 use super::*;
+use crate::controller::Controller;
+use crate::controller::testing::{ObservationBuf, engage_at};
 use crate::controllers::helix_radius::HelixRadiusConfig;
 use crate::emu::Plant;
 use crate::emu::servo::MODULE_LENGTH_M;
@@ -321,12 +323,30 @@ fn the_radius_admittance_squeezes_the_coil_onto_the_pole() {
     assert!(force < -0.8 * 4.0, "{force}");
 }
 
+/// Steps `c` and the plant together for `steps` ms from t = 1 ms, the controller seeing
+/// the plant's spring torques of the step before; `each(k, plant, c)` after step `k`.
+fn drive(
+    plant: &mut PhysicsPlant,
+    c: &mut dyn Controller,
+    steps: usize,
+    mut each: impl FnMut(usize, &PhysicsPlant, &dyn Controller),
+) {
+    let buf = ObservationBuf::new(N);
+    let (pos, mut tau, mut out) = ([0.0; N], [0.0; N], vec![0.0; N]);
+    for k in 1..=steps {
+        c.step(k as f64 * 1e-3, &buf.observe(&pos, &tau), &mut out);
+        plant.step(1e-3, &hold(&out));
+        for (i, t) in tau.iter_mut().enumerate() {
+            *t = plant.ground_truth(i).torque_nm;
+        }
+        each(k, plant, c);
+    }
+}
+
 /// The `helix_radius` controller (central, its preset) driving the plant: from a coil
 /// 6 mm loose on a 0.14 m pole, rolling at ωT 0.5 rad/s. Returns the centre's height
 /// every 2 s and ρ at the end.
 fn helix_radius_on_the_pole(squeeze: f64) -> (Vec<f64>, f64) {
-    use crate::controller::Controller;
-    use crate::controller::testing::{ObservationBuf, engage_at};
     use crate::controllers::helix_radius::{HelixRadius, HelixRadiusConfig};
     let l = BodyLayout::alternating(N, Plane::Lateral, MODULE_LENGTH_M);
     let params = GaitParams::default_for(GaitKind::RollingHelix);
@@ -335,19 +355,12 @@ fn helix_radius_on_the_pole(squeeze: f64) -> (Vec<f64>, f64) {
     let mut c = HelixRadius::new(config, &l, &params);
     engage_at(&mut c, &l, &params, 0.0);
     let (mut plant, _) = coiled(0.10, 0.006, 0.5, quiet(N));
-    let buf = ObservationBuf::new(N);
-    let (pos, mut tau, mut out) = ([0.0; N], [0.0; N], vec![0.0; N]);
     let mut z = vec![plant.centre_of_mass_m()[2]];
-    for k in 1..=20_000 {
-        c.step(k as f64 * 1e-3, &buf.observe(&pos, &tau), &mut out);
-        plant.step(1e-3, &hold(&out));
-        for (i, t) in tau.iter_mut().enumerate() {
-            *t = plant.ground_truth(i).torque_nm;
-        }
+    drive(&mut plant, &mut c, 20_000, |k, plant, _| {
         if k % 2000 == 0 {
             z.push(plant.centre_of_mass_m()[2]);
         }
-    }
+    });
     (z, c.radius_scale())
 }
 
@@ -374,8 +387,6 @@ fn climb_a_step(factor: f64, fixed: bool) -> Vec<f64> {
 /// As [`climb_a_step`] with `helix_radius` in `config` (`None`: the fixed coil).
 fn climb_a_step_with(factor: f64, config: Option<HelixRadiusConfig>) -> Vec<f64> {
     let fixed = config.is_none();
-    use crate::controller::Controller;
-    use crate::controller::testing::{ObservationBuf, engage_at};
     use crate::controllers::helix_radius::HelixRadius;
     use crate::controllers::open_loop::OpenLoop;
     let l = BodyLayout::alternating(N, Plane::Lateral, MODULE_LENGTH_M);
@@ -395,19 +406,12 @@ fn climb_a_step_with(factor: f64, config: Option<HelixRadiusConfig>) -> Vec<f64>
     };
     engage_at(c.as_mut(), &l, &params, 0.0);
     let (mut plant, _) = coiled_stepped(0.10, 0.006, 0.5, quiet(N), (0.8, factor));
-    let buf = ObservationBuf::new(N);
-    let (pos, mut tau, mut out) = ([0.0; N], [0.0; N], vec![0.0; N]);
     let mut z = vec![plant.centre_of_mass_m()[2]];
-    for k in 1..=40_000 {
-        c.step(k as f64 * 1e-3, &buf.observe(&pos, &tau), &mut out);
-        plant.step(1e-3, &hold(&out));
-        for (i, t) in tau.iter_mut().enumerate() {
-            *t = plant.ground_truth(i).torque_nm;
-        }
+    drive(&mut plant, c.as_mut(), 40_000, |k, plant, _| {
         if k % 5000 == 0 {
             z.push(plant.centre_of_mass_m()[2]);
         }
-    }
+    });
     z
 }
 
@@ -451,9 +455,7 @@ fn radius_compliance_climbs_a_thinner_section_the_fixed_coil_stalls_on() {
 /// the grip kept in its band.
 #[test]
 fn the_adaptive_set_point_follows_a_thinner_section() {
-    use crate::controller::Controller;
     use crate::controller::report::ControllerReport;
-    use crate::controller::testing::{ObservationBuf, engage_at};
     use crate::controllers::helix_radius::HelixRadius;
     let l = BodyLayout::alternating(N, Plane::Lateral, MODULE_LENGTH_M);
     let d = GaitParams::default_for(GaitKind::RollingHelix);
@@ -461,21 +463,14 @@ fn the_adaptive_set_point_follows_a_thinner_section() {
     let mut c = HelixRadius::new(config, &l, &d);
     engage_at(&mut c, &l, &d, 0.0);
     let (mut plant, _) = coiled_stepped(0.10, 0.006, 0.5, quiet(N), (0.8, 0.75));
-    let buf = ObservationBuf::new(N);
-    let (pos, mut tau, mut out) = ([0.0; N], [0.0; N], vec![0.0; N]);
     let mut report = ControllerReport::EMPTY;
     let mut at_20s = (0.0, 0.0);
-    for k in 1..=40_000 {
-        c.step(k as f64 * 1e-3, &buf.observe(&pos, &tau), &mut out);
-        plant.step(1e-3, &hold(&out));
-        for (i, t) in tau.iter_mut().enumerate() {
-            *t = plant.ground_truth(i).torque_nm;
-        }
+    drive(&mut plant, &mut c, 40_000, |k, plant, c| {
         if k == 20_000 {
             c.report(&mut report);
             at_20s = (plant.centre_of_mass_m()[2], report.signals[6]);
         }
-    }
+    });
     c.report(&mut report);
     let (z, set, grip) = (
         plant.centre_of_mass_m()[2],
