@@ -10,6 +10,8 @@ use snaked::lab::displacement::Terrain;
 
 #[path = "snake_lab/displacement.rs"]
 mod displacement;
+#[path = "snake_lab/pole.rs"]
+mod pole;
 #[path = "snake_lab/sidewinding.rs"]
 mod sidewinding;
 use snaked::emu::servo::PositionLoop;
@@ -44,6 +46,8 @@ enum Cmd {
     RockPile(displacement::Args),
     /// Anti-compliant sidewinding through an irregular peg array (SPEC §7).
     Sidewinding(sidewinding::Args),
+    /// The rolling helix with radius compliance up poles whose diameter changes (SPEC §6).
+    Pole(pole::Args),
 }
 
 #[derive(Debug, clap::Args)]
@@ -134,6 +138,7 @@ fn main() -> ExitCode {
         Cmd::PegArray(args) => displacement::run(Terrain::PegArray, args),
         Cmd::RockPile(args) => displacement::run(Terrain::RockPile, args),
         Cmd::Sidewinding(args) => sidewinding::run(args),
+        Cmd::Pole(args) => pole::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

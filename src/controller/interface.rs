@@ -150,6 +150,14 @@ pub trait Controller: Send {
     /// The report after the last step, in the order of the controller's
     /// [`super::report::ReportSpec`].
     fn report(&self, out: &mut ControllerReport);
+    /// Whether the controller takes over as soon as its gait is selected, from the pose
+    /// the selector's blend starts at, and makes its own way into the gait (the rolling
+    /// helix winds itself round a pole: a blend into the coil would coil on the ground).
+    /// Such a controller must itself move smoothly from the handover's set-points.
+    /// Most controllers take over when the selector's blend ends.
+    fn takes_over_at_switch(&self) -> bool {
+        false
+    }
     /// An operator's command; it takes effect at the controller's next step. Most
     /// controllers have none.
     fn command(&mut self, command: ControllerCommand) -> Result<(), CommandRefused> {

@@ -7,7 +7,7 @@
 
 use super::LabError;
 use super::board::Layout;
-use super::trial::TrialRecord;
+use super::trial::{TrialConfig, TrialRecord};
 use crate::emu::Plant;
 use crate::emu::world::WorldSpec;
 use crate::gait::GaitKind;
@@ -39,6 +39,11 @@ pub trait ExperimentModule: Sync {
         modules: usize,
         start: u64,
     ) -> Result<(WorldSpec, Self::Goal), LabError>;
+    /// How a trial runs on the world whose goal is `goal`: the experiment's unless the
+    /// world needs its own (the nominal parameters an operator would set for it).
+    fn trial_config(&self, base: &TrialConfig, _goal: &Self::Goal) -> TrialConfig {
+        *base
+    }
     /// The figures of a finished trial on the world whose goal was `goal`.
     fn metrics(&self, goal: &Self::Goal, rec: &TrialRecord) -> Self::Metrics;
 }

@@ -25,6 +25,7 @@ pub mod experiment;
 pub mod metrics;
 pub mod pegboard;
 pub mod plots;
+pub mod pole;
 pub mod report;
 pub mod runner;
 pub mod sidewinding;

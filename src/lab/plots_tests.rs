@@ -38,6 +38,8 @@ fn record(signals: usize) -> TrialRecord {
         temporal_freq_rad_s: 1.0,
         cycles_not_running: 0,
         self_contacts: 0,
+        heights_m: Vec::new(),
+        windows: Vec::new(),
     }
 }
 

@@ -125,6 +125,18 @@ pub fn plan<E: ExperimentModule>(
         for start in 0..exp.starts {
             let (world, goal) = module.world(l, t.modules, start as u64)?;
             let world = Arc::new(world);
+            let own = module.trial_config(t, &goal);
+            if own.gaits != t.gaits {
+                let params = own.gaits.get(module.gait());
+                for c in &exp.controllers {
+                    let bad = |e: String| LabError::BadValue(format!("layout {}: {e}", l.name));
+                    let built = c.build(&layout, params).map_err(|e| bad(e.to_string()))?;
+                    built
+                        .controller
+                        .accepts(params)
+                        .map_err(|e| bad(format!("controller {}: {e}", c.label)))?;
+                }
+            }
             for repeat in 0..exp.repeats {
                 worlds.push(PlannedWorld {
                     layout: li,
@@ -205,7 +217,7 @@ pub fn run<E: ExperimentModule>(
             &w.world,
             &w.goal,
             w.noise_seed,
-            &exp.trial,
+            &module.trial_config(&exp.trial, &w.goal),
             recording,
         )?;
         let metrics = module.metrics(&w.goal, &rec);

@@ -13,6 +13,7 @@ use super::controllers::LabController;
 use super::experiment::Goal;
 use crate::bus::sim::{SimBus, SimBusConfig};
 use crate::controller::catalog::Catalog;
+use crate::controller::report::MAX_COLUMNS;
 use crate::emu::Plant;
 use crate::emu::servo::PositionLoop;
 use crate::emu::world::WorldSpec;
@@ -48,6 +49,10 @@ pub struct TrialConfig {
     /// Every gait's nominal parameters (the daemon's defaults unless the experiment
     /// was given `--nominal`): what the selector runs and the controllers are built on.
     pub gaits: GaitTable,
+    /// Start in this gait and select the controller's after this many seconds, as an
+    /// operator's `gait.set` would (the pole: rolling on the ground, then the helix);
+    /// `None`: the controller's gait from the start.
+    pub lead_in: Option<(GaitKind, f64)>,
 }
 
 impl Default for TrialConfig {
@@ -60,6 +65,7 @@ impl Default for TrialConfig {
             blend_time_s: DEFAULT_BLEND_TIME_S,
             servo_loop: PositionLoop::default(),
             gaits: GaitTable::default(),
+            lead_in: None,
         }
     }
 }
@@ -115,6 +121,11 @@ pub struct TrialRecord {
     pub cycles_not_running: u64,
     /// Contact onsets between non-adjacent links during the trial (`Plant::self_contacts`).
     pub self_contacts: u64,
+    /// Every link's height at every sample, laid out as `links_m`, m.
+    pub heights_m: Vec<f64>,
+    /// The report's first window field at every sample (empty when it has none): each
+    /// window's centre in normalised arc length and its columns.
+    pub windows: Vec<Vec<[f64; 1 + MAX_COLUMNS]>>,
 }
 
 impl TrialRecord {
@@ -122,6 +133,18 @@ impl TrialRecord {
     pub fn links_at(&self, k: usize) -> &[[f64; 2]] {
         let n = self.start_links_m.len();
         self.links_m.get(k * n..(k + 1) * n).unwrap_or(&[])
+    }
+
+    /// The links' heights (head first) at sample `k`; empty past the end.
+    pub fn heights_at(&self, k: usize) -> &[f64] {
+        let n = self.start_links_m.len();
+        self.heights_m.get(k * n..(k + 1) * n).unwrap_or(&[])
+    }
+
+    /// The centre's height (mean of the links') at sample `k`, m.
+    pub fn centre_height(&self, k: usize) -> f64 {
+        let h = self.heights_at(k);
+        h.iter().sum::<f64>() / h.len().max(1) as f64
     }
 }
 
@@ -159,17 +182,26 @@ pub struct TrialRecording<'a> {
     pub metadata: Vec<(String, String)>,
 }
 
+/// The loop of one trial, its signal names, its recorder and the sender of its
+/// request channel (an operator's requests later in the trial).
+pub(crate) type TrialLoop = (
+    ControlLoop,
+    Vec<String>,
+    Option<Recorder>,
+    crossbeam_channel::Sender<crate::rt::messages::Envelope>,
+);
+
 /// The loop of one trial: `controller` installed for its gait, the selector starting
-/// on that gait, over `plant`, with `requests` waiting for its first cycle (as if an
-/// operator had sent them); recorded when `recording` says where (the recorder is
-/// returned, to be finished at the trial's end).
+/// on that gait (or the lead-in's), over `plant`, with `requests` waiting for its first
+/// cycle (as if an operator had sent them); recorded when `recording` says where (the
+/// recorder is returned, to be finished at the trial's end).
 pub(crate) fn trial_loop(
     controller: &LabController,
     plant: PhysicsPlant,
     config: &TrialConfig,
     recording: Option<TrialRecording<'_>>,
     requests: &[crate::rt::messages::LoopRequest],
-) -> Result<(ControlLoop, Vec<String>, Option<Recorder>), LabError> {
+) -> Result<TrialLoop, LabError> {
     let n = config.modules;
     let gait = controller.gait;
     let layout = BodyLayout::alternating(n, Plane::Lateral, MODULE_LENGTH_M);
@@ -223,7 +255,7 @@ pub(crate) fn trial_loop(
     );
     // The lab's loop answers no socket: its channels only need to exist, and carry the
     // requests given (their answers are not read).
-    let (req_tx, req_rx) = crossbeam_channel::bounded(requests.len().max(1));
+    let (req_tx, req_rx) = crossbeam_channel::bounded(requests.len() + 1);
     for (ticket, r) in requests.iter().enumerate() {
         let _ = req_tx.try_send(crate::rt::messages::Envelope::new(ticket as u64, *r));
     }
@@ -236,7 +268,7 @@ pub(crate) fn trial_loop(
         selector: GaitSelector::new(
             layout,
             table,
-            gait,
+            config.lead_in.map_or(gait, |(g, _)| g),
             config.blend_time_s,
             SEA_MAX_JOINT_SPEED_RAD_S,
         ),
@@ -259,7 +291,7 @@ pub(crate) fn trial_loop(
         estimators,
         recording: record,
     };
-    Ok((ControlLoop::new(parts), names, recorder))
+    Ok((ControlLoop::new(parts), names, recorder, req_tx))
 }
 
 /// Runs `controller` in `world` until `goal` is reached or the time limit.
@@ -279,11 +311,16 @@ pub fn run_trial(
     })?;
     let temporal_freq_rad_s = config.gaits.get(controller.gait).temporal_freq_rad_s;
     let start_links_m = links(&plant);
+    let n_links = start_links_m.len();
     let record_path = recording
         .as_ref()
         .map(|r| r.path.clone())
         .unwrap_or_default();
-    let (mut lp, signal_names, recorder) = trial_loop(controller, plant, config, recording, &[])?;
+    let (mut lp, signal_names, recorder, requests) =
+        trial_loop(controller, plant, config, recording, &[])?;
+    let switch_step = config
+        .lead_in
+        .map(|(_, s)| ((s / config.dt_s).round() as usize).max(1));
 
     let steps = (config.limit_s / config.dt_s).round() as usize;
     let per_sample = config.steps_per_sample();
@@ -301,9 +338,15 @@ pub fn run_trial(
         temporal_freq_rad_s,
         cycles_not_running: 0,
         self_contacts: 0,
+        heights_m: Vec::with_capacity(samples * n_links),
+        windows: Vec::new(),
     };
     record(&lp, &mut rec);
     for k in 1..=steps {
+        if Some(k) == switch_step {
+            let request = crate::rt::messages::LoopRequest::SetGait(controller.gait);
+            let _ = requests.try_send(crate::rt::messages::Envelope::new(1 << 32, request));
+        }
         if lp.step() == Flow::Finished {
             break;
         }
@@ -341,9 +384,31 @@ fn record(lp: &ControlLoop, rec: &mut TrialRecord) {
     rec.centre_m.push(centre(plant));
     rec.links_m
         .extend((0..plant.link_count()).map(|k| ground(plant.link_pose(k).position_m)));
+    rec.heights_m
+        .extend((0..plant.link_count()).map(|k| plant.link_pose(k).position_m[2]));
     let report = lp.controllers().report();
     for (k, series) in rec.signals.iter_mut().enumerate() {
         series.push(report.map_or(f64::NAN, |(_, r)| r.signals[k]));
+    }
+    if let Some((_, r)) = report
+        && r.fields.first().is_some_and(|f| !f.is_empty())
+    {
+        let f = &r.fields[0];
+        if rec.windows.len() + 1 < rec.centre_m.len() {
+            rec.windows.resize(rec.centre_m.len() - 1, Vec::new());
+        }
+        rec.windows.push(
+            (0..f.len())
+                .map(|w| {
+                    let mut row = [0.0; 1 + MAX_COLUMNS];
+                    row[0] = 0.5 * (f.a[w].clamp(0.0, 1.0) + f.b[w].clamp(0.0, 1.0));
+                    for (c, col) in f.columns.iter().enumerate() {
+                        row[1 + c] = col[w];
+                    }
+                    row
+                })
+                .collect(),
+        );
     }
 }
 

@@ -4,7 +4,9 @@
 //! gait changes, its parameters change, the loop holds, or the controller is replaced.
 //!
 //! - **Takeover without a jump.** The controller is engaged with the selector's phase
-//!   and set-points of this cycle (a [`Handover`]) and the gait's nominal parameters.
+//!   and set-points of this cycle (a [`Handover`]) and the gait's nominal parameters;
+//!   one that makes its own way into its gait (`takes_over_at_switch`) is engaged at
+//!   the blend's first cycle instead of its end.
 //! - **Hand back.** The selector's output continues from the set-points sent last
 //!   cycle: their difference from the selector's own fades out over the blend time
 //!   while the gait keeps moving; the controller takes over again after that.
@@ -193,7 +195,8 @@ impl ControllerSlots {
         let Some(slot) = self.slots[gait.index()].as_mut() else {
             return false;
         };
-        if self.engaged.is_none() && selector.blend_progress() >= 1.0 {
+        let ready = selector.blend_progress() >= 1.0 || slot.controller.takes_over_at_switch();
+        if self.engaged.is_none() && ready {
             slot.controller.engage(&Handover {
                 t_s,
                 phase_rad: selector.phase(),

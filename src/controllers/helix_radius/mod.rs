@@ -25,7 +25,10 @@ use crate::shape::helix_shape::HelixShape;
 use crate::shape::torque::TorqueFilter;
 use crate::shape::window::{Window, steepness_for_width};
 
+mod getting_on;
 mod windows;
+use getting_on::GettingOn;
+pub use getting_on::{GettingOnConfig, PoleSide, Stage};
 use windows::{MAX_HALF_TURNS, RadiusWindows, adapt};
 
 /// The controller's configuration.
@@ -48,6 +51,9 @@ pub struct HelixRadiusConfig {
     /// one for the body.
     #[serde(default)]
     pub windowed: bool,
+    /// Getting on the pole from the ground (on unless given).
+    #[serde(default)]
+    pub getting_on: GettingOnConfig,
 }
 
 /// The adaptive set point: the grip (the mean |τ_ext| over the joints) below `low_nm`
@@ -91,6 +97,22 @@ impl HelixRadiusConfig {
             torque_deadband_nm: 0.1,
             adaptive: AdaptiveConfig::default(),
             windowed: false,
+            getting_on: GettingOnConfig::default(),
+        }
+    }
+
+    /// The open-loop helix on the same start: ρ held at 1 (no compliance, no squeeze),
+    /// so the coil's radius is the nominal one; it gets on the pole as the others do.
+    pub fn fixed() -> Self {
+        let c = Self::central();
+        Self {
+            gains: AdmittanceGains {
+                min: 1.0,
+                max: 1.0,
+                bias_force: 0.0,
+                ..c.gains
+            },
+            ..c
         }
     }
 
@@ -127,6 +149,12 @@ impl HelixRadiusConfig {
         }
     }
 
+    /// Without getting on: the body is already coiled (tests start it on the pole).
+    pub fn on_the_pole(mut self) -> Self {
+        self.getting_on.enabled = false;
+        self
+    }
+
     fn check(&self) -> Result<(), ConfigError> {
         let (lo, hi) = RHO_RANGE;
         self.gains
@@ -143,7 +171,8 @@ impl HelixRadiusConfig {
         let a = &self.adaptive;
         check_range("adaptive.low_nm", a.low_nm, 0.0, 7.0)?;
         check_range("adaptive.high_nm", a.high_nm, a.low_nm, 7.0)?;
-        check_range("adaptive.rate_per_s", a.rate_per_s, 0.0, 1.0)
+        check_range("adaptive.rate_per_s", a.rate_per_s, 0.0, 1.0)?;
+        self.getting_on.check()
     }
 }
 
@@ -157,6 +186,10 @@ impl ControllerKind for HelixRadiusKind {
         "the rolling helix's radius follows the torques, squeezed onto the pole (SPEC §6)";
     const GAITS: &'static [GaitKind] = &[GaitKind::RollingHelix];
     const PRESETS: &'static [(&'static str, &'static str)] = &[
+        (
+            "fixed",
+            "the open-loop helix: the nominal coil, radius fixed (no compliance, no squeeze)",
+        ),
         (
             "central",
             "one radius for the body, compliant, with a virtual squeeze",
@@ -174,6 +207,7 @@ impl ControllerKind for HelixRadiusKind {
 
     fn preset(name: &str) -> Option<Self::Config> {
         match name {
+            "fixed" => Some(HelixRadiusConfig::fixed()),
             "central" => Some(HelixRadiusConfig::central()),
             "central_adaptive" => Some(HelixRadiusConfig::central_adaptive()),
             "windowed" => Some(HelixRadiusConfig::windowed()),
@@ -216,6 +250,7 @@ impl ControllerKind for HelixRadiusKind {
                 s("windows", "count"),
                 s("radius_scale_min", ""),
                 s("radius_scale_max", ""),
+                s("getting_on", "stage"),
             ],
             fields,
         }
@@ -260,6 +295,9 @@ pub struct HelixRadius {
     t0: f64,
     phase: f64,
     last_t: Option<f64>,
+    getting_on: GettingOn,
+    /// Taken over at the switch: the getting on decides the phase.
+    own_way: bool,
 }
 
 impl HelixRadius {
@@ -291,6 +329,8 @@ impl HelixRadius {
             t0: 0.0,
             phase: 0.0,
             last_t: None,
+            getting_on: GettingOn::new(config.getting_on, layout),
+            own_way: false,
         }
     }
 
@@ -404,14 +444,32 @@ impl Controller for HelixRadius {
         self.t0 = h.t_s;
         self.phase = h.phase_rad;
         self.last_t = None;
+        let stage = self.getting_on.engage(h.t_s, h.set_points_rad, h.params);
+        self.own_way = stage != Stage::Off;
+    }
+
+    fn takes_over_at_switch(&self) -> bool {
+        self.config.getting_on.enabled
     }
 
     fn step(&mut self, t_s: f64, obs: &Observation<'_>, set_points_rad: &mut [f64]) {
         let dt = self.last_t.map_or(0.0, |last| (t_s - last).max(0.0));
         self.last_t = Some(t_s);
-        self.phase = self.phase0 + self.temporal_freq * (t_s - self.t0);
+        let mut rate = self.temporal_freq;
+        if self.own_way {
+            self.getting_on.update(t_s, obs.position_rad, obs.imu);
+            self.phase0 = self.getting_on.coil_phase();
+            self.t0 = self.getting_on.roll_start_s();
+            rate *= self.getting_on.direction();
+        }
+        self.phase = self.phase0 + rate * (t_s - self.t0).max(0.0);
         self.shape.set_phase(self.phase);
         self.filter.update(dt, obs.torque_nm, &mut self.tau_ext);
+        if !self.getting_on.coil_active() {
+            // Held or lapping: the coil waits at its nominal.
+            self.getting_on.mix(t_s, set_points_rad);
+            return;
+        }
         if self.config.windowed {
             self.windows
                 .step(&mut self.shape, &self.config, self.r0, &self.tau_ext, dt);
@@ -425,6 +483,7 @@ impl Controller for HelixRadius {
                 Plane::Dorsal => self.params.offset_dor_rad,
             };
         }
+        self.getting_on.mix(t_s, set_points_rad);
     }
 
     fn report(&self, out: &mut ControllerReport) {
@@ -454,6 +513,7 @@ impl Controller for HelixRadius {
             self.window_count() as f64,
             lo,
             hi,
+            self.getting_on.stage().code(),
         ];
         out.signals[..values.len()].copy_from_slice(&values);
         if self.config.windowed {

@@ -15,7 +15,10 @@ fn setup() -> (BodyLayout, GaitParams) {
 #[test]
 fn without_torque_or_squeeze_it_is_the_open_loop_helix() {
     let (layout, params) = setup();
-    for mut config in [HelixRadiusConfig::central(), HelixRadiusConfig::windowed()] {
+    for mut config in [
+        HelixRadiusConfig::central().on_the_pole(),
+        HelixRadiusConfig::windowed().on_the_pole(),
+    ] {
         config.gains.bias_force = 0.0;
         let mut open = OpenLoop::new(GaitKind::RollingHelix, &layout, &params);
         let mut c = HelixRadius::new(config, &layout, &params);
@@ -42,7 +45,7 @@ fn without_torque_or_squeeze_it_is_the_open_loop_helix() {
 #[test]
 fn a_window_answers_only_its_own_joints() {
     let (layout, params) = setup();
-    let mut config = HelixRadiusConfig::windowed();
+    let mut config = HelixRadiusConfig::windowed().on_the_pole();
     config.gains.bias_force = 0.0;
     let mut c = HelixRadius::new(config, &layout, &params);
     engage_at(&mut c, &layout, &params, 0.0);
@@ -74,7 +77,7 @@ fn a_window_answers_only_its_own_joints() {
 #[test]
 fn the_squeeze_tightens_the_coil_until_the_pole_pushes_back() {
     let (layout, params) = setup();
-    let config = HelixRadiusConfig::central();
+    let config = HelixRadiusConfig::central().on_the_pole();
     let tightened = |push_nm: f64| {
         let mut c = HelixRadius::new(config, &layout, &params);
         engage_at(&mut c, &layout, &params, 0.0);
@@ -98,7 +101,7 @@ fn the_squeeze_tightens_the_coil_until_the_pole_pushes_back() {
 #[test]
 fn a_coil_the_bound_would_tighten_past_the_joints_is_refused() {
     let (layout, mut params) = setup();
-    let c = HelixRadius::new(HelixRadiusConfig::central(), &layout, &params);
+    let c = HelixRadius::new(HelixRadiusConfig::central().on_the_pole(), &layout, &params);
     assert!(c.accepts(&params).is_ok());
     params.helix_radius_m = 0.07;
     params.helix_pitch_m = 0.028;
@@ -113,14 +116,14 @@ fn a_coil_the_bound_would_tighten_past_the_joints_is_refused() {
 
 #[test]
 fn the_configuration_is_checked() {
-    let mut c = HelixRadiusConfig::central();
+    let mut c = HelixRadiusConfig::central().on_the_pole();
     assert!(c.check().is_ok());
     c.gains.min = 1.1;
     assert!(c.check().unwrap_err().to_string().contains("gains"));
-    let mut c = HelixRadiusConfig::central();
+    let mut c = HelixRadiusConfig::central().on_the_pole();
     c.gains.max = 5.0;
     assert!(c.check().unwrap_err().to_string().contains("gains.max"));
-    let mut c = HelixRadiusConfig::central();
+    let mut c = HelixRadiusConfig::central().on_the_pole();
     c.torque_cutoff_hz = f64::NAN;
     assert!(c.check().is_err());
 }
@@ -154,8 +157,8 @@ fn on_a_modelled_pole(config: HelixRadiusConfig, fit: f64, seconds: f64) -> (f64
 #[test]
 fn the_adaptive_set_point_keeps_the_grip_in_its_band() {
     let (plain, adaptive) = (
-        HelixRadiusConfig::central(),
-        HelixRadiusConfig::central_adaptive(),
+        HelixRadiusConfig::central().on_the_pole(),
+        HelixRadiusConfig::central_adaptive().on_the_pole(),
     );
     let a = adaptive.adaptive;
     let (_, set_plain, grip_plain) = on_a_modelled_pole(plain, 1.2, 60.0);

@@ -201,6 +201,7 @@ fn start(
                 return Ok(StartPose {
                     head_m: [head[0], head[1], 0.0],
                     yaw_rad: yaw,
+                    roll_rad: 0.0,
                     joint_angles_rad: st.joint_angles_rad.clone(),
                 });
             }
@@ -228,6 +229,7 @@ fn start(
     Ok(StartPose {
         head_m: head,
         yaw_rad: yaw,
+        roll_rad: 0.0,
         joint_angles_rad: st.joint_angles_rad.clone(),
     })
 }

@@ -93,6 +93,10 @@ pub struct StartPose {
     /// Direction from head to tail in the ground plane, rad from +x. (For a pole climb the
     /// generator places the body around the pole instead; see `scenario`.)
     pub yaw_rad: f64,
+    /// The body rolled about its own axis (the head link's x, towards the head), rad;
+    /// 0: the lateral joints' plane is horizontal.
+    #[serde(default)]
+    pub roll_rad: f64,
     pub joint_angles_rad: Vec<f64>,
 }
 
@@ -101,6 +105,7 @@ impl Default for StartPose {
         Self {
             head_m: [0.0, 0.0, 0.0],
             yaw_rad: std::f64::consts::PI,
+            roll_rad: 0.0,
             joint_angles_rad: Vec::new(),
         }
     }

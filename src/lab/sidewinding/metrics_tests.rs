@@ -59,6 +59,8 @@ fn record(at: f64, through: bool, rev_s: Option<f64>) -> (Fence, TrialRecord) {
         temporal_freq_rad_s: 1.0,
         cycles_not_running: 0,
         self_contacts: 0,
+        heights_m: Vec::new(),
+        windows: Vec::new(),
     };
     (fence, rec)
 }

@@ -178,7 +178,12 @@ pub fn start_poses(
     }
     let mut h = spec.start.head_m;
     h[2] += 0.5 * MODULE_DIAMETER_M;
-    let head = head_pose(h, spec.start.yaw_rad, MODULE_LENGTH_M);
+    // Rolled about the head link's own x axis (along the body).
+    let head = head_pose(h, spec.start.yaw_rad, MODULE_LENGTH_M)
+        * nalgebra::UnitQuaternion::from_axis_angle(
+            &nalgebra::Vector3::x_axis(),
+            spec.start.roll_rad,
+        );
     let mut poses = chain_poses(head, config.first_plane, &angles, MODULE_LENGTH_M);
     // A shaped body (an arc curling down, say) would start inside the ground: lift it
     // so its lowest point is `head_m.z` above z = 0, as a straight body's is.

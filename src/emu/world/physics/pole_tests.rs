@@ -350,7 +350,7 @@ fn helix_radius_on_the_pole(squeeze: f64) -> (Vec<f64>, f64) {
     use crate::controllers::helix_radius::{HelixRadius, HelixRadiusConfig};
     let l = BodyLayout::alternating(N, Plane::Lateral, MODULE_LENGTH_M);
     let params = GaitParams::default_for(GaitKind::RollingHelix);
-    let mut config = HelixRadiusConfig::central();
+    let mut config = HelixRadiusConfig::central().on_the_pole();
     config.gains.bias_force = squeeze;
     let mut c = HelixRadius::new(config, &l, &params);
     engage_at(&mut c, &l, &params, 0.0);
@@ -381,7 +381,10 @@ fn the_helix_radius_controller_grips_a_loose_coil_and_climbs() {
 /// helix commanded tight enough to grip the lower section (radius 0.085 m against the
 /// coil's 0.10). The centre's height every 5 s.
 fn climb_a_step(factor: f64, fixed: bool) -> Vec<f64> {
-    climb_a_step_with(factor, (!fixed).then(HelixRadiusConfig::central))
+    climb_a_step_with(
+        factor,
+        (!fixed).then(|| HelixRadiusConfig::central().on_the_pole()),
+    )
 }
 
 /// As [`climb_a_step`] with `helix_radius` in `config` (`None`: the fixed coil).
@@ -420,7 +423,10 @@ fn climb_a_step_with(factor: f64, config: Option<HelixRadiusConfig>) -> Vec<f64>
 #[test]
 fn radius_compliance_climbs_a_thicker_section_the_fixed_coil_falls_at() {
     let (fixed, compliant) = (climb_a_step(1.25, true), climb_a_step(1.25, false));
-    let full = climb_a_step_with(1.25, Some(HelixRadiusConfig::windowed_adaptive()));
+    let full = climb_a_step_with(
+        1.25,
+        Some(HelixRadiusConfig::windowed_adaptive().on_the_pole()),
+    );
     println!(
         "pole x1.25 at 0.8 m, z every 5 s: fixed {fixed:.2?}; helix_radius central \
          {compliant:.2?}; windowed_adaptive {full:.2?}"
@@ -435,7 +441,10 @@ fn radius_compliance_climbs_a_thicker_section_the_fixed_coil_falls_at() {
 #[test]
 fn radius_compliance_climbs_a_thinner_section_the_fixed_coil_stalls_on() {
     let (fixed, compliant) = (climb_a_step(0.75, true), climb_a_step(0.75, false));
-    let full = climb_a_step_with(0.75, Some(HelixRadiusConfig::windowed_adaptive()));
+    let full = climb_a_step_with(
+        0.75,
+        Some(HelixRadiusConfig::windowed_adaptive().on_the_pole()),
+    );
     println!(
         "pole x0.75 at 0.8 m, z every 5 s: fixed {fixed:.2?}; helix_radius central \
          {compliant:.2?}; windowed_adaptive {full:.2?}"
@@ -459,7 +468,7 @@ fn the_adaptive_set_point_follows_a_thinner_section() {
     use crate::controllers::helix_radius::HelixRadius;
     let l = BodyLayout::alternating(N, Plane::Lateral, MODULE_LENGTH_M);
     let d = GaitParams::default_for(GaitKind::RollingHelix);
-    let config = HelixRadiusConfig::central_adaptive();
+    let config = HelixRadiusConfig::central_adaptive().on_the_pole();
     let mut c = HelixRadius::new(config, &l, &d);
     engage_at(&mut c, &l, &d, 0.0);
     let (mut plant, _) = coiled_stepped(0.10, 0.006, 0.5, quiet(N), (0.8, 0.75));
