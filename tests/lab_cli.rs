@@ -451,3 +451,61 @@ fn sidewinding_runs_starts_times_repeats_and_writes_its_figures() {
     );
     assert!(String::from_utf8_lossy(&o.stderr).contains("peg_fence"));
 }
+
+#[test]
+fn pole_runs_named_and_seeded_poles_and_writes_its_figures() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("pole");
+    let o = lab(&[
+        "pole",
+        "--poles",
+        "step-up",
+        "--seeded",
+        "1",
+        "--starts",
+        "1",
+        "--controllers",
+        "fixed,windowed_adaptive",
+        "--seconds",
+        "8",
+        "--quiet",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let csv = read(&out.join("results.csv"));
+    let rows: Vec<&str> = csv.lines().collect();
+    assert!(
+        rows[0].starts_with("controller,pole,start,repeat,outcome,seconds,top_s"),
+        "{csv}"
+    );
+    assert_eq!(rows.len(), 1 + 2 * 2, "{csv}");
+    assert!(rows[1].starts_with("fixed,step-up,0,"), "{csv}");
+    assert!(rows[2].starts_with("fixed,seed100,0,"), "{csv}");
+    let md = read(&out.join("summary.md"));
+    assert!(md.contains("| windowed_adaptive | 2 |"), "{md}");
+    assert!(
+        md.contains("| step-up |") && md.contains("| seed100 |"),
+        "{md}"
+    );
+    // The windowed controller's half turns exist once the coil opens (about 3.5 s in).
+    for f in ["climb.png", "windows-windowed_adaptive.png"] {
+        let bytes = std::fs::read(out.join(f)).unwrap();
+        assert_eq!(bytes[..8], PNG_SIGNATURE, "{f}");
+    }
+    let err = bad_input(&["pole", "--poles", "nope", "--out", out.to_str().unwrap()]);
+    assert!(err.contains("\"nope\"") && err.contains("step-up"), "{err}");
+    let err = bad_input(&["pole", "--mu", "0", "--out", out.to_str().unwrap()]);
+    assert!(err.contains("--mu"), "{err}");
+    let err = bad_input(&[
+        "pole",
+        "--controllers",
+        "central,ac_sfc",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(
+        err.contains("ac_sfc") && err.contains("windowed_adaptive"),
+        "{err}"
+    );
+}

@@ -16,7 +16,14 @@ impl ObservationBuf {
     pub fn new(joints: usize) -> Self {
         Self {
             velocity: vec![0.0; joints],
-            imu: vec![Imu::default(); joints],
+            // At rest: the accelerometers read gravity (up along each module's z).
+            imu: vec![
+                Imu {
+                    accel_m_s2: [0.0, 0.0, 9.81],
+                    gyro_rad_s: [0.0; 3],
+                };
+                joints
+            ],
             body: BodyEstimate::default(),
         }
     }

@@ -421,3 +421,38 @@ fn a_non_finite_set_point_from_any_registered_controller_holds_with_the_reason()
     }
     assert!(checked >= 13, "every family's presets: {checked}");
 }
+
+/// A controller that makes its own way into its gait (the rolling helix getting on a
+/// pole) takes over at the switch, from where the joints were, and moves them no
+/// faster than the loop allows; one that does not waits for the blend's end.
+#[test]
+fn a_controller_that_makes_its_own_way_takes_over_at_the_switch() {
+    let mut h = harness(None);
+    run(&mut h, None, 3000);
+    let helix = GaitKind::RollingHelix;
+    // Installed one after the other: the open-loop controller replaces helix_radius.
+    for preset in ["windowed_adaptive", "open_loop"] {
+        let sel = Selection::named(preset);
+        let c = build_installed(&h.catalog, &h.layout, &table(), helix, &sel);
+        assert_eq!(
+            request(&mut h, LoopRequest::SetController(helix), Some(c)),
+            Ok(())
+        );
+    }
+    let before = setpoints(&h);
+    assert_eq!(request(&mut h, LoopRequest::SetGait(helix), None), Ok(()));
+    let (step, _) = run(&mut h, None, 1);
+    assert!(max_diff(&setpoints(&h), &before) <= MAX_STEP_RAD, "no jump");
+    assert!(step <= MAX_STEP_RAD);
+    // The open-loop controller was installed last: it replaced helix_radius and waits.
+    assert_eq!(engagement(&h), Engagement::Waiting);
+    let sel = Selection::named("windowed_adaptive");
+    let c = build_installed(&h.catalog, &h.layout, &table(), helix, &sel);
+    assert_eq!(
+        request(&mut h, LoopRequest::SetController(helix), Some(c)),
+        Ok(())
+    );
+    assert_eq!(engagement(&h), Engagement::Engaged, "engaged mid-blend");
+    let (step, _) = run(&mut h, None, 4000);
+    assert!(step <= MAX_STEP_RAD, "{step}");
+}

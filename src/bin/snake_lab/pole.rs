@@ -38,8 +38,10 @@ pub struct Args {
     /// Trials per start, differing only in their sensor-noise seed.
     #[arg(long, default_value_t = 1)]
     repeats: usize,
-    /// Seconds in the rolling gait before the helix is selected.
-    #[arg(long, default_value_t = 1.0)]
+    /// Seconds in the rolling gait before the helix is selected (0.2: the body still
+    /// lies straight; from about 1 s the half-formed rolling arc carries its middle off
+    /// the pole as it straightens: docs/lab.md).
+    #[arg(long, default_value_t = 0.2)]
     lead_in: f64,
     /// Skin–pole friction.
     #[arg(long, default_value_t = 0.6)]

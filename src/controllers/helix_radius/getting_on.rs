@@ -57,6 +57,11 @@ pub struct GettingOnConfig {
     pub lap_pitch_m: f64,
     /// The lap's radius over the nominal helix radius, m (room to close round the pole).
     pub lap_clearance_m: f64,
+    /// The grip (mean |τ_ext| over the joints) at the end of the opening that says the
+    /// coil closed on the pole, N·m; below it the lap missed and is tried again.
+    pub found_nm: f64,
+    /// Laps tried again after a miss, each 2 cm wider.
+    pub retries: u32,
 }
 
 impl Default for GettingOnConfig {
@@ -70,6 +75,8 @@ impl Default for GettingOnConfig {
             open_s: 3.0,
             lap_pitch_m: 0.008,
             lap_clearance_m: 0.02,
+            found_nm: 0.8,
+            retries: 2,
         }
     }
 }
@@ -82,7 +89,9 @@ impl GettingOnConfig {
         check_range("lap_s", self.lap_s, 0.2, 30.0).map_err(k)?;
         check_range("open_s", self.open_s, 0.2, 30.0).map_err(k)?;
         check_range("lap_pitch_m", self.lap_pitch_m, 0.001, 0.05).map_err(k)?;
-        check_range("lap_clearance_m", self.lap_clearance_m, 0.0, 0.1).map_err(k)
+        check_range("lap_clearance_m", self.lap_clearance_m, 0.0, 0.1).map_err(k)?;
+        check_range("found_nm", self.found_nm, 0.0, 7.0).map_err(k)?;
+        check_range("retries", f64::from(self.retries), 0.0, 5.0).map_err(k)
     }
 }
 
@@ -135,6 +144,11 @@ pub struct GettingOn {
     lap_phase: f64,
     /// +1: the head is above the tail (the phase advancing at ωT > 0 climbs); −1 below.
     direction: f64,
+    /// Laps tried again so far.
+    attempts: u32,
+    params: GaitParams,
+    /// The last set-points mixed (where a retry starts from).
+    last: Vec<f64>,
 }
 
 fn smooth(x: f64) -> f64 {
@@ -164,6 +178,9 @@ impl GettingOn {
             coil_phase: 0.0,
             lap_phase: 0.0,
             direction: 1.0,
+            attempts: 0,
+            params: GaitParams::default_for(GaitKind::RollingHelix),
+            last: vec![0.0; n],
         }
     }
 
@@ -178,12 +195,9 @@ impl GettingOn {
         self.from.copy_from_slice(from);
         self.up_sum = Vector3::zeros();
         self.coil_wave = Serpenoid::for_layout(GaitKind::RollingHelix, params, &self.layout);
-        let lap = GaitParams {
-            helix_radius_m: params.helix_radius_m + self.config.lap_clearance_m,
-            helix_pitch_m: self.config.lap_pitch_m * params.helix_pitch_m.signum(),
-            ..*params
-        };
-        self.lap_wave = Serpenoid::for_layout(GaitKind::RollingHelix, &lap, &self.layout);
+        self.params = *params;
+        self.attempts = 0;
+        self.set_lap();
         let coil_amplitude = self.coil_wave.dorsal.amplitude_rad.abs();
         self.stage = if !self.config.enabled {
             Stage::Off
@@ -194,6 +208,24 @@ impl GettingOn {
             Stage::Straighten
         };
         self.stage
+    }
+
+    /// Laps tried again so far.
+    pub fn attempts(&self) -> u32 {
+        self.attempts
+    }
+
+    /// The lap of this attempt: 2 cm wider each retry.
+    fn set_lap(&mut self) {
+        let p = &self.params;
+        let lap = GaitParams {
+            helix_radius_m: p.helix_radius_m
+                + self.config.lap_clearance_m
+                + 0.02 * f64::from(self.attempts),
+            helix_pitch_m: self.config.lap_pitch_m * p.helix_pitch_m.signum(),
+            ..*p
+        };
+        self.lap_wave = Serpenoid::for_layout(GaitKind::RollingHelix, &lap, &self.layout);
     }
 
     /// Seconds from the takeover to the end of the measuring.
@@ -221,8 +253,9 @@ impl GettingOn {
         self.direction
     }
 
-    /// Advances the stage at `t_s` with the measured joint angles and IMUs.
-    pub fn update(&mut self, t_s: f64, position_rad: &[f64], imu: &[Imu]) {
+    /// Advances the stage at `t_s` with the measured joint angles and IMUs and the grip
+    /// (mean |τ_ext| over the joints, N·m).
+    pub fn update(&mut self, t_s: f64, position_rad: &[f64], imu: &[Imu], grip_nm: f64) {
         let c = self.config;
         let e = t_s - self.t0;
         let measured = self.measured_s();
@@ -240,7 +273,19 @@ impl GettingOn {
                 }
             }
             Stage::Lap if e >= measured + c.lap_s => self.stage = Stage::Open,
-            Stage::Open if e >= measured + c.lap_s + c.open_s => self.stage = Stage::Climb,
+            Stage::Open if e >= measured + c.lap_s + c.open_s => {
+                if grip_nm < c.found_nm && self.attempts < c.retries {
+                    // Missed the pole: straighten from here and lap again, wider.
+                    self.attempts += 1;
+                    self.set_lap();
+                    self.t0 = t_s;
+                    self.from.copy_from_slice(&self.last);
+                    self.up_sum = Vector3::zeros();
+                    self.stage = Stage::Straighten;
+                } else {
+                    self.stage = Stage::Climb;
+                }
+            }
             Stage::Resume if e >= c.open_s => self.stage = Stage::Climb,
             _ => {}
         }
@@ -279,7 +324,7 @@ impl GettingOn {
 
     /// Mixes the controller's coil `coil` (written at the coil's phase) into what the
     /// stage commands, in place.
-    pub fn mix(&self, t_s: f64, coil: &mut [f64]) {
+    pub fn mix(&mut self, t_s: f64, coil: &mut [f64]) {
         let c = &self.config;
         let e = t_s - self.t0;
         let blend = |a: &[f64], b: &mut [f64], w: f64| {
@@ -306,6 +351,7 @@ impl GettingOn {
             Stage::Open => blend(&self.lap, coil, smooth((e - measured - c.lap_s) / c.open_s)),
             Stage::Resume => blend(&self.from, coil, smooth(e / c.open_s)),
         }
+        self.last.copy_from_slice(coil);
     }
 
     /// Picks the lap's phase (and the coil's) so the middle bends towards the pole.
@@ -373,3 +419,7 @@ impl GettingOn {
         best
     }
 }
+
+#[cfg(test)]
+#[path = "getting_on_tests.rs"]
+mod tests;

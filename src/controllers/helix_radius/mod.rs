@@ -26,9 +26,12 @@ use crate::shape::torque::TorqueFilter;
 use crate::shape::window::{Window, steepness_for_width};
 
 mod getting_on;
+mod slip;
 mod windows;
 use getting_on::GettingOn;
 pub use getting_on::{GettingOnConfig, PoleSide, Stage};
+pub use slip::SlipConfig;
+use slip::SlipGuard;
 use windows::{MAX_HALF_TURNS, RadiusWindows, adapt};
 
 /// The controller's configuration.
@@ -54,6 +57,9 @@ pub struct HelixRadiusConfig {
     /// Getting on the pole from the ground (on unless given).
     #[serde(default)]
     pub getting_on: GettingOnConfig,
+    /// What a lost grip is and what is done about it (on unless given).
+    #[serde(default)]
+    pub slip: SlipConfig,
 }
 
 /// The adaptive set point: the grip (the mean |τ_ext| over the joints) below `low_nm`
@@ -98,11 +104,13 @@ impl HelixRadiusConfig {
             adaptive: AdaptiveConfig::default(),
             windowed: false,
             getting_on: GettingOnConfig::default(),
+            slip: SlipConfig::default(),
         }
     }
 
-    /// The open-loop helix on the same start: ρ held at 1 (no compliance, no squeeze),
-    /// so the coil's radius is the nominal one; it gets on the pole as the others do.
+    /// The open-loop helix on the same start: ρ held at 1 (no compliance, no squeeze,
+    /// no slip guard), so the coil's radius is the nominal one; it gets on the pole as
+    /// the others do.
     pub fn fixed() -> Self {
         let c = Self::central();
         Self {
@@ -111,6 +119,10 @@ impl HelixRadiusConfig {
                 max: 1.0,
                 bias_force: 0.0,
                 ..c.gains
+            },
+            slip: SlipConfig {
+                enabled: false,
+                ..c.slip
             },
             ..c
         }
@@ -172,7 +184,16 @@ impl HelixRadiusConfig {
         check_range("adaptive.low_nm", a.low_nm, 0.0, 7.0)?;
         check_range("adaptive.high_nm", a.high_nm, a.low_nm, 7.0)?;
         check_range("adaptive.rate_per_s", a.rate_per_s, 0.0, 1.0)?;
-        self.getting_on.check()
+        let (lo, hi) = RHO_RANGE;
+        if self.gains.bias_force * self.slip.squeeze_gain > self.gains.stiffness * (hi - lo) {
+            return Err(ConfigError::invalid(
+                "slip.squeeze_gain",
+                "the raised squeeze (bias_force × squeeze_gain) exceeds what the stiffness \
+                 bounds (stiffness × the range of ρ)",
+            ));
+        }
+        self.getting_on.check()?;
+        self.slip.check()
     }
 }
 
@@ -251,6 +272,9 @@ impl ControllerKind for HelixRadiusKind {
                 s("radius_scale_min", ""),
                 s("radius_scale_max", ""),
                 s("getting_on", "stage"),
+                s("getting_on_retries", "count"),
+                s("slipping", "bool"),
+                s("slips", "count"),
             ],
             fields,
         }
@@ -298,6 +322,9 @@ pub struct HelixRadius {
     getting_on: GettingOn,
     /// Taken over at the switch: the getting on decides the phase.
     own_way: bool,
+    slip: SlipGuard,
+    /// Time the roll held while slipping, s (the phase stands still meanwhile).
+    held_s: f64,
 }
 
 impl HelixRadius {
@@ -331,6 +358,8 @@ impl HelixRadius {
             last_t: None,
             getting_on: GettingOn::new(config.getting_on, layout),
             own_way: false,
+            slip: SlipGuard::default(),
+            held_s: 0.0,
         }
     }
 
@@ -355,7 +384,7 @@ impl HelixRadius {
 
 impl HelixRadius {
     /// One ρ for the body: its force, grip, set point and admittance, then the shape.
-    fn step_central(&mut self, dt: f64, set_points_rad: &mut [f64]) {
+    fn step_central(&mut self, config: &HelixRadiusConfig, dt: f64, set_points_rad: &mut [f64]) {
         let r = [self.r0 * self.radius_scale()];
         self.shape.jacobian(&r, &mut self.jacobian);
         // ∂h/∂ρ = R_0·∂h/∂R.
@@ -367,10 +396,10 @@ impl HelixRadius {
                 .map(|(j, t)| j * t)
                 .sum::<f64>();
         self.grip = self.tau_ext.iter().map(|t| t.abs()).sum::<f64>() / self.tau_ext.len() as f64;
-        let g = &self.config.gains;
+        let g = &config.gains;
         // The set point moves, ρ's deviation from it is kept: ρ moves with it.
         self.set_point = adapt(
-            &self.config.adaptive,
+            &config.adaptive,
             self.set_point,
             self.grip,
             g.min,
@@ -378,7 +407,7 @@ impl HelixRadius {
             dt,
         );
         self.rho
-            .step(g, self.config.sign, self.force, self.set_point, dt);
+            .step(g, config.sign, self.force, self.set_point, dt);
         self.shape
             .value(&[self.r0 * self.radius_scale()], set_points_rad);
     }
@@ -446,6 +475,8 @@ impl Controller for HelixRadius {
         self.last_t = None;
         let stage = self.getting_on.engage(h.t_s, h.set_points_rad, h.params);
         self.own_way = stage != Stage::Off;
+        self.slip = SlipGuard::default();
+        self.held_s = 0.0;
     }
 
     fn takes_over_at_switch(&self) -> bool {
@@ -455,27 +486,38 @@ impl Controller for HelixRadius {
     fn step(&mut self, t_s: f64, obs: &Observation<'_>, set_points_rad: &mut [f64]) {
         let dt = self.last_t.map_or(0.0, |last| (t_s - last).max(0.0));
         self.last_t = Some(t_s);
+        self.filter.update(dt, obs.torque_nm, &mut self.tau_ext);
+        let grip = self.tau_ext.iter().map(|t| t.abs()).sum::<f64>() / self.tau_ext.len() as f64;
         let mut rate = self.temporal_freq;
         if self.own_way {
-            self.getting_on.update(t_s, obs.position_rad, obs.imu);
+            self.getting_on.update(t_s, obs.position_rad, obs.imu, grip);
             self.phase0 = self.getting_on.coil_phase();
             self.t0 = self.getting_on.roll_start_s();
             rate *= self.getting_on.direction();
         }
-        self.phase = self.phase0 + rate * (t_s - self.t0).max(0.0);
+        // Slipping: hold the roll and squeeze harder (once climbing).
+        let mut config = self.config;
+        let climbing = !self.own_way || self.getting_on.stage() == Stage::Climb;
+        if climbing && self.slip.update(&config.slip, dt, grip, obs.imu) {
+            self.held_s += dt;
+            config.gains.bias_force *= config.slip.squeeze_gain;
+        }
+        self.phase = self.phase0 + rate * (t_s - self.t0 - self.held_s).max(0.0);
         self.shape.set_phase(self.phase);
-        self.filter.update(dt, obs.torque_nm, &mut self.tau_ext);
         if !self.getting_on.coil_active() {
-            // Held or lapping: the coil waits at its nominal.
+            // Held or lapping: the coil waits at its nominal (again after a miss).
+            self.rho = ParamState::default();
+            self.set_point = 1.0;
+            self.windows.reset();
             self.getting_on.mix(t_s, set_points_rad);
             return;
         }
         if self.config.windowed {
             self.windows
-                .step(&mut self.shape, &self.config, self.r0, &self.tau_ext, dt);
+                .step(&mut self.shape, &config, self.r0, &self.tau_ext, dt);
             self.shape.value(self.windows.values(), set_points_rad);
         } else {
-            self.step_central(dt, set_points_rad);
+            self.step_central(&config, dt, set_points_rad);
         }
         for (x, &plane) in set_points_rad.iter_mut().zip(&self.layout.planes) {
             *x += match plane {
@@ -514,6 +556,9 @@ impl Controller for HelixRadius {
             lo,
             hi,
             self.getting_on.stage().code(),
+            f64::from(self.getting_on.attempts()),
+            f64::from(u8::from(self.slip.slipping())),
+            f64::from(self.slip.count()),
         ];
         out.signals[..values.len()].copy_from_slice(&values);
         if self.config.windowed {

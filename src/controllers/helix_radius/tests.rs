@@ -5,6 +5,12 @@ use crate::controllers::open_loop::OpenLoop;
 
 const N: usize = 18;
 
+/// The coil alone: no slip guard (these tests have no pole to hold).
+fn bare(mut c: HelixRadiusConfig) -> HelixRadiusConfig {
+    c.slip.enabled = false;
+    c
+}
+
 fn setup() -> (BodyLayout, GaitParams) {
     (
         BodyLayout::alternating(N, Plane::Lateral, 0.064),
@@ -16,8 +22,8 @@ fn setup() -> (BodyLayout, GaitParams) {
 fn without_torque_or_squeeze_it_is_the_open_loop_helix() {
     let (layout, params) = setup();
     for mut config in [
-        HelixRadiusConfig::central().on_the_pole(),
-        HelixRadiusConfig::windowed().on_the_pole(),
+        bare(HelixRadiusConfig::central().on_the_pole()),
+        bare(HelixRadiusConfig::windowed().on_the_pole()),
     ] {
         config.gains.bias_force = 0.0;
         let mut open = OpenLoop::new(GaitKind::RollingHelix, &layout, &params);
@@ -77,7 +83,7 @@ fn a_window_answers_only_its_own_joints() {
 #[test]
 fn the_squeeze_tightens_the_coil_until_the_pole_pushes_back() {
     let (layout, params) = setup();
-    let config = HelixRadiusConfig::central().on_the_pole();
+    let config = bare(HelixRadiusConfig::central().on_the_pole());
     let tightened = |push_nm: f64| {
         let mut c = HelixRadius::new(config, &layout, &params);
         engage_at(&mut c, &layout, &params, 0.0);
@@ -157,8 +163,8 @@ fn on_a_modelled_pole(config: HelixRadiusConfig, fit: f64, seconds: f64) -> (f64
 #[test]
 fn the_adaptive_set_point_keeps_the_grip_in_its_band() {
     let (plain, adaptive) = (
-        HelixRadiusConfig::central().on_the_pole(),
-        HelixRadiusConfig::central_adaptive().on_the_pole(),
+        bare(HelixRadiusConfig::central().on_the_pole()),
+        bare(HelixRadiusConfig::central_adaptive().on_the_pole()),
     );
     let a = adaptive.adaptive;
     let (_, set_plain, grip_plain) = on_a_modelled_pole(plain, 1.2, 60.0);
@@ -188,4 +194,93 @@ fn the_adaptive_set_point_keeps_the_grip_in_its_band() {
         (set - (1.0 - 5.0 * a.rate_per_s)).abs() < 0.01,
         "set point {set}"
     );
+}
+
+/// Safety on the pole: the grip lost (no torque from the pole) the roll holds and the
+/// squeeze rises; the grip back, the roll resumes. A fall (the IMUs' specific force
+/// near zero) acts at once.
+#[test]
+fn a_lost_grip_holds_the_roll_and_squeezes_until_it_is_back() {
+    use crate::controller::{BodyEstimate, Imu};
+    let (layout, params) = setup();
+    let config = HelixRadiusConfig::central().on_the_pole();
+    let mut c = HelixRadius::new(config, &layout, &params);
+    engage_at(&mut c, &layout, &params, 0.0);
+    let resting = [Imu {
+        accel_m_s2: [0.0, 0.0, 9.81],
+        gyro_rad_s: [0.0; 3],
+    }; N];
+    let falling = [Imu::default(); N];
+    let body = BodyEstimate::default();
+    let (pos, vel, mut out) = ([0.0; N], [0.0; N], vec![0.0; N]);
+    let mut report = ControllerReport::EMPTY;
+    let mut t = 0.0;
+    // Steps `seconds` with the pole pushing back by `push_nm` (0: no pole) and the
+    // IMUs given; returns the phase advance and the report's slipping, slips, squeeze.
+    let mut run = |c: &mut HelixRadius, seconds: f64, push_nm: f64, imu: &[Imu]| {
+        let phase = c.phase;
+        for _ in 0..(seconds * 1000.0) as usize {
+            t += 1e-3;
+            let mut tau = [0.0; N];
+            for (x, &sp) in tau.iter_mut().zip(&out) {
+                *x = push_nm * f64::signum(sp);
+            }
+            let obs = Observation {
+                position_rad: &pos,
+                velocity_rad_s: &vel,
+                torque_nm: &tau,
+                imu,
+                body: &body,
+            };
+            c.step(t, &obs, &mut out);
+        }
+        c.report(&mut report);
+        let sig = |name: &str| {
+            let i = HelixRadiusKind::report_spec(&config, &ctx(&layout, &params))
+                .signals
+                .iter()
+                .position(|s| s.name == name)
+                .unwrap();
+            report.signals[i]
+        };
+        (c.phase - phase, sig("slipping"), sig("slips"))
+    };
+    let wt = params.temporal_freq_rad_s;
+    let (advance, slipping, slips) = run(&mut c, 3.0, 1.0, &resting);
+    assert!((advance - 3.0 * wt).abs() < 0.01, "climbing: {advance}");
+    assert_eq!((slipping, slips), (0.0, 0.0));
+    let rho_held = c.radius_scale();
+    let (advance, slipping, slips) = run(&mut c, 2.0, 0.0, &resting);
+    // The grace (0.3 s) and the torque filter's lag, then nothing (2 s would be 1 rad).
+    assert!(
+        advance < 0.5 * wt,
+        "the roll holds after the grace: {advance}"
+    );
+    assert_eq!((slipping, slips), (1.0, 1.0));
+    assert!(
+        c.radius_scale() > rho_held + 0.05,
+        "squeezed: {} vs {rho_held}",
+        c.radius_scale()
+    );
+    let (advance, slipping, _) = run(&mut c, 0.5, 1.0, &resting);
+    assert!(
+        advance.abs() < 1e-12 && slipping == 1.0,
+        "not yet recovered"
+    );
+    let (advance, slipping, slips) = run(&mut c, 2.0, 1.0, &resting);
+    assert!(advance > 0.9 * wt, "rolls on: {advance}");
+    assert_eq!((slipping, slips), (0.0, 1.0));
+    let (advance, slipping, slips) = run(&mut c, 0.01, 1.0, &falling);
+    assert!(
+        advance < 0.01 * wt && slipping == 1.0 && slips == 2.0,
+        "a fall acts at once"
+    );
+}
+
+fn ctx<'a>(layout: &'a BodyLayout, params: &'a GaitParams) -> BuildContext<'a> {
+    BuildContext {
+        gait: GaitKind::RollingHelix,
+        layout,
+        params,
+    }
 }

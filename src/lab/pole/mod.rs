@@ -47,7 +47,7 @@ impl Default for PoleClimb {
         Self {
             designs: poles::named_set(),
             mu: 0.6,
-            lead_in_s: 1.0,
+            lead_in_s: 0.2,
             grip_margin_m: 0.003,
         }
     }
