@@ -1,7 +1,11 @@
-//! One pole-experiment trial through the daemon's loop, printed every second: the
-//! getting-on stage, ρ, the centre's height, the links touching the pole (within 1 cm
-//! of its skin) and the highest link.
+//! One pole-experiment trial through the daemon's loop (`snake-lab pole`'s), printed
+//! every second: the middle link's distance from the pole's axis, the head, the
+//! getting-on stage, ρ, the grip, the centre's height, the links touching the pole
+//! (within 1 cm of its skin) and the highest link.
 //!     cargo run --release --example pole_trial -- [POLE] [CONTROLLER] [START] [SECONDS] [JSON]
+//! POLE a named pole or `seedN`; JSON a configuration over CONTROLLER. Environment:
+//! WT (ωT), ROLL (the start's roll, rad), LEAD (the lead-in, s), DETAIL (every 0.25 s
+//! to 8 s), LINKS (every third link's position).
 use snaked::gait::GaitKind;
 use snaked::lab::board::Layout;
 use snaked::lab::controllers::LabController;

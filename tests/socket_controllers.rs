@@ -610,3 +610,70 @@ fn a_nominal_heading_is_set_through_the_socket_and_snakectl() {
     );
     assert!(text.contains("nominal heading -0.3"), "{text}");
 }
+
+/// The pole-climbing controller tuned at run time (squeeze, adaptation, nominal radius)
+/// and reported: it takes over as soon as the helix is selected, getting on (its stage
+/// a signal), and its half turns (R, set point, force, grip) are a field of `status`.
+#[test]
+fn the_pole_climbing_controller_is_tuned_and_reported_through_the_socket() {
+    let l = real_loop();
+    let mut c = Client::connect(
+        &Endpoint::Unix(l.path.clone()),
+        Some(Duration::from_secs(10)),
+    )
+    .unwrap();
+    let text = snakectl(
+        &l,
+        &[
+            "controller",
+            "set",
+            "rolling_helix",
+            "windowed_adaptive",
+            "gains.bias_force=20",
+            "adaptive.low_nm=0.5",
+            "adaptive.rate_per_s=0.05",
+            "getting_on.side=right",
+        ],
+    );
+    assert!(text.contains("helix_radius/windowed_adaptive"), "{text}");
+    // A squeeze the stiffness cannot bound is refused, naming the field.
+    let err = call(
+        &mut c,
+        "controller.set",
+        json!({"gait": "rolling_helix", "controller": "helix_radius", "preset": "central",
+               "config": {"gains": {"bias_force": 20.0}, "slip": {"squeeze_gain": 5.0}}}),
+    );
+    assert!(error_message(&err).contains("squeeze_gain"), "{err}");
+    let p = c.call(
+        "params.set",
+        Some(json!({"gait": "rolling_helix", "helix_radius_m": 0.11, "helix_pitch_m": 0.044})),
+    );
+    assert!(p.is_ok(), "{p:?}");
+    c.call("gait.set", Some(json!({"gait": "rolling_helix"})))
+        .unwrap();
+    // Engaged at the switch, getting on (no blend first).
+    let s = status_when(&mut c, |s| {
+        s["controller"]["state"] == "engaged"
+            && s["controller"]["signals"]["getting_on"].as_f64() > Some(0.0)
+    });
+    assert_eq!(s["controller"]["controller"], "helix_radius", "{s}");
+    assert!(
+        s["controller"]["signals"]["getting_on"].as_f64() > Some(0.0),
+        "{s}"
+    );
+    // Once the coil opens its half turns are reported.
+    let s = status_when(&mut c, |s| {
+        s["controller"]["fields"][0]["windows"]
+            .as_array()
+            .is_some_and(|w| !w.is_empty())
+    });
+    let field = &s["controller"]["fields"][0];
+    assert_eq!(field["name"], "radius", "{s}");
+    let w = &field["windows"][0];
+    for col in ["radius_scale", "set_point", "shape_force", "grip_nm"] {
+        assert!(w[col].is_number(), "{col}: {w}");
+    }
+    assert_eq!(s["controller"]["signals"]["squeeze"], 20.0, "{s}");
+    let text = snakectl(&l, &["status"]);
+    assert!(text.contains("helix_radius/windowed_adaptive"), "{text}");
+}

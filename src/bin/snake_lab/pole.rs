@@ -138,7 +138,7 @@ pub fn run(args: Args) -> Result<(), LabError> {
     };
     let results = super::run_experiment(&module, &exp, threads, args.quiet)?;
     let ctx = super::context(&exp, Vec::new());
-    let written = pole::write_report(&args.out, &results, &ctx)?;
+    let written = pole::write_report(&args.out, &module, &results, &ctx)?;
     super::finish(&written, &args.out, args.quiet);
     Ok(())
 }

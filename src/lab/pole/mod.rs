@@ -166,6 +166,7 @@ impl ExperimentModule for PoleClimb {
 /// point against the pole's diameter where they lie) into `dir`; returns the files.
 pub fn write_report(
     dir: &std::path::Path,
+    module: &PoleClimb,
     results: &[super::runner::TrialResult<PoleClimb>],
     ctx: &super::report::SummaryContext,
 ) -> Result<Vec<std::path::PathBuf>, LabError> {
@@ -199,7 +200,10 @@ pub fn write_report(
         .filter_map(|p| p.file_name().map(|n| n.to_string_lossy().into_owned()))
         .collect();
     let md = dir.join("summary.md");
-    super::report::write_text(&md, &report::summary_markdown(results, &ctx))?;
+    super::report::write_text(
+        &md,
+        &report::summary_markdown(results, &ctx, &module.designs),
+    )?;
     written.push(md);
     Ok(written)
 }

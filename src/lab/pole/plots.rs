@@ -1,9 +1,9 @@
 //! The pole experiment's figures:
 //! - [`climb_plot`]: the body centre's height over time, one line per controller on
 //!   the first pole and start, the diameter changes and the top marked;
-//! - [`windows_plot`]: a windowed controller's half turns, each second: the coil's inner
-//!   diameter its ρ (and its set point) stands for against the pole's diameter where
-//!   the half turn lies; on the diagonal the coil fits the pole exactly.
+//! - [`windows_plot`]: a windowed controller's half turns on the pole, each second: the
+//!   coil's inner diameter its ρ (and its set point) stands for against the pole's
+//!   diameter where the half turn lies; on the diagonal the coil fits the pole exactly.
 
 use std::path::Path;
 
@@ -116,9 +116,16 @@ pub fn windows_plot(
         if heights.len() < n {
             break;
         }
+        let links = rec.links_at(k);
         for w in windows {
             let link = ((w[0] * (n - 1) as f64).round() as usize).min(n - 1);
             let d = diameter_at(&goal.sections, heights[link]);
+            // Only half turns on the pole (their middle link against it; the pole
+            // stands at the origin): the ends hanging off it hold nothing.
+            let [x, y] = links[link];
+            if x.hypot(y) > 0.5 * (d + MODULE_DIAMETER_M) + 0.015 {
+                continue;
+            }
             coil.push((d, inner_diameter(goal.nominal_radius_m, w[1])));
             set.push((d, inner_diameter(goal.nominal_radius_m, w[2])));
         }
@@ -156,7 +163,7 @@ pub fn windows_plot(
                 .map(|&p| Circle::new(p, 2, blue.mix(0.5).filled())),
         )
         .map_err(&err)?
-        .label("R (each half turn, every 1 s)")
+        .label("R (each half turn on the pole, every 1 s)")
         .legend(move |(x, y)| Circle::new((x + 9, y), 3, blue.filled()));
     chart
         .draw_series(

@@ -49,8 +49,40 @@ fn stat(v: &[f64], digits: usize) -> String {
     )
 }
 
-/// `summary.md` as text.
-pub fn summary_markdown(results: &[TrialResult<PoleClimb>], ctx: &SummaryContext) -> String {
+/// The poles' designs as a table.
+fn poles_table(designs: &[super::poles::PoleDesign]) -> String {
+    let mut s = String::from(
+        "| pole | foot m | changes (from height m: to × foot, over m) |\n| --- | ---: | --- |\n",
+    );
+    for d in designs {
+        let changes: Vec<String> = d
+            .changes
+            .iter()
+            .map(|c| {
+                if c.length_m > 0.0 {
+                    format!("{:.2}: ×{:.2} over {:.2}", c.at_m, c.factor, c.length_m)
+                } else {
+                    format!("{:.2}: ×{:.2} step", c.at_m, c.factor)
+                }
+            })
+            .collect();
+        let _ = writeln!(
+            s,
+            "| {} | {:.3} | {} |",
+            d.name,
+            d.foot_m,
+            changes.join("; ")
+        );
+    }
+    s
+}
+
+/// `summary.md` as text; `designs` the poles run.
+pub fn summary_markdown(
+    results: &[TrialResult<PoleClimb>],
+    ctx: &SummaryContext,
+    designs: &[super::poles::PoleDesign],
+) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
@@ -145,6 +177,8 @@ pub fn summary_markdown(results: &[TrialResult<PoleClimb>], ctx: &SummaryContext
         }
         s.push('\n');
     }
+    s.push_str("\nThe poles:\n\n");
+    s.push_str(&poles_table(designs));
     let _ = writeln!(s, "\nPer trial: `results.csv`.");
     if !ctx.plots.is_empty() {
         s.push_str("\nPlots:\n\n");
