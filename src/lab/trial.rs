@@ -87,6 +87,13 @@ impl TrialConfig {
         (1.0 / (self.sample_hz * self.dt_s)).round().max(1.0) as usize
     }
 
+    /// The lead-in, if it lasts two loop cycles or more (shorter: the controller's
+    /// gait from the start). A gait request before the loop's second cycle is not
+    /// taken (measured: a switch at the first cycle never happened).
+    pub fn lead_in(&self) -> Option<(GaitKind, f64)> {
+        self.lead_in.filter(|&(_, s)| s >= 2.0 * self.dt_s)
+    }
+
     /// Time between two samples, s.
     pub fn sample_dt_s(&self) -> f64 {
         self.steps_per_sample() as f64 * self.dt_s
@@ -268,7 +275,7 @@ pub(crate) fn trial_loop(
         selector: GaitSelector::new(
             layout,
             table,
-            config.lead_in.map_or(gait, |(g, _)| g),
+            config.lead_in().map_or(gait, |(g, _)| g),
             config.blend_time_s,
             SEA_MAX_JOINT_SPEED_RAD_S,
         ),
@@ -319,8 +326,8 @@ pub fn run_trial(
     let (mut lp, signal_names, recorder, requests) =
         trial_loop(controller, plant, config, recording, &[])?;
     let switch_step = config
-        .lead_in
-        .map(|(_, s)| ((s / config.dt_s).round() as usize).max(1));
+        .lead_in()
+        .map(|(_, s)| ((s / config.dt_s).round() as usize).max(2));
 
     let steps = (config.limit_s / config.dt_s).round() as usize;
     let per_sample = config.steps_per_sample();

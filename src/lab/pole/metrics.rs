@@ -127,9 +127,10 @@ pub fn pole_metrics(rec: &TrialRecord, changes_m: &[f64], top_m: f64) -> PoleMet
 pub fn slips(h: &[f64], dt: f64) -> (usize, f64) {
     let w = (SLIP_WINDOW_S / dt).round().max(1.0) as usize;
     let (mut count, mut total) = (0, 0.0);
-    let mut k = 0;
+    // The window never reaches back past the last slide's bottom: one slide, one count.
+    let (mut k, mut after) = (0, 0);
     while k < h.len() {
-        let from = k.saturating_sub(w);
+        let from = k.saturating_sub(w).max(after);
         let peak = h[from..=k]
             .iter()
             .copied()
@@ -142,6 +143,7 @@ pub fn slips(h: &[f64], dt: f64) -> (usize, f64) {
             }
             count += 1;
             total += peak - h[j];
+            after = j;
             k = j + 1;
         } else {
             k += 1;
