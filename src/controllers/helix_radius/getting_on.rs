@@ -74,7 +74,7 @@ impl Default for GettingOnConfig {
             lap_s: 2.0,
             open_s: 3.0,
             lap_pitch_m: 0.008,
-            lap_clearance_m: 0.02,
+            lap_clearance_m: 0.04,
             found_nm: 0.8,
             retries: 2,
         }
