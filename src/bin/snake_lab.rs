@@ -254,6 +254,33 @@ pub(crate) fn finish(written: &[PathBuf], out: &std::path::Path, quiet: bool) {
     );
 }
 
+/// The compared controllers of `module`: the names given (its own list when none),
+/// then each `LABEL=JSON` variant over `variant_base` unless it names another.
+pub(crate) fn module_controllers<E: snaked::lab::experiment::ExperimentModule>(
+    module: &E,
+    given: &[String],
+    variants: &[String],
+    variant_base: &str,
+) -> Result<Vec<LabController>, LabError> {
+    let gait = module.gait();
+    let mut controllers = if given.is_empty() {
+        module
+            .controllers()
+            .iter()
+            .map(|n| LabController::named(gait, n))
+            .collect::<Result<Vec<_>, _>>()?
+    } else {
+        given
+            .iter()
+            .map(|n| LabController::named(gait, n.trim()))
+            .collect::<Result<Vec<_>, _>>()?
+    };
+    for spec in variants {
+        controllers.push(LabController::variant_on(gait, spec, variant_base)?);
+    }
+    Ok(controllers)
+}
+
 /// `--threads`, or the available parallelism.
 fn threads(given: Option<usize>) -> Result<usize, LabError> {
     match given {

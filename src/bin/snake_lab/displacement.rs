@@ -8,7 +8,6 @@ use snaked::emu::world::scenario::WorldScenario;
 use snaked::gait::GaitKind;
 use snaked::lab::LabError;
 use snaked::lab::board::Layout;
-use snaked::lab::controllers::LabController;
 use snaked::lab::displacement::{self, Displacement, MODULES, Terrain};
 use snaked::lab::experiment::ExperimentModule;
 use snaked::lab::runner::Experiment;
@@ -106,26 +105,12 @@ pub fn run(terrain: Terrain, args: Args) -> Result<(), LabError> {
     let layouts: Vec<Layout> = (0..args.layouts as u64)
         .map(|k| Layout::seeded(&base, seed_base.wrapping_add(k)))
         .collect();
-    let gait = GaitKind::Slithering;
-    let names: Vec<String> = if args.controllers.is_empty() {
-        module.controllers().iter().map(|s| s.to_string()).collect()
-    } else {
-        args.controllers
-            .iter()
-            .map(|s| s.trim().to_owned())
-            .collect()
-    };
-    let mut controllers = names
-        .iter()
-        .map(|n| LabController::named(gait, n))
-        .collect::<Result<Vec<_>, _>>()?;
     let variant_base = match terrain {
         Terrain::PegArray => "dc_switching",
         Terrain::RockPile => "dc3d_switching",
     };
-    for spec in &args.variants {
-        controllers.push(LabController::variant_on(gait, spec, variant_base)?);
-    }
+    let mut controllers =
+        super::module_controllers(&module, &args.controllers, &args.variants, variant_base)?;
     let trial = TrialConfig {
         modules: args.modules,
         limit_s: args.seconds,

@@ -5,8 +5,6 @@ use std::path::PathBuf;
 use snaked::emu::servo::PositionLoop;
 use snaked::gait::GaitKind;
 use snaked::lab::LabError;
-use snaked::lab::controllers::LabController;
-use snaked::lab::experiment::ExperimentModule;
 use snaked::lab::pole::{self, PoleClimb, poles};
 use snaked::lab::runner::Experiment;
 use snaked::lab::trial::TrialConfig;
@@ -107,21 +105,12 @@ pub fn run(args: Args) -> Result<(), LabError> {
     };
     let layouts = module.layouts()?;
     let gait = GaitKind::RollingHelix;
-    let names: Vec<String> = if args.controllers.is_empty() {
-        module.controllers().iter().map(|s| s.to_string()).collect()
-    } else {
-        args.controllers
-            .iter()
-            .map(|s| s.trim().to_owned())
-            .collect()
-    };
-    let mut controllers = names
-        .iter()
-        .map(|n| LabController::named(gait, n))
-        .collect::<Result<Vec<_>, _>>()?;
-    for spec in &args.variants {
-        controllers.push(LabController::variant_on(gait, spec, "windowed_adaptive")?);
-    }
+    let controllers = super::module_controllers(
+        &module,
+        &args.controllers,
+        &args.variants,
+        "windowed_adaptive",
+    )?;
     let trial = TrialConfig {
         limit_s: args.seconds,
         servo_loop: args.servo_loop,

@@ -7,8 +7,6 @@ use snaked::emu::world::scenario::WorldScenario;
 use snaked::gait::GaitKind;
 use snaked::lab::LabError;
 use snaked::lab::board::Layout;
-use snaked::lab::controllers::LabController;
-use snaked::lab::experiment::ExperimentModule;
 use snaked::lab::runner::Experiment;
 use snaked::lab::sidewinding::{self, SIDEWINDING_PEGS_TOML, SidewindingPegs};
 use snaked::lab::trial::TrialConfig;
@@ -81,21 +79,8 @@ pub fn run(args: Args) -> Result<(), LabError> {
         .map(|k| Layout::seeded(&base, seed_base.wrapping_add(k)))
         .collect();
     let gait = GaitKind::Sidewinding;
-    let names: Vec<String> = if args.controllers.is_empty() {
-        module.controllers().iter().map(|s| s.to_string()).collect()
-    } else {
-        args.controllers
-            .iter()
-            .map(|s| s.trim().to_owned())
-            .collect()
-    };
-    let mut controllers = names
-        .iter()
-        .map(|n| LabController::named(gait, n))
-        .collect::<Result<Vec<_>, _>>()?;
-    for spec in &args.variants {
-        controllers.push(LabController::variant_on(gait, spec, "ac_sfc")?);
-    }
+    let controllers =
+        super::module_controllers(&module, &args.controllers, &args.variants, "ac_sfc")?;
     let trial = TrialConfig {
         limit_s: args.seconds,
         servo_loop: args.servo_loop,
