@@ -134,30 +134,11 @@ fn the_daemon_records_a_run_and_finishes_the_file_on_sigterm() {
     assert_eq!(body["orientation_wxyz"].as_array().map(Vec::len), Some(4));
 
     // The independent reader, where it is installed (.ci/run installs it).
-    let python = Command::new("python3")
-        .args(["-c", "import mcap.reader"])
-        .output()
-        .is_ok_and(|o| o.status.success());
-    if !python {
-        assert!(
-            std::env::var_os("CI").is_none(),
-            "CI must have python3 mcap"
-        );
-        println!("skipped the Python reader: pip install mcap");
+    if !python_has_mcap() {
         return;
     }
     let script = concat!(env!("CARGO_MANIFEST_DIR"), "/scripts/mcap-summary.py");
-    let out = Command::new("python3")
-        .arg(script)
-        .arg(&file)
-        .output()
-        .unwrap();
-    let text = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        out.status.success(),
-        "{text}{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let text = python(&[script.as_ref(), file.as_os_str()]);
     let joints_line = text
         .lines()
         .find(|l| l.trim_start().starts_with("/joints "))
@@ -170,4 +151,231 @@ fn the_daemon_records_a_run_and_finishes_the_file_on_sigterm() {
         .unwrap();
     assert_eq!(n, cycles.len() as u64, "{text}");
     assert!(text.contains("metadata snaked.status"), "{text}");
+}
+
+/// Whether python3 has the `mcap` package; CI must (`.ci/run` installs it).
+fn python_has_mcap() -> bool {
+    let ok = Command::new("python3")
+        .args(["-c", "import mcap.reader"])
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !ok {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "CI must have python3 mcap"
+        );
+        println!("skipped the Python reader: pip install mcap");
+    }
+    ok
+}
+
+/// Runs python3 with `args`: its output, once it succeeded.
+fn python(args: &[&std::ffi::OsStr]) -> String {
+    let out = Command::new("python3").args(args).output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout).into_owned();
+    assert!(
+        out.status.success(),
+        "python3 {args:?}:\n{text}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    text
+}
+
+/// docs/recording.md's Python recipe, as a user copies it, reading the file named by
+/// its first argument.
+fn documented_recipe() -> String {
+    let doc = include_str!("../docs/recording.md");
+    let section = &doc[doc
+        .find("## Reading a recording with Python")
+        .expect("the section")..];
+    let start = section.find("```python\n").expect("a python block") + 10;
+    let len = section[start..].find("```").expect("its end");
+    let code = &section[start..start + len];
+    assert!(code.contains("make_reader(f)") && code.contains("\"run.mcap\""));
+    format!(
+        "import sys\n{}",
+        code.replace("\"run.mcap\"", "sys.argv[1]")
+    )
+}
+
+/// Loop time of the first and the last `/joints` message, s, and how many there are.
+fn joints_span(path: &std::path::Path) -> (f64, f64, usize) {
+    let (_, msgs) = read(path, &["/joints"]);
+    let t: Vec<f64> = msgs
+        .iter()
+        .map(|(_, v)| v["t_ns"].as_u64().expect("t_ns") as f64 * 1e-9)
+        .collect();
+    (t[0], t[t.len() - 1], t.len())
+}
+
+/// `snaked --recover FILE`: the recovered file's path and what the tool printed.
+fn recover(file: &std::path::Path) -> (std::path::PathBuf, String) {
+    let out = Command::new(exe("snaked"))
+        .arg("--recover")
+        .arg(file)
+        .output()
+        .expect("snaked --recover");
+    let text = String::from_utf8_lossy(&out.stdout).into_owned();
+    assert!(
+        out.status.success(),
+        "{text}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    (file.with_file_name("run.recovered.mcap"), text)
+}
+
+#[test]
+fn a_killed_recording_is_recovered_and_read_with_the_documented_recipe() {
+    let dir = tempfile::tempdir().unwrap();
+    let sock = dir.path().join("s.sock");
+    let file = dir.path().join("run.mcap");
+    let config = dir.path().join("snaked.toml");
+    std::fs::write(
+        &config,
+        "[record]\nchunk_duration_s = 0.1\nring_capacity = 256\n",
+    )
+    .unwrap();
+    let mut d = Proc::spawn(
+        "snaked",
+        &exe("snaked"),
+        &[
+            "--config".into(),
+            config.display().to_string(),
+            "--emulated".into(),
+            "--socket".into(),
+            sock.display().to_string(),
+            "--record".into(),
+            file.display().to_string(),
+        ],
+    );
+    let mut c = Client::connect(&sock, Duration::from_secs(30));
+    let s = c.wait_status(Duration::from_secs(60), "3 s of loop time", |s| {
+        s["t_s"].as_f64().is_some_and(|t| t >= 3.0)
+    });
+    let killed_at = s["t_s"].as_f64().unwrap();
+    d.signal(libc::SIGKILL);
+    assert_eq!(
+        std::os::unix::process::ExitStatusExt::signal(&d.wait(Duration::from_secs(30))),
+        Some(libc::SIGKILL)
+    );
+
+    // As the kill left it: no footer, but whole chunks of less than 100 ms each.
+    let bytes = std::fs::read(&file).unwrap();
+    let spans: Vec<u64> = mcap::read::LinearReader::new(&bytes)
+        .unwrap()
+        .map_while(Result::ok)
+        .filter_map(|r| match r {
+            mcap::records::Record::Chunk { header, .. } => {
+                Some(header.message_end_time - header.message_start_time)
+            }
+            _ => None,
+        })
+        .collect();
+    assert!(spans.len() >= 10, "{} chunks", spans.len());
+    assert!(spans.iter().all(|&ns| ns < 100_000_000), "{spans:?}");
+
+    let (recovered, report) = recover(&file);
+    println!("{report}");
+    let (first, last, n) = joints_span(&recovered);
+    let lost = killed_at - last;
+    println!(
+        "killed at t = {killed_at:.3} s; recovered /joints {first:.3}..{last:.3} s ({n} \
+         messages); lost the last {lost:.3} s"
+    );
+    // Lost: the open chunk (≤ 100 ms) and what the ring held (≤ 256 items).
+    assert!(lost < 1.0, "lost {lost:.3} s");
+
+    if !python_has_mcap() {
+        return;
+    }
+    let recipe = documented_recipe();
+    let text = python(&["-c".as_ref(), recipe.as_ref(), recovered.as_os_str()]);
+    // One line per /joints message (log time, t_ns, positions), then the metadata.
+    let t_ns: Vec<u64> = text
+        .lines()
+        .filter_map(|l| l.split_whitespace().nth(1)?.parse().ok())
+        .collect();
+    assert_eq!(t_ns.len(), n, "the recipe reads every recovered message");
+    assert_eq!(*t_ns.last().unwrap() as f64 * 1e-9, last);
+    assert!(text.contains("snaked.recovery"), "the recovery is noted");
+}
+
+#[test]
+fn a_full_disk_is_reported_as_an_unfinished_file_that_recovers() {
+    use std::io::{BufRead, BufReader};
+    use std::os::unix::process::CommandExt;
+
+    let dir = tempfile::tempdir().unwrap();
+    let sock = dir.path().join("s.sock");
+    let file = dir.path().join("run.mcap");
+    // The disk is full at 1 MB for the daemon: past it a write fails (EFBIG).
+    let limit: u64 = 1_000_000;
+    let mut cmd = Command::new(exe("snaked"));
+    cmd.args(["--emulated", "--socket"])
+        .arg(&sock)
+        .arg("--record")
+        .arg(&file)
+        .stdin(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .env("RUST_LOG", "warn");
+    // SAFETY: only async-signal-safe calls between fork and exec.
+    unsafe {
+        cmd.pre_exec(move || {
+            let lim = libc::rlimit {
+                rlim_cur: limit,
+                rlim_max: limit,
+            };
+            libc::setrlimit(libc::RLIMIT_FSIZE, &lim);
+            libc::signal(libc::SIGXFSZ, libc::SIG_IGN);
+            Ok(())
+        });
+    }
+    let mut child = cmd.spawn().expect("spawn snaked");
+    let stderr = child.stderr.take().unwrap();
+    let mut d = Proc {
+        name: "snaked",
+        child: Some(child),
+    };
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        for line in BufReader::new(stderr).lines().map_while(Result::ok) {
+            let _ = tx.send(line);
+        }
+    });
+    let mut log = Vec::new();
+    let wait = |log: &mut Vec<String>, needle: &str| {
+        while !log.iter().any(|l| l.contains(needle)) {
+            match rx.recv_timeout(Duration::from_secs(60)) {
+                Ok(l) => log.push(l),
+                Err(_) => panic!("no {needle:?} in the log:\n{}", log.join("\n")),
+            }
+        }
+    };
+    wait(&mut log, "was not finished");
+    d.signal(libc::SIGTERM);
+    assert!(d.wait(Duration::from_secs(30)).success(), "exit 0");
+    log.extend(rx.try_iter());
+    let text = log.join("\n");
+    assert!(!text.contains("file is finished"), "{text}");
+    assert!(!text.contains("recording finished"), "{text}");
+    assert!(text.contains("snaked --recover"), "{text}");
+    let size = std::fs::metadata(&file).unwrap().len();
+    assert!(size <= limit, "{size} bytes");
+
+    // The log says how much the file holds; recovery gets at least that.
+    let line = log.iter().find(|l| l.contains("was not finished")).unwrap();
+    let held: f64 = line
+        .split("hold the first ")
+        .nth(1)
+        .and_then(|r| r.split(' ').next())
+        .and_then(|s| s.parse().ok())
+        .unwrap_or_else(|| panic!("{line}"));
+    let (recovered, report) = recover(&file);
+    println!("{line}\n{report}");
+    let (first, last, n) = joints_span(&recovered);
+    assert!(n > 100, "{n} /joints");
+    assert!(
+        last - first >= held - 0.002,
+        "{first}..{last} s, {held} s held"
+    );
 }

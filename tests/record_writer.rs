@@ -8,7 +8,8 @@ mod fixture;
 use fixture::*;
 use foxglove::schemas::{FrameTransforms, SceneUpdate};
 use snaked::record::{
-    CapReason, LiveOptions, McapOptions, RecordError, RecordOptions, RecordSummary, start,
+    CapReason, FileState, LiveOptions, McapOptions, RecordError, RecordOptions, RecordSummary,
+    start,
 };
 
 fn record(items: &[snaked::record::RecordItem], opts: RecordOptions, world: bool) -> RecordSummary {
@@ -276,6 +277,9 @@ fn status_reports_progress_and_the_cap() {
     let s = rec.status();
     assert_eq!(s.items, 100);
     assert_eq!(s.capped, Some(CapReason::MaxDuration));
+    // Closed at the cap with its summary: finished, and all of it complete.
+    assert_eq!(s.file, Some(FileState::Finished));
+    assert_eq!(s.complete_s, 0.010);
     // Joints, commands, IMU, body estimate, signals a cycle over 0..=10 ms, and the 3-D
     // pair at 0 ms.
     assert_eq!(s.messages_written, 11 * 5 + 2);
@@ -373,6 +377,13 @@ fn bad_options_are_refused() {
         RecordOptions {
             mcap: Some(McapOptions {
                 max_duration_s: Some(f64::NAN),
+                ..McapOptions::new("x.mcap")
+            }),
+            ..RecordOptions::default()
+        },
+        RecordOptions {
+            mcap: Some(McapOptions {
+                chunk_duration_s: 0.0,
                 ..McapOptions::new("x.mcap")
             }),
             ..RecordOptions::default()

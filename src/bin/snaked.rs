@@ -1,10 +1,11 @@
 //! snaked: the control daemon. `snaked --emulated` runs it against an in-process
 //! emulated snake; otherwise it discovers the modules on the network.
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use clap::{Parser, ValueEnum};
 use snaked::daemon::{self, Overrides, config::Config, config::Pacing, config::StartMode};
+use snaked::record;
 
 #[derive(Parser, Debug)]
 #[command(version, about = "Real-time control daemon for modular snake robots")]
@@ -42,6 +43,11 @@ struct Args {
     /// Validate the configuration, print it, and exit.
     #[arg(long)]
     check_config: bool,
+    /// Make a finished file of a recording that a crash, a power loss or a full disk left
+    /// unfinished (every complete chunk, the metadata), write it to OUT.mcap (default:
+    /// NAME.recovered.mcap beside it; never overwritten), and exit.
+    #[arg(long, num_args = 1..=2, value_names = ["FILE.mcap", "OUT.mcap"])]
+    recover: Option<Vec<PathBuf>>,
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -59,6 +65,9 @@ enum PacingArg {
 fn main() -> ExitCode {
     daemon::logging::init("info");
     let args = Args::parse();
+    if let Some(paths) = &args.recover {
+        return recover(&paths[0], paths.get(1));
+    }
     let mut cfg = match &args.config {
         Some(path) => match Config::load(path) {
             Ok(c) => c,
@@ -95,6 +104,54 @@ fn main() -> ExitCode {
         Err(e) => {
             tracing::error!("{e:#}");
             eprintln!("snaked: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// `--recover FILE [OUT]`: what the file held and what was written; exit 1 on failure.
+fn recover(input: &Path, output: Option<&PathBuf>) -> ExitCode {
+    let output = output
+        .cloned()
+        .unwrap_or_else(|| record::recovered_path(input));
+    match record::recover(input, &output) {
+        Ok(r) if r.already_finished => {
+            println!(
+                "{}: finished (it ends with its footer): nothing to recover",
+                input.display()
+            );
+            ExitCode::SUCCESS
+        }
+        Ok(r) => {
+            let mut said = format!(
+                "{}: not finished: {} complete chunks, {} messages over {:.3} s",
+                input.display(),
+                r.chunks,
+                r.messages,
+                r.span_s()
+            );
+            if r.lost_bytes > 0 {
+                let why = r
+                    .stopped
+                    .as_deref()
+                    .unwrap_or("a summary section cut short");
+                said += &format!("; the {} bytes after them dropped ({why})", r.lost_bytes);
+            }
+            println!("{said}");
+            let topics: Vec<String> = r
+                .per_topic
+                .iter()
+                .map(|(t, n)| format!("{t} {n}"))
+                .collect();
+            println!(
+                "wrote {}: finished (summary and index); {}",
+                output.display(),
+                topics.join(", ")
+            );
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("snaked: {e}");
             ExitCode::FAILURE
         }
     }

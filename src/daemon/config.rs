@@ -33,6 +33,9 @@ pub struct RecordConfig {
     pub max_mb: f64,
     /// Stop writing past this much loop time, s; 0 = no duration cap.
     pub max_duration_s: f64,
+    /// Write the open chunk whole and sync the file at least this often, s of loop time
+    /// (0.05..=60): what a crash or a power loss can lose of the file.
+    pub chunk_duration_s: f64,
     /// Items the ring between the loop and the writer holds (about 13 kB each).
     pub ring_capacity: usize,
     /// Rate of the ground truth and the 3-D body, Hz.
@@ -45,6 +48,7 @@ impl Default for RecordConfig {
             path: PathBuf::new(),
             max_mb: 10000.0,
             max_duration_s: 0.0,
+            chunk_duration_s: crate::record::DEFAULT_CHUNK_DURATION_S,
             ring_capacity: 1024,
             scene_rate_hz: 50.0,
         }
@@ -376,6 +380,16 @@ mod tests {
             Config::default(),
             "config/snaked.toml must document the defaults"
         );
+    }
+
+    #[test]
+    fn the_recording_chunk_duration_is_bounded() {
+        for bad in ["0.0", "0.01", "61.0", "nan"] {
+            let text = format!("[record]\nchunk_duration_s = {bad}\n");
+            let err = Config::parse(&text, Path::new("x.toml")).unwrap_err();
+            assert!(err.to_string().contains("record.chunk_duration_s"), "{err}");
+        }
+        assert!(Config::parse("[record]\nchunk_duration_s = 0.05\n", Path::new("x")).is_ok());
     }
 
     #[test]

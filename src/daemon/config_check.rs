@@ -271,6 +271,12 @@ impl Config {
             1e7,
         )?;
         range(
+            "record.chunk_duration_s",
+            self.record.chunk_duration_s,
+            0.05,
+            60.0,
+        )?;
+        range(
             "record.ring_capacity",
             self.record.ring_capacity as f64,
             16.0,

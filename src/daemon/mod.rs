@@ -341,6 +341,7 @@ fn start_recorder(
             path: p,
             max_bytes: (rec.max_mb > 0.0).then_some((rec.max_mb * 1e6) as u64),
             max_duration_s: (rec.max_duration_s > 0.0).then_some(rec.max_duration_s),
+            chunk_duration_s: rec.chunk_duration_s,
         }),
         live: cfg.foxglove.enabled.then(|| LiveOptions {
             addr: std::net::SocketAddr::new(cfg.foxglove.host, cfg.foxglove.port),

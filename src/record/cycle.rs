@@ -134,3 +134,13 @@ pub enum RecordItem {
         stats: LoopStats,
     },
 }
+
+impl RecordItem {
+    /// The loop time the item was pushed at, ns.
+    pub fn t_ns(&self) -> u64 {
+        match self {
+            RecordItem::Cycle(rec) => rec.t_ns,
+            RecordItem::Event { t_ns, .. } | RecordItem::Stats { t_ns, .. } => *t_ns,
+        }
+    }
+}

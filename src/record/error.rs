@@ -31,6 +31,19 @@ pub enum RecordError {
         path: PathBuf,
         reason: std::io::Error,
     },
+    /// The summary or footer could not be written (e.g. a full disk): what the file
+    /// holds and how to make a finished file of it.
+    #[error(
+        "recording {} was not finished ({reason}): its complete chunks hold the first \
+         {complete_s:.3} s; `snaked --recover {}` makes a finished file of them",
+        path.display(),
+        path.display()
+    )]
+    Unfinished {
+        path: PathBuf,
+        complete_s: f64,
+        reason: String,
+    },
     #[error("cannot start the live view on {addr}: {reason}")]
     Live {
         addr: SocketAddr,

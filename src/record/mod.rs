@@ -9,7 +9,8 @@
 //!
 //! RecordOptions { mcap: Option<McapOptions>, live: Option<LiveOptions>,
 //!                 ring_capacity: usize /* 1024 */, scene_rate_hz: f64 /* 50 */ }   // Default
-//! McapOptions   { path: PathBuf, max_bytes: Option<u64>, max_duration_s: Option<f64> } // ::new(path)
+//! McapOptions   { path: PathBuf, max_bytes: Option<u64>, max_duration_s: Option<f64>,
+//!                 chunk_duration_s: f64 /* 1: a chunk reaches the disk whole at least this often */ } // ::new(path)
 //! LiveOptions   { addr: SocketAddr /* 127.0.0.1:8765; port 0 = any */ }            // Default
 //! RecordingInfo { source: String /* "snaked" | "snake-lab" */, module_names: Vec<String>,
 //!                 layout: BodyLayout, world: Option<WorldSpec>, catalog: Catalog,
@@ -21,12 +22,20 @@
 //!     fn dropped(&self) -> u64;  fn len(&self) -> usize;  fn capacity(&self) -> usize;
 //! }
 //! impl Recorder {            // Drop finishes the file too
-//!     fn finish(self) -> Result<RecordSummary, RecordError>;  // drain, summary + index, join
+//!     fn finish(self) -> Result<RecordSummary, RecordError>;  // drain, summary + index, join;
+//!                     // RecordError::Unfinished { path, complete_s, reason } if it could not
 //!     fn live_addr(&self) -> Option<SocketAddr>;
 //!     fn status(&self) -> RecorderStatus;  // items, messages_written, dropped, bytes,
-//!                                          // capped: Option<CapReason>, live_clients
+//!                                          // capped: Option<CapReason>, live_clients,
+//!                                          // file: Option<FileState>, complete_s
 //! }
 //! RecordSummary { path, items, messages_written, per_topic, dropped, bytes, capped }
+//! FileState     { Writing, Finished, Unfinished }
+//!
+//! // A file a crash or a full disk left unfinished → a finished one (`snaked --recover`).
+//! pub fn recover(input: &Path, output: &Path) -> Result<Recovery, RecoverError>;
+//! pub fn recovered_path(input: &Path) -> PathBuf;   // run.mcap → run.recovered.mcap
+//! Recovery { already_finished, chunks, messages, per_topic, log_time_ns, lost_bytes, stopped }
 //! ```
 //!
 //! # What the loop pushes
@@ -37,7 +46,8 @@
 //! # Files
 //! `ring` (loop ↔ writer), `recorder` (start, finish, status), `writer` (the thread,
 //! caps), `channels` (topics), `encode` + `schemas` (JSON bodies and their schemas),
-//! `scene` + `kinematics` (3-D), `file` (MCAP), `live` (WebSocket server).
+//! `scene` + `kinematics` (3-D), `file` (MCAP, append only), `recover` (a finished file
+//! from an unfinished one), `live` (WebSocket server).
 
 mod channels;
 pub mod cycle;
@@ -48,6 +58,7 @@ pub mod kinematics;
 mod live;
 mod options;
 mod recorder;
+mod recover;
 mod ring;
 mod scene;
 mod schemas;
@@ -59,9 +70,10 @@ pub use cycle::{
 };
 pub use error::RecordError;
 pub use options::{
-    CapReason, DEFAULT_LIVE_PORT, LiveOptions, McapOptions, RecordOptions, RecordSummary,
-    RecorderStatus, RecordingInfo,
+    CapReason, DEFAULT_CHUNK_DURATION_S, DEFAULT_LIVE_PORT, FileState, LiveOptions, McapOptions,
+    RecordOptions, RecordSummary, RecorderStatus, RecordingInfo,
 };
 pub use recorder::{Recorder, start};
+pub use recover::{RecoverError, Recovery, recover, recovered_path};
 pub use ring::RecordTx;
 pub use scene::{BODY_FRAME, WORLD_FRAME, link_frame};

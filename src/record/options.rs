@@ -12,6 +12,10 @@ use crate::gait::BodyLayout;
 /// Port the Foxglove app connects to by default.
 pub const DEFAULT_LIVE_PORT: u16 = 8765;
 
+/// A chunk is closed (and reaches the disk whole) at least this often, s of loop time:
+/// what a crash can lose of the file beyond what the ring held.
+pub const DEFAULT_CHUNK_DURATION_S: f64 = 1.0;
+
 /// What to record and where.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RecordOptions {
@@ -46,15 +50,20 @@ pub struct McapOptions {
     pub max_bytes: Option<u64>,
     /// Stop writing once this much loop time has been recorded, s.
     pub max_duration_s: Option<f64>,
+    /// Close the open chunk, write it whole and sync the file at least this often, s of
+    /// loop time ([`DEFAULT_CHUNK_DURATION_S`]): a crash or power loss then loses at most
+    /// this much of the file, plus what the ring held.
+    pub chunk_duration_s: f64,
 }
 
 impl McapOptions {
-    /// A file without caps.
+    /// A file without caps, chunks of at most [`DEFAULT_CHUNK_DURATION_S`].
     pub fn new(path: impl Into<PathBuf>) -> Self {
         Self {
             path: path.into(),
             max_bytes: None,
             max_duration_s: None,
+            chunk_duration_s: DEFAULT_CHUNK_DURATION_S,
         }
     }
 }
@@ -103,8 +112,23 @@ pub enum CapReason {
     WriteError,
 }
 
+/// What state the MCAP file is in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FileState {
+    /// Being written. Its chunks reach the disk whole; after a crash `snaked --recover`
+    /// makes a finished file of them.
+    Writing,
+    /// Summary, index and footer written: every reader opens it.
+    Finished,
+    /// A write failed (e.g. a full disk), so it has no summary or footer: its complete
+    /// chunks hold the first [`RecorderStatus::complete_s`] of the recording, and
+    /// `snaked --recover` makes a finished file of them.
+    Unfinished,
+}
+
 /// A snapshot of a running recorder.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct RecorderStatus {
     /// Items taken from the ring.
     pub items: u64,
@@ -114,8 +138,13 @@ pub struct RecorderStatus {
     pub dropped: u64,
     /// Bytes in the MCAP file so far (grows a chunk at a time).
     pub bytes: u64,
-    /// Set once a cap was reached: the file is finished, the ring is still drained.
+    /// Set once a cap was reached: the file is closed, the ring is still drained.
     pub capped: Option<CapReason>,
+    /// The file's state (`None`: no file).
+    pub file: Option<FileState>,
+    /// Loop time, s since the first item, that complete chunks in the file hold (all of
+    /// it once finished).
+    pub complete_s: f64,
     /// Live-view clients connected now.
     pub live_clients: usize,
 }

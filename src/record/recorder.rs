@@ -70,6 +70,11 @@ fn validate(opts: &RecordOptions) -> Result<(), RecordError> {
                 "max_duration_s must be positive and finite",
             ));
         }
+        if !(m.chunk_duration_s.is_finite() && m.chunk_duration_s > 0.0) {
+            return Err(RecordError::InvalidOption(
+                "chunk_duration_s must be positive and finite",
+            ));
+        }
         if m.max_bytes == Some(0) {
             return Err(RecordError::InvalidOption("max_bytes must be positive"));
         }
@@ -112,6 +117,8 @@ impl Recorder {
             dropped: self.shared.ring.dropped(),
             bytes: self.shared.bytes.load(Ordering::Relaxed),
             capped: self.shared.capped(),
+            file: self.shared.file(),
+            complete_s: self.shared.complete_ns.load(Ordering::Relaxed) as f64 * 1e-9,
             live_clients: self.latch.as_ref().map_or(0, |l| l.clients()),
         }
     }

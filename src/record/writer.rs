@@ -19,7 +19,7 @@ use super::encode::{
 use super::error::RecordError;
 use super::file::McapFile;
 use super::live::{Latch, Live};
-use super::options::{CapReason, RecordOptions, RecordSummary, RecordingInfo};
+use super::options::{CapReason, FileState, RecordOptions, RecordSummary, RecordingInfo};
 use super::ring::Ring;
 use super::scene::{BodyDrawer, world_scene};
 use crate::controller::catalog::{Catalog, ControllerInfo, NO_CONTROLLER};
@@ -36,8 +36,12 @@ pub(crate) struct Shared {
     pub items: AtomicU64,
     pub written: AtomicU64,
     pub bytes: Arc<AtomicU64>,
+    /// Loop time that complete chunks in the file hold, ns.
+    pub complete_ns: AtomicU64,
     /// 0: not capped, else `1 + CapReason as u8`.
     capped: AtomicU8,
+    /// 0: no file, else `1 + FileState as u8`.
+    file: AtomicU8,
 }
 
 impl Shared {
@@ -48,7 +52,9 @@ impl Shared {
             items: AtomicU64::new(0),
             written: AtomicU64::new(0),
             bytes: Arc::new(AtomicU64::new(0)),
+            complete_ns: AtomicU64::new(0),
             capped: AtomicU8::new(0),
+            file: AtomicU8::new(0),
         }
     }
 
@@ -68,6 +74,25 @@ impl Shared {
             CapReason::WriteError => 3,
         };
         self.capped.store(v, Ordering::Release);
+    }
+
+    pub fn file(&self) -> Option<FileState> {
+        match self.file.load(Ordering::Acquire) {
+            1 => Some(FileState::Writing),
+            2 => Some(FileState::Finished),
+            3 => Some(FileState::Unfinished),
+            _ => None,
+        }
+    }
+
+    fn set_file(&self, f: &McapFile) {
+        self.complete_ns.store(f.complete_ns(), Ordering::Relaxed);
+        let v = match f.state() {
+            FileState::Writing => 1,
+            FileState::Finished => 2,
+            FileState::Unfinished => 3,
+        };
+        self.file.store(v, Ordering::Release);
     }
 }
 
@@ -132,6 +157,7 @@ impl Writer {
             .transpose()?;
         if let Some(f) = &file {
             tracing::info!(path = %f.path().display(), "recorder: writing MCAP");
+            shared.set_file(f);
         }
         channels.file_open = file.is_some();
         channels.latch = live.as_ref().map(|l| l.latch.clone());
@@ -199,21 +225,17 @@ impl Writer {
 
     pub fn handle(&mut self, item: &RecordItem) {
         self.items += 1;
-        let t_ns = match item {
-            RecordItem::Cycle(rec) => {
-                self.cycle(rec);
-                rec.t_ns
-            }
-            RecordItem::Event { t_ns, event } => {
-                self.event(*t_ns, event);
-                *t_ns
-            }
-            RecordItem::Stats { t_ns, stats } => {
-                self.stats(*t_ns, stats);
-                *t_ns
-            }
-        };
-        self.check_caps(t_ns);
+        // A chunk due is closed before this item, so it spans less than its duration.
+        if let Some(file) = self.file.as_mut().filter(|f| f.is_open()) {
+            let t_ns = item.t_ns();
+            file.before_item(t_ns.saturating_sub(self.t0_ns.unwrap_or(t_ns)));
+        }
+        match item {
+            RecordItem::Cycle(rec) => self.cycle(rec),
+            RecordItem::Event { t_ns, event } => self.event(*t_ns, event),
+            RecordItem::Stats { t_ns, stats } => self.stats(*t_ns, stats),
+        }
+        self.check_caps(item.t_ns());
     }
 
     /// The info of controller `id`, published on `/controller/info` the first time.
@@ -296,23 +318,29 @@ impl Writer {
         });
     }
 
+    /// Notes what reached the file, then stops it at a cap or a failed write.
     fn check_caps(&mut self, t_ns: u64) {
-        let Some(file) = self.file.as_ref().filter(|f| f.is_open()) else {
+        let Some(file) = self.file.as_mut().filter(|f| f.is_open()) else {
             return;
         };
         let recorded_ns = t_ns.saturating_sub(self.t0_ns.unwrap_or(t_ns));
+        file.item_written(recorded_ns);
+        self.shared.set_file(file);
         let Some(reason) = file.cap_reached(recorded_ns) else {
             return;
         };
-        tracing::warn!(
-            path = %file.path().display(),
-            bytes = file.size(),
-            ?reason,
-            "recorder: cap reached; the file is finished, later items are not written"
-        );
         self.shared.set_capped(reason);
-        if let Err(e) = self.close_file() {
-            tracing::warn!("recorder: {e}");
+        let (path, bytes) = (file.path().display().to_string(), file.size());
+        // Say what state the file was left in: finished only if its end was written.
+        match self.close_file() {
+            Ok(()) => tracing::warn!(
+                path,
+                bytes,
+                ?reason,
+                "recorder: cap reached; the file is finished (summary and index), \
+                 later items are not written"
+            ),
+            Err(e) => tracing::error!(?reason, "recorder: {e}; later items are not written"),
         }
     }
 
@@ -322,11 +350,13 @@ impl Writer {
             return Ok(());
         };
         let status = final_status(&self.channels, self.items, &self.shared);
-        let written = file.write_metadata("snaked.status", status);
+        // A failed status write shows again (as its cause) when the file closes.
+        let _ = file.write_metadata("snaked.status", status);
         self.channels.file_open = false;
         let closed = file.close();
+        self.shared.set_file(file);
         self.publish_status();
-        written.and(closed)
+        closed
     }
 
     fn publish_status(&self) {
@@ -337,7 +367,11 @@ impl Writer {
     }
 
     fn finish(mut self) -> Result<RecordSummary, RecordError> {
-        let closed = self.close_file();
+        // A file already stopped by a failed write reports it again here.
+        let closed = match self.file.as_mut() {
+            Some(f) if !f.is_open() => f.close(),
+            _ => self.close_file(),
+        };
         if let Some(live) = &mut self.live {
             live.stop();
         }
