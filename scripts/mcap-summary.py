@@ -8,6 +8,7 @@ channels (schema, encoding, message count), time span, and the metadata records.
 import argparse
 import json
 
+from mcap.exceptions import McapError
 from mcap.reader import make_reader
 
 
@@ -20,9 +21,15 @@ def main():
 
     with open(args.path, "rb") as f:
         reader = make_reader(f)
-        summary = reader.get_summary()
+        try:
+            summary = reader.get_summary()
+        except McapError:  # the end is not a footer: a crash or a full disk cut it
+            summary = None
         if summary is None:
-            raise SystemExit(f"{args.path}: no summary (the recording was not finished)")
+            raise SystemExit(
+                f"{args.path}: not finished (no summary or footer): "
+                f"`snaked --recover {args.path}` makes a finished file of it"
+            )
         stats = summary.statistics
         counts = stats.channel_message_counts
         span = (stats.message_end_time - stats.message_start_time) / 1e9
