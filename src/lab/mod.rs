@@ -29,6 +29,7 @@ pub mod pole;
 pub mod report;
 pub mod runner;
 pub mod sidewinding;
+pub mod strain;
 pub mod trial;
 
 pub use pegboard::CONTROLLERS as PEGBOARD_CONTROLLERS;

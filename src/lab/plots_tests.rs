@@ -40,6 +40,7 @@ fn record(signals: usize) -> TrialRecord {
         self_contacts: 0,
         heights_m: Vec::new(),
         windows: Vec::new(),
+        strain: Default::default(),
     }
 }
 
@@ -86,6 +87,7 @@ fn every_figure_is_a_png() {
                 side_exit: false,
                 progress_m: 1.0,
             },
+            strain: Default::default(),
             plotted: None,
         })
         .collect();

@@ -4,8 +4,10 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use super::LabError;
+use super::experiment::ExperimentModule;
 use super::metrics::{MIN_PATH_M, mean_sd_median};
-use super::runner::TrialResult;
+use super::runner::{TrialResult, controller_names};
+use super::strain::{Strain, StrainSummary};
 
 /// The CSV header; one row per trial follows in plan order.
 pub const CSV_HEADER: &str = "controller,layout,start,success,seconds,cycles,path_m,distance_m,cycles_per_m,stuck_s,\
@@ -14,13 +16,13 @@ self_contacts,side_exit,progress_m";
 /// `results.csv` as text.
 pub fn results_csv(results: &[TrialResult]) -> String {
     let mut out = String::with_capacity(64 * (results.len() + 1));
-    out.push_str(CSV_HEADER);
+    out.push_str(&with_strain_header(CSV_HEADER));
     out.push('\n');
     for r in results {
         let m = &r.metrics;
         let _ = writeln!(
             out,
-            "{},{},{},{},{:.3},{:.4},{:.4},{:.4},{:.4},{:.2},{},{},{:.4}",
+            "{},{},{},{},{:.3},{:.4},{:.4},{:.4},{:.4},{:.2},{},{},{:.4},{}",
             csv_field(&r.controller),
             csv_field(&r.layout),
             r.start,
@@ -33,10 +35,43 @@ pub fn results_csv(results: &[TrialResult]) -> String {
             m.stuck_s,
             m.self_contacts,
             m.side_exit,
-            m.progress_m
+            m.progress_m,
+            r.strain.csv_row()
         );
     }
     out
+}
+
+/// An experiment's CSV header with the strain columns every experiment appends.
+pub fn with_strain_header(own: &str) -> String {
+    format!("{own},{}", Strain::CSV_HEADER)
+}
+
+/// The summary's section on what the controllers asked of the actuators (any
+/// experiment): per controller, medians and worst trials of [`Strain`].
+pub fn strain_markdown<E: ExperimentModule>(results: &[TrialResult<E>]) -> String {
+    let mut s = String::from(
+        "\nWhat each controller asked of the actuators (every cycle of every trial):\n\n",
+    );
+    s.push_str(StrainSummary::TABLE_HEADER);
+    s.push('\n');
+    for name in controller_names(results) {
+        let mine = results.iter().filter(|r| r.controller == name);
+        let _ = writeln!(
+            s,
+            "{}",
+            StrainSummary::of(mine.map(|r| &r.strain)).table_row(name)
+        );
+    }
+    s.push_str(
+        "\nGuard-limited = cycles in which the set-point guard slowed a set-point to the \
+         joints' speed (the controller asked for more). Peak joint speed = the fastest \
+         joint speed a module reported in the trial; above motor speed = share of joint-time \
+         reported faster than the motor's 3.46 rad/s (on the spring or thrown by a contact). \
+         At torque limit = share of joint-time at 95 % of 7 N·m or more. Definitions: \
+         docs/lab.md, \"Strain\".\n",
+    );
+    s
 }
 
 pub(crate) fn csv_field(s: &str) -> String {
@@ -177,6 +212,7 @@ pub fn summary_markdown(results: &[TrialResult], ctx: &SummaryContext) -> String
         MIN_PATH_M * 100.0
     );
     s.push_str(&calibrations_markdown(ctx));
+    s.push_str(&crate::lab::report::strain_markdown(results));
     let _ = writeln!(s, "\nPer trial: `results.csv`.");
     if !ctx.plots.is_empty() {
         s.push_str("\nPlots:\n\n");
@@ -218,6 +254,7 @@ mod tests {
                 side_exit: !success && start == 2,
                 progress_m: if success { 2.0 } else { -0.05 },
             },
+            strain: Default::default(),
             plotted: None,
         }
     }

@@ -14,6 +14,7 @@ use super::controllers::LabController;
 use super::experiment::ExperimentModule;
 use super::file_stem;
 use super::pegboard::Pegboard;
+use super::strain::Strain;
 use super::trial::{TrialConfig, TrialRecord, TrialRecording, run_trial};
 use crate::emu::world::WorldSpec;
 use crate::emu::world::scenario::MODULE_LENGTH_M;
@@ -56,6 +57,8 @@ pub struct TrialResult<E: ExperimentModule = Pegboard> {
     pub start: usize,
     pub repeat: usize,
     pub metrics: E::Metrics,
+    /// What the trial asked of the actuators (every experiment reports it).
+    pub strain: Strain,
     /// The world and the full record, kept for the trial the report plots (each
     /// controller's first layout and start).
     pub plotted: Option<(Arc<WorldSpec>, E::Goal, TrialRecord)>,
@@ -228,6 +231,7 @@ pub fn run<E: ExperimentModule>(
             start: w.start,
             repeat: w.repeat,
             metrics,
+            strain: rec.strain,
             plotted: first.then(|| (Arc::clone(&w.world), w.goal.clone(), rec)),
         })
     };

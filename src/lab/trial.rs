@@ -11,6 +11,7 @@ use std::sync::atomic::{AtomicBool, AtomicU64};
 use super::LabError;
 use super::controllers::LabController;
 use super::experiment::Goal;
+use super::strain::{Strain, StrainLimits};
 use crate::bus::sim::{SimBus, SimBusConfig};
 use crate::controller::catalog::Catalog;
 use crate::controller::report::MAX_COLUMNS;
@@ -133,6 +134,8 @@ pub struct TrialRecord {
     /// The report's first window field at every sample (empty when it has none): each
     /// window's centre in normalised arc length and its columns.
     pub windows: Vec<Vec<[f64; 1 + MAX_COLUMNS]>>,
+    /// What the trial asked of the actuators, every cycle (guard, joint speed, torque).
+    pub strain: Strain,
 }
 
 impl TrialRecord {
@@ -347,6 +350,7 @@ pub fn run_trial(
         self_contacts: 0,
         heights_m: Vec::with_capacity(samples * n_links),
         windows: Vec::new(),
+        strain: Strain::default(),
     };
     record(&lp, &mut rec);
     for k in 1..=steps {
@@ -354,12 +358,14 @@ pub fn run_trial(
             let request = crate::rt::messages::LoopRequest::SetGait(controller.gait);
             let _ = requests.try_send(crate::rt::messages::Envelope::new(1 << 32, request));
         }
+        let guarded = lp.guard_counters().slew_limited_cycles;
         if lp.step() == Flow::Finished {
             break;
         }
         if lp.mode() != crate::safety::failsafe::Mode::Running {
             rec.cycles_not_running += 1;
         }
+        add_strain(&lp, guarded, &mut rec.strain);
         if k % per_sample == 0 {
             record(&lp, &mut rec);
             if goal.reached(plant_of(&lp)) {
@@ -380,6 +386,18 @@ pub fn run_trial(
         })?;
     }
     Ok(rec)
+}
+
+/// One cycle's strain: whether the guard limited it (its count moved past
+/// `guarded_before`) and the modules' reported speeds and torques.
+fn add_strain(lp: &ControlLoop, guarded_before: u64, strain: &mut Strain) {
+    let plant = plant_of(lp);
+    let limited = lp.guard_counters().slew_limited_cycles > guarded_before;
+    let joints = (0..plant.module_count()).map(|i| {
+        let f = plant.feedback(i);
+        (f64::from(f.velocity_rad_s), f64::from(f.torque_nm))
+    });
+    strain.add_cycle(&StrainLimits::SEA, limited, joints);
 }
 
 pub(crate) fn plant_of(lp: &ControlLoop) -> &dyn Plant {

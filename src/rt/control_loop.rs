@@ -165,6 +165,11 @@ impl ControlLoop {
         self.p.bus.as_ref()
     }
 
+    /// What the set-point guard changed so far.
+    pub fn guard_counters(&self) -> crate::rt::setpoint_guard::GuardCounters {
+        self.guard.counters()
+    }
+
     /// The controller slots (which one drives, its last report).
     pub fn controllers(&self) -> &ControllerSlots {
         &self.slots

@@ -48,6 +48,20 @@ pub struct AdmittanceGains {
     /// τ_D, added to the force.
     #[serde(default)]
     pub bias_force: f64,
+    /// Fastest the parameter may change, its unit per second (`null` or absent:
+    /// unbounded). The joints follow a parameter at `∂θ/∂σ · σ̇`: an anti-compliant
+    /// parameter against a stiff contact runs away (positive feedback), and this keeps
+    /// that run within what the motors can follow (docs/compliance.md, "Speed budget").
+    #[serde(
+        default = "unbounded",
+        serialize_with = "crate::controller::config::bound::serialize",
+        deserialize_with = "crate::controller::config::bound::upper"
+    )]
+    pub max_rate: f64,
+}
+
+fn unbounded() -> f64 {
+    f64::INFINITY
 }
 
 impl AdmittanceGains {
@@ -83,7 +97,14 @@ impl AdmittanceGains {
             max_shift
         };
         let bias = self.stiffness * shift;
-        check_range("bias_force", self.bias_force, -bias, bias)
+        check_range("bias_force", self.bias_force, -bias, bias)?;
+        if self.max_rate.is_nan() || self.max_rate <= 0.0 {
+            return Err(ConfigError::invalid(
+                "max_rate",
+                "must be positive (or null: unbounded)",
+            ));
+        }
+        Ok(())
     }
 }
 
@@ -109,7 +130,7 @@ impl ParamState {
             - g.damping * self.rate
             - g.stiffness * self.deviation)
             / g.mass;
-        self.rate += accel * dt_s;
+        self.rate = (self.rate + accel * dt_s).clamp(-g.max_rate, g.max_rate);
         self.deviation += self.rate * dt_s;
         let value = nominal + self.deviation;
         if value > g.max || value < g.min {
@@ -135,6 +156,7 @@ mod tests {
             min: 0.0,
             max: 1.5,
             bias_force: 0.0,
+            max_rate: f64::INFINITY,
         }
     }
 
@@ -192,5 +214,26 @@ mod tests {
         g.bias_force = 0.0;
         g.max = 100.0;
         assert!(g.check(f64::NEG_INFINITY, f64::INFINITY, 1.0).is_err());
+        for bad in [0.0, -1.0, f64::NAN] {
+            let mut g = gains();
+            g.max_rate = bad;
+            assert_eq!(field(g), "max_rate", "{bad}");
+        }
+    }
+
+    #[test]
+    fn a_rate_cap_bounds_how_fast_the_parameter_moves() {
+        let mut g = gains();
+        g.max_rate = 0.5;
+        let mut p = ParamState::default();
+        let mut last = p.value(0.8);
+        for _ in 0..2000 {
+            // Anti-compliant under a large force: it would run at tens of units/s.
+            p.step(&g, AdmittanceSign::AntiCompliant, -100.0, 0.8, 1e-3);
+            let v = p.value(0.8);
+            assert!((v - last).abs() <= 0.5e-3 + 1e-12, "{} per ms", v - last);
+            last = v;
+        }
+        assert!((p.value(0.8) - 1.5).abs() < 1e-9, "still reaches its bound");
     }
 }

@@ -83,6 +83,7 @@ impl CompliantSlitheringConfig {
                     min: 0.1,
                     max: 1.2,
                     bias_force: 0.0,
+                    max_rate: f64::INFINITY,
                 },
             },
             spatial_freq: ParamConfig {
@@ -95,6 +96,7 @@ impl CompliantSlitheringConfig {
                     min: 2.0 * PI,
                     max: 4.0 * PI,
                     bias_force: 0.0,
+                    max_rate: f64::INFINITY,
                 },
             },
             phase: ParamConfig {
@@ -107,6 +109,7 @@ impl CompliantSlitheringConfig {
                     min: f64::NEG_INFINITY,
                     max: f64::INFINITY,
                     bias_force: 0.0,
+                    max_rate: f64::INFINITY,
                 },
             },
             sign: AdmittanceSign::Compliant,

@@ -141,6 +141,7 @@ mod tests {
             min: 0.1,
             max: 1.2,
             bias_force: 0.0,
+            max_rate: f64::INFINITY,
         }
     }
 

@@ -147,6 +147,7 @@ impl DirectionalComplianceConfig {
             min,
             max,
             bias_force: 0.0,
+            max_rate: f64::INFINITY,
         };
         Self {
             strategy,
@@ -173,6 +174,7 @@ impl DirectionalComplianceConfig {
                     min: f64::NEG_INFINITY,
                     max: f64::INFINITY,
                     bias_force: 0.0,
+                    max_rate: f64::INFINITY,
                 },
             },
             // Tuned on peg-array layouts 500-503 (docs/measurements.md); the fixed

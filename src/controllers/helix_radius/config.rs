@@ -69,6 +69,7 @@ impl HelixRadiusConfig {
                 min: 0.7,
                 max: 1.35,
                 bias_force: 16.0,
+                max_rate: f64::INFINITY,
             },
             sign: AdmittanceSign::Compliant,
             torque_cutoff_hz: 5.0,
@@ -90,6 +91,7 @@ impl HelixRadiusConfig {
                 min: 1.0,
                 max: 1.0,
                 bias_force: 0.0,
+                max_rate: f64::INFINITY,
                 ..c.gains
             },
             slip: SlipConfig {

@@ -57,6 +57,7 @@ impl SerpenoidAdmittanceConfig {
                 min: 0.5,
                 max: 1.4,
                 bias_force: 0.0,
+                max_rate: f64::INFINITY,
             },
         };
         Self {

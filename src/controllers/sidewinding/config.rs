@@ -45,7 +45,9 @@ const SPATIAL_FREQ_RANGE: (f64, f64) = (0.25 * PI, 8.0 * PI);
 
 impl SidewindingConfig {
     /// AC-SFC: both parameters anti-compliant, steering on. Gains from the compliant
-    /// slithering controller's, tuned on the peg array (docs/compliance.md).
+    /// slithering controller's, tuned on the peg array; the spatial frequency's damping
+    /// and both rate caps set by the joints' speed budget (docs/compliance.md,
+    /// "Speed budget").
     pub fn full() -> Self {
         Self {
             amplitude: ParamConfig {
@@ -60,18 +62,30 @@ impl SidewindingConfig {
                     // joints' ±π/2: 1.1 × 1.4 = 1.54 rad.
                     max: 1.1,
                     bias_force: 0.0,
+                    // ∂θ/∂A = sin φ (× the taper's 1.4 at most): ≤ 1.4 rad/s of joint
+                    // speed on top of the wave's own.
+                    max_rate: 1.0,
                 },
             },
             spatial_freq: ParamConfig {
                 enabled: true,
                 centralization: Centralization::Central,
+                // Against a stiff peg anti-compliance is positive feedback: ωS runs to
+                // a bound at about F/B. With damping 0.3 that was ~10 rad/BL/s, which
+                // asks the tail joints (∂θ/∂ωS = A·s) for 8-12 rad/s: the guard then
+                // slew-limited 8 % of cycles and the body chattered (issue 25). Damping
+                // 3 and the cap keep it within the motors; the stiffness stays low so ωS
+                // may sit at a bound while it squeezes through (stiffer did worse:
+                // docs/measurements.md, "Chatter among pegs").
                 gains: AdmittanceGains {
                     mass: 0.05,
-                    damping: 0.3,
+                    damping: 3.0,
                     stiffness: 0.3,
                     min: 2.0 * PI,
                     max: 4.0 * PI,
                     bias_force: 0.0,
+                    // ∂θ/∂ωS = A·s ≤ 1.54 rad: ≤ 1.5 rad/s of joint speed.
+                    max_rate: 1.0,
                 },
             },
             sign: AdmittanceSign::AntiCompliant,

@@ -130,3 +130,71 @@ fn a_nominal_heading_turned_round_reverses_the_travel() {
     assert!(b[0].hypot(b[1]) > 0.3, "it still moves: {b:?}");
     assert!(cos < -0.7, "the travel reversed: {a:?} vs {b:?}");
 }
+
+/// What `ac_sfc` asks of the actuators on a world, through the daemon's loop: the
+/// share of cycles the set-point guard had to slow its set-points, the share of
+/// joint-time faster than the motor, and how fast its spatial frequency moved.
+fn strain_of(world: &WorldSpec, seconds: f64) -> (crate::lab::strain::Strain, f64) {
+    struct Never;
+    impl crate::lab::experiment::Goal for Never {
+        fn reached(&self, _: &dyn Plant) -> bool {
+            false
+        }
+    }
+    let controller = LabController::named(GaitKind::Sidewinding, "ac_sfc").unwrap();
+    let config = TrialConfig {
+        limit_s: seconds,
+        sample_hz: 100.0,
+        ..TrialConfig::default()
+    };
+    let rec = crate::lab::trial::run_trial(&controller, world, &Never, 7, &config, None).unwrap();
+    let k = rec
+        .signal_names
+        .iter()
+        .position(|n| n == "spatial_freq_rad")
+        .unwrap();
+    let ws = &rec.signals[k];
+    let fastest = ws
+        .windows(2)
+        .filter(|w| w[0].is_finite() && w[1].is_finite())
+        .map(|w| (w[1] - w[0]).abs() / rec.sample_dt_s)
+        .fold(0.0, f64::max);
+    (rec.strain, fastest)
+}
+
+/// Issue 25: the default anti-compliant sidewinding chattered among pegs. Its spatial
+/// frequency, pushed by a stiff contact (anti-compliance is positive feedback there),
+/// ran between its bounds at ~10 rad/BL/s, which asks the tail joints for 8-12 rad/s:
+/// the guard slew-limited 8-10 % of all cycles on the probe's board and 3 % on flat
+/// ground. Its rates are now within the joints' speed budget (docs/compliance.md,
+/// "Speed budget"): the guard never has to act on the set-points it produces.
+#[test]
+fn anti_compliant_sidewinding_does_not_outrun_the_motors() {
+    let board =
+        crate::emu::world::scenario::WorldScenario::parse(crate::lab::board::PEG_BOARD_EDGE_TOML)
+            .unwrap()
+            .generate_trial(18, 0)
+            .unwrap();
+    let cap = crate::controllers::sidewinding::SidewindingConfig::full()
+        .spatial_freq
+        .gains
+        .max_rate;
+    for (name, world) in [("flat", WorldSpec::default()), ("peg board", board)] {
+        let (s, fastest_ws) = strain_of(&world, 20.0);
+        println!(
+            "{name}: guard-limited {:.2} % of cycles, above motor speed {:.3} % of joint-time, \
+             at the torque limit {:.3} %, spatial frequency at most {fastest_ws:.2} rad/BL/s",
+            s.guard_limited_pct(),
+            s.fast_pct(),
+            s.torque_limit_pct()
+        );
+        assert!(
+            s.guard_limited_pct() < 0.1,
+            "{name}: the guard slowed the set-points"
+        );
+        assert!(
+            fastest_ws <= cap * 1.001,
+            "{name}: ωS moved at {fastest_ws}"
+        );
+    }
+}

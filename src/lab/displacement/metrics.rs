@@ -206,6 +206,7 @@ mod tests {
             self_contacts: 7,
             heights_m: Vec::new(),
             windows: Vec::new(),
+            strain: Default::default(),
         }
     }
 
@@ -257,6 +258,7 @@ mod tests {
             start,
             repeat,
             metrics: displacement_metrics(&rec, 1.024),
+            strain: Default::default(),
             plotted: None,
         }
     }

@@ -303,6 +303,7 @@ mod tests {
             self_contacts: 0,
             heights_m: Vec::new(),
             windows: Vec::new(),
+            strain: Default::default(),
         }
     }
 
@@ -324,6 +325,7 @@ mod tests {
                 start: k % 2,
                 repeat: 0,
                 metrics: super::super::metrics::displacement_metrics(&record(), 1.0),
+                strain: Default::default(),
                 plotted: None,
             })
             .collect();

@@ -6,7 +6,7 @@ use std::fmt::Write as _;
 
 use super::Displacement;
 use super::metrics::summarise;
-use crate::lab::report::{SummaryContext, calibrations_markdown, csv_field};
+use crate::lab::report::{SummaryContext, calibrations_markdown, csv_field, with_strain_header};
 use crate::lab::runner::TrialResult;
 
 /// The CSV header; one row per trial follows in plan order.
@@ -16,13 +16,13 @@ velocity_bl_min,forward_bl_min,self_contacts,mode_switches,directional_share";
 /// `results.csv` as text.
 pub fn results_csv(results: &[TrialResult<Displacement>]) -> String {
     let mut out = String::with_capacity(80 * (results.len() + 1));
-    out.push_str(CSV_HEADER);
+    out.push_str(&with_strain_header(CSV_HEADER));
     out.push('\n');
     for r in results {
         let m = &r.metrics;
         let _ = writeln!(
             out,
-            "{},{},{},{},{:.3},{:.4},{:.4},{:.4},{},{},{:.3}",
+            "{},{},{},{},{:.3},{:.4},{:.4},{:.4},{},{},{:.3},{}",
             csv_field(&r.controller),
             csv_field(&r.layout),
             r.start,
@@ -33,7 +33,8 @@ pub fn results_csv(results: &[TrialResult<Displacement>]) -> String {
             m.forward_bl_min,
             m.self_contacts,
             m.mode_switches,
-            m.directional_share
+            m.directional_share,
+            r.strain.csv_row()
         );
     }
     out
@@ -117,6 +118,7 @@ pub fn summary_markdown(
          with at least one window in a directional mode. Definitions: docs/lab.md."
     );
     s.push_str(&calibrations_markdown(ctx));
+    s.push_str(&crate::lab::report::strain_markdown(results));
     let _ = writeln!(s, "\nPer trial: `results.csv`.");
     if !ctx.plots.is_empty() {
         s.push_str("\nPlots:\n\n");

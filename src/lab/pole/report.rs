@@ -7,7 +7,7 @@ use std::fmt::Write as _;
 use super::PoleClimb;
 use super::metrics::Outcome;
 use crate::lab::metrics::mean_sd_median;
-use crate::lab::report::{SummaryContext, csv_field};
+use crate::lab::report::{SummaryContext, csv_field, with_strain_header};
 use crate::lab::runner::{TrialResult, controller_names};
 
 /// The CSV header; one row per trial follows in plan order.
@@ -17,13 +17,13 @@ climb_per_cycle_m,slips,slid_m,grip_mean_nm,changes_passed";
 /// `results.csv` as text.
 pub fn results_csv(results: &[TrialResult<PoleClimb>]) -> String {
     let mut out = String::with_capacity(100 * (results.len() + 1));
-    out.push_str(CSV_HEADER);
+    out.push_str(&with_strain_header(CSV_HEADER));
     out.push('\n');
     for r in results {
         let m = &r.metrics;
         let _ = writeln!(
             out,
-            "{},{},{},{},{},{:.2},{},{:.3},{:.4},{},{:.3},{:.3},{}",
+            "{},{},{},{},{},{:.2},{},{:.3},{:.4},{},{:.3},{:.3},{},{}",
             csv_field(&r.controller),
             csv_field(&r.layout),
             r.start,
@@ -36,7 +36,8 @@ pub fn results_csv(results: &[TrialResult<PoleClimb>]) -> String {
             m.slips,
             m.slid_m,
             m.grip_mean_nm,
-            m.changes_passed
+            m.changes_passed,
+            r.strain.csv_row()
         );
     }
     out
@@ -179,6 +180,7 @@ pub fn summary_markdown(
     }
     s.push_str("\nThe poles:\n\n");
     s.push_str(&poles_table(designs));
+    s.push_str(&crate::lab::report::strain_markdown(results));
     let _ = writeln!(s, "\nPer trial: `results.csv`.");
     if !ctx.plots.is_empty() {
         s.push_str("\nPlots:\n\n");

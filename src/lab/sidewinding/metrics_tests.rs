@@ -61,6 +61,7 @@ fn record(at: f64, through: bool, rev_s: Option<f64>) -> (Fence, TrialRecord) {
         self_contacts: 0,
         heights_m: Vec::new(),
         windows: Vec::new(),
+        strain: Default::default(),
     };
     (fence, rec)
 }

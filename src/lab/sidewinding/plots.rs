@@ -331,6 +331,7 @@ mod tests {
             self_contacts: 0,
             heights_m: Vec::new(),
             windows: Vec::new(),
+            strain: Default::default(),
         }
     }
 

@@ -7,7 +7,7 @@ use std::fmt::Write as _;
 
 use super::SidewindingPegs;
 use super::metrics::summarise;
-use crate::lab::report::{SummaryContext, csv_field};
+use crate::lab::report::{SummaryContext, csv_field, with_strain_header};
 use crate::lab::runner::TrialResult;
 
 /// The CSV header; one row per trial follows in plan order.
@@ -22,13 +22,13 @@ fn opt(v: Option<usize>) -> String {
 /// `results.csv` as text.
 pub fn results_csv(results: &[TrialResult<SidewindingPegs>]) -> String {
     let mut out = String::with_capacity(120 * (results.len() + 1));
-    out.push_str(CSV_HEADER);
+    out.push_str(&with_strain_header(CSV_HEADER));
     out.push('\n');
     for r in results {
         let m = &r.metrics;
         let _ = writeln!(
             out,
-            "{},{},{},{},{},{:.2},{},{},{},{:.3},{},{:.2},{:.2},{:.3},{:.3},{:.3},{:.3},{}",
+            "{},{},{},{},{},{:.2},{},{},{},{:.3},{},{:.2},{:.2},{:.3},{:.3},{:.3},{:.3},{},{}",
             csv_field(&r.controller),
             csv_field(&r.layout),
             r.start,
@@ -46,7 +46,8 @@ pub fn results_csv(results: &[TrialResult<SidewindingPegs>]) -> String {
             m.estimate_error_mean_rad,
             m.estimate_error_max_rad,
             m.progress_m,
-            m.self_contacts
+            m.self_contacts,
+            r.strain.csv_row()
         );
     }
     out
@@ -116,6 +117,7 @@ pub fn summary_markdown(results: &[TrialResult<SidewindingPegs>], ctx: &SummaryC
          heading estimate against the true heading low-passed alike, aligned at the first \
          estimate. Mean ± sample sd. Definitions: docs/lab.md."
     );
+    s.push_str(&crate::lab::report::strain_markdown(results));
     let _ = writeln!(s, "\nPer trial: `results.csv`.");
     if !ctx.plots.is_empty() {
         s.push_str("\nPlots:\n\n");

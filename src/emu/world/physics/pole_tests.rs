@@ -265,6 +265,7 @@ fn squeeze_on_the_pole(squeeze: f64) -> (f64, f64, f64, f64) {
         min: 0.5 * r0,
         max: 1.5 * shape.k(),
         bias_force: squeeze,
+        max_rate: f64::INFINITY,
     };
     let (mut plant, _) = coiled(0.10, 0.006, 0.5, quiet(N));
     let mut state = ParamState::default();
