@@ -1,6 +1,6 @@
 //! snaked: the control daemon. `snaked --emulated` runs it against an in-process
 //! emulated snake; otherwise it discovers the modules on the network.
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use clap::{Parser, ValueEnum};
@@ -86,6 +86,13 @@ fn main() -> ExitCode {
         foxglove: args.foxglove,
     };
     daemon::apply_overrides(&mut cfg, &overrides);
+    // The command line may change what the file said (a TCP port, a world): check the
+    // result, so that --check-config refuses what the daemon would.
+    let label = args.config.as_deref().unwrap_or(Path::new("the defaults"));
+    if let Err(e) = cfg.validate(label) {
+        eprintln!("snaked: bad configuration (with the command line's overrides): {e}");
+        return ExitCode::from(2);
+    }
     if args.check_config {
         println!("{cfg:#?}");
         return ExitCode::SUCCESS;
