@@ -22,6 +22,7 @@ pub mod emu;
 pub mod estimation;
 pub mod gait;
 pub mod lab;
+pub mod num;
 pub mod protocol;
 pub mod record;
 pub mod rt;

@@ -58,9 +58,16 @@ fn check_config_finds_cross_field_and_named_file_errors() {
         dir.path().display()
     );
     let readable_key = format!("[network]\nkey_file = \"{}\"\n", open_key.display());
+    // Issue 25: the daemon refuses a token file every user can read when it starts.
+    let readable_token = format!(
+        "[control]\ntcp_port = 7878\ntcp_token_file = \"{}\"\n",
+        open_key.display()
+    );
     for (text, key) in [
         (missing_key.as_str(), "network.key_file"),
         (readable_key.as_str(), "network.key_file"),
+        (readable_token.as_str(), "control.tcp_token_file"),
+        ("[failsafe]\nlimp_after_s = 0.0\n", "failsafe.limp_after_s"),
         (
             "[network]\nfeedback_rate_hz = 100.0\ncommand_lifetime_s = 0.002\n",
             "network.command_lifetime_s",
@@ -98,6 +105,20 @@ fn check_config_finds_cross_field_and_named_file_errors() {
         assert_eq!(out.status.code(), Some(2), "{text}: {err}");
         assert!(err.contains("c.toml") && err.contains(key), "{text}: {err}");
     }
+}
+
+/// The command line's overrides are checked too: a TCP port without a token file would
+/// stop the daemon, so `--check-config` refuses it.
+#[test]
+fn check_config_checks_the_command_line_s_overrides() {
+    let out = Command::new(exe("snaked"))
+        .args(["--check-config", "--tcp-port", "7878"])
+        .env("RUST_LOG", "off")
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("control.tcp_token_file"), "{err}");
 }
 
 #[test]
@@ -200,6 +221,66 @@ fn emulated_daemon_runs_switches_and_stops_safely() {
         "exit 0 after the safe stop"
     );
     assert!(!sock.exists(), "socket removed");
+}
+
+/// Issue 25: a calibration in flight when the daemon is told to stop is answered with
+/// the documented -32002 (shutting down) before the connection closes, not cut off.
+#[test]
+fn a_calibration_in_flight_at_sigterm_is_refused_not_cut_off() {
+    use std::io::{BufRead, BufReader, Write};
+    let dir = tempfile::tempdir().unwrap();
+    let sock = dir.path().join("s.sock");
+    let cfg = dir.path().join("dc.toml");
+    std::fs::write(
+        &cfg,
+        // No shutdown hold: the loop is gone within two cycles, before the calibration
+        // polls it again; the server must still answer before it closes.
+        "[failsafe]\nshutdown_hold_s = 0.0\n[gait]\ninitial = \"slithering\"\n\
+         [gait.controllers.slithering]\ncontroller = \"dc_switching\"\n",
+    )
+    .unwrap();
+    let mut d = Proc::spawn(
+        "snaked",
+        &exe("snaked"),
+        &[
+            "--emulated".into(),
+            "--config".into(),
+            cfg.display().to_string(),
+            "--socket".into(),
+            sock.display().to_string(),
+        ],
+    );
+    let mut c = Client::connect(&sock, Duration::from_secs(20));
+    c.wait_status(Duration::from_secs(20), "the controller driving", |s| {
+        s["controller"]["preset"] == "dc_switching" && s["controller"]["state"] == "engaged"
+    });
+    let mut calib = std::os::unix::net::UnixStream::connect(&sock).unwrap();
+    calib
+        .set_read_timeout(Some(Duration::from_secs(20)))
+        .unwrap();
+    writeln!(
+        calib,
+        r#"{{"id":7,"method":"controller.calibrate","params":{{"seconds":60}}}}"#
+    )
+    .unwrap();
+    c.wait_status(Duration::from_secs(20), "calibrating", |s| {
+        s["controller"]["signals"]["calibration"] == 1.0
+    });
+    d.signal(libc::SIGTERM);
+    let mut line = String::new();
+    let n = BufReader::new(calib).read_line(&mut line).unwrap();
+    assert!(n > 0, "the connection closed without an answer");
+    let answer: serde_json::Value = serde_json::from_str(&line).unwrap();
+    assert_eq!(answer["id"], 7, "{answer}");
+    assert_eq!(answer["error"]["code"], -32002, "{answer}");
+    assert!(
+        answer["error"]["message"]
+            .as_str()
+            .unwrap()
+            .contains("shutting down"),
+        "{answer}"
+    );
+    assert!(d.wait(Duration::from_secs(20)).success());
 }
 
 /// The service manager's view: READY once the loop turns, watchdog pings while it

@@ -4,21 +4,17 @@
 mod socket_support;
 
 use std::process::Command;
-use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
 use serde_json::{Value, json};
 use snaked::bus::echo::EchoBus;
 use snaked::control::api::code;
 use snaked::control::client::{Client, Endpoint};
-use snaked::control::{BusKind, DaemonInfo, LoopHandle, Pacing, RunningServer, ServerConfig};
 use snaked::gait::{GaitKind, GaitTable};
 use snaked::rt::harness::{PERIOD_NS, echo_harness_on};
 use snaked::rt::messages::LoopRequest;
 use snaked::safety::failsafe::FailsafeConfig;
-use socket_support::{Harness, error_code, error_message, raw};
+use socket_support::{Harness, RealLoop, error_code, error_message, raw, serve_real_loop};
 
 fn call(c: &mut Client, method: &str, params: Value) -> Value {
     let line = json!({"id": 1, "method": method, "params": params}).to_string();
@@ -202,28 +198,6 @@ fn controller_set_is_validated_built_off_the_loop_and_sent() {
     assert_eq!(got["result"]["controller"]["preset"], "a", "{got}");
 }
 
-/// The real loop over an echo bus (torques against the bend at every other lateral
-/// joint), stepped about ten times faster than real time on its own thread.
-struct RealLoop {
-    stop: Arc<AtomicBool>,
-    thread: Option<JoinHandle<()>>,
-    server: Option<RunningServer>,
-    path: std::path::PathBuf,
-    _dir: tempfile::TempDir,
-}
-
-impl Drop for RealLoop {
-    fn drop(&mut self) {
-        if let Some(s) = self.server.take() {
-            s.shutdown();
-        }
-        self.stop.store(true, Ordering::Relaxed);
-        if let Some(t) = self.thread.take() {
-            t.join().unwrap();
-        }
-    }
-}
-
 fn pegs(i: usize, position_rad: f32) -> f32 {
     if i.is_multiple_of(4) && position_rad.abs() > 0.05 {
         2.0 * position_rad.signum()
@@ -232,6 +206,8 @@ fn pegs(i: usize, position_rad: f32) -> f32 {
     }
 }
 
+/// The real loop over an echo bus (torques against the bend at every other lateral
+/// joint), stepped about ten times faster than real time on its own thread.
 fn real_loop() -> RealLoop {
     let mut table = GaitTable::default();
     table.get_mut(GaitKind::Slithering).temporal_freq_rad_s = 3.0;
@@ -243,49 +219,12 @@ fn real_loop() -> RealLoop {
         false,
         FailsafeConfig::default(),
     );
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("snaked.sock");
-    let handle = LoopHandle {
-        requests: h.requests.clone(),
-        acks: h.acks.clone(),
-        telemetry: h.telemetry.clone(),
-        info: DaemonInfo {
-            version: "test".into(),
-            module_count: 18,
-            module_names: vec![],
-            loop_rate_hz: 1000.0,
-            bus: BusKind::Emulated,
-            pacing: Pacing::Lockstep,
-        },
-        layout: h.layout.clone(),
-        retired: h.retired.clone(),
-        catalog: h.catalog.clone(),
-    };
-    let cfg = ServerConfig {
-        unix_path: Some(path.clone()),
-        ..ServerConfig::default()
-    };
-    let server = snaked::control::start(cfg, handle).unwrap();
-    let stop = Arc::new(AtomicBool::new(false));
-    let mut control = h.control;
-    let thread = {
-        let stop = stop.clone();
-        std::thread::spawn(move || {
-            while !stop.load(Ordering::Relaxed) {
-                for _ in 0..10 {
-                    control.step();
-                }
-                std::thread::sleep(Duration::from_millis(1));
-            }
-        })
-    };
-    RealLoop {
-        stop,
-        thread: Some(thread),
-        server: Some(server),
-        path,
-        _dir: dir,
-    }
+    serve_real_loop(h, |control| {
+        for _ in 0..10 {
+            control.step();
+        }
+        std::thread::sleep(Duration::from_millis(1));
+    })
 }
 
 /// `status` once `ok` holds for it (or the last one after 30 s).
@@ -560,6 +499,40 @@ fn a_controller_is_calibrated_through_the_socket_and_snakectl() {
     assert!(text.contains("cleared"), "{text}");
     let s = status_when(&mut c, |s| s["controller"]["signals"]["calibration"] == 0.0);
     assert_eq!(s["controller"]["signals"]["calibration"], 0.0, "{s}");
+}
+
+/// Issue 25: the server shutting down while a calibration waits answers it with the
+/// documented -32002 before the connection closes (the loop itself still runs here).
+#[test]
+fn a_calibration_waiting_when_the_server_shuts_down_is_refused_not_cut_off() {
+    let mut l = real_loop();
+    let mut c = Client::connect(
+        &Endpoint::Unix(l.path.clone()),
+        Some(Duration::from_secs(20)),
+    )
+    .unwrap();
+    c.call(
+        "controller.set",
+        Some(json!({"gait": "slithering", "controller": "dc_switching"})),
+    )
+    .unwrap();
+    status_when(&mut c, |s| {
+        s["controller"]["preset"] == "dc_switching" && s["controller"]["state"] == "engaged"
+    });
+    let mut waiting = Client::connect(
+        &Endpoint::Unix(l.path.clone()),
+        Some(Duration::from_secs(20)),
+    )
+    .unwrap();
+    waiting
+        .send_line(r#"{"id":3,"method":"controller.calibrate","params":{"seconds":60}}"#)
+        .unwrap();
+    status_when(&mut c, |s| s["controller"]["signals"]["calibration"] == 1.0);
+    l.server.take().unwrap().shutdown();
+    let answer = waiting.next_message().expect("answered before the close");
+    assert_eq!(answer["id"], 3, "{answer}");
+    assert_eq!(error_code(&answer), code::REFUSED, "{answer}");
+    assert!(error_message(&answer).contains("shutting down"), "{answer}");
 }
 
 #[test]

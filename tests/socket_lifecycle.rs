@@ -7,7 +7,7 @@ use std::time::{Duration, Instant};
 use snaked::control::api::code;
 use snaked::control::client::{Client, ClientError, Endpoint};
 use snaked::control::{ServerConfig, ServerError};
-use socket_support::{Harness, LoopSpec, error_code, fake_loop};
+use socket_support::{Harness, LoopSpec, error_code, fake_loop, serve_real_loop};
 
 fn connect(path: &std::path::Path) -> Client {
     Client::connect(
@@ -345,4 +345,75 @@ fn an_untrusted_socket_directory_is_refused() {
     }
     let e = start(&theirs).err().expect("another user's: refused");
     assert!(e.to_string().contains("owned by uid 65534"), "{e}");
+}
+
+/// Issue 25: with the smallest request queue the configuration accepts
+/// (`control.channel_capacity = 8`, the loop's requests per cycle) and the real loop
+/// stepped as fast as it runs, a flood of acting requests from many connections gets
+/// an answer for every request: applied, busy or refused, never a timeout, and as many
+/// "applied" answers as the loop applied. Counted, not timed.
+#[test]
+fn a_flood_at_the_smallest_queue_answers_every_applied_request() {
+    use snaked::bus::echo::EchoBus;
+    use snaked::gait::{GaitKind, GaitTable};
+    use snaked::rt::harness::{PERIOD_NS, echo_harness_sized};
+    use snaked::safety::failsafe::FailsafeConfig;
+
+    const CLIENTS: usize = 24;
+    const EACH: usize = 150;
+    let capacity = snaked::rt::control_loop::MAX_REQUESTS_PER_CYCLE;
+    let h = echo_harness_sized(
+        EchoBus::new(8, PERIOD_NS),
+        GaitTable::default(),
+        GaitKind::Slithering,
+        false,
+        FailsafeConfig::default(),
+        capacity,
+    );
+    // The loop back to back: acks come as fast as the loop can make them.
+    let l = serve_real_loop(h, |control| {
+        control.step();
+    });
+    let path = l.path.clone();
+    let flooders: Vec<_> = (0..CLIENTS)
+        .map(|_| {
+            let mut c = connect(&path);
+            std::thread::spawn(move || {
+                let mut counts = [0usize; 4]; // applied, busy, refused, timed out
+                for _ in 0..EACH {
+                    let slot = match c.call("hold", None) {
+                        Ok(_) => 0,
+                        Err(ClientError::Rpc(e)) if e.code == code::BUSY => 1,
+                        Err(ClientError::Rpc(e)) if e.code == code::REFUSED => 2,
+                        Err(ClientError::Rpc(e)) if e.code == code::LOOP_TIMEOUT => 3,
+                        Err(e) => panic!("{e}"),
+                    };
+                    counts[slot] += 1;
+                    if slot == 1 {
+                        // Busy: try again, as a client would, without spinning.
+                        std::thread::sleep(Duration::from_millis(1));
+                    }
+                }
+                counts
+            })
+        })
+        .collect();
+    let mut total = [0usize; 4];
+    for f in flooders {
+        for (t, n) in total.iter_mut().zip(f.join().unwrap()) {
+            *t += n;
+        }
+    }
+    let applied = connect(&path).call("status", None).unwrap()["requests_applied"]
+        .as_u64()
+        .unwrap();
+    drop(l);
+    let [ok, busy, refused, timed_out] = total;
+    println!(
+        "{ok} applied, {busy} busy, {refused} refused, {timed_out} timed out; \
+         the loop applied {applied}"
+    );
+    assert_eq!(ok + busy + refused + timed_out, CLIENTS * EACH);
+    assert_eq!(timed_out, 0, "every request the loop took is answered");
+    assert_eq!(ok as u64, applied, "every applied request was told so");
 }

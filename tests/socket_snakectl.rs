@@ -189,3 +189,33 @@ fn snakectl_over_tcp_sends_the_token() {
     assert_eq!(wrong.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&wrong.stderr).contains("wrong token"));
 }
+
+/// Issue 25: with every client slot held, `snakectl estop` is served over the limit. The
+/// server's greeting (`id` null, -32004) is not the answer: the stop is applied, snakectl
+/// says so and exits 0, and the greeting is shown on stderr.
+#[test]
+fn an_estop_over_the_client_limit_reports_success_and_the_notice() {
+    let h = Harness::new(socket_support::LoopSpec::default(), |c| c.max_clients = 2);
+    // Subscribers are never evicted: both slots stay taken however long this takes.
+    let holders: Vec<_> = (0..2)
+        .map(|_| {
+            let mut c = h.client();
+            c.call(
+                "telemetry.subscribe",
+                Some(serde_json::json!({"rate_hz": 1})),
+            )
+            .unwrap();
+            c
+        })
+        .collect();
+    let o = snakectl(&h, &["estop"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(0), "{err}");
+    assert_eq!(String::from_utf8_lossy(&o.stdout).trim(), "ok");
+    assert!(
+        err.contains("too many clients") && err.contains("estop") && err.contains("-32004"),
+        "the greeting is shown: {err}"
+    );
+    assert_eq!(h.fake.seen(), [LoopRequest::EStop]);
+    drop(holders);
+}

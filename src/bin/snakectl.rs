@@ -180,12 +180,29 @@ fn run(cli: &Cli) -> Result<(), Failure> {
     }
     let token = tcp_token(cli)?;
     let mut client = Client::connect(&endpoint(cli), Some(timeout))?;
+    let outcome = converse(cli, &mut client, token, method, params);
+    // What the daemon said on its own (e.g. that it serves this connection over its
+    // client limit for one stop): the operator sees it, whatever came of the call.
+    for n in client.notices() {
+        eprintln!("snakectl: snaked says: {} ({})", n.message, n.code);
+    }
+    outcome
+}
+
+/// Authenticate if asked, call the method and print its result.
+fn converse(
+    cli: &Cli,
+    client: &mut Client,
+    token: Option<String>,
+    method: &str,
+    params: Option<Value>,
+) -> Result<(), Failure> {
     if let Some(token) = token {
         client.call("auth", Some(json!({ "token": token })))?;
     }
     let result = client.call(method, params)?;
     match &cli.cmd {
-        Cmd::Watch { count, .. } => return watch(&mut client, cli.json, *count),
+        Cmd::Watch { count, .. } => return watch(client, cli.json, *count),
         Cmd::Call { .. } if !cli.json => println!("{}", pretty(&result)),
         _ if cli.json => println!("{result}"),
         cmd => print_human(cmd, &result),

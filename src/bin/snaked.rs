@@ -95,6 +95,13 @@ fn main() -> ExitCode {
         foxglove: args.foxglove,
     };
     daemon::apply_overrides(&mut cfg, &overrides);
+    // The command line may change what the file said (a TCP port, a world): check the
+    // result, so that --check-config refuses what the daemon would.
+    let label = args.config.as_deref().unwrap_or(Path::new("the defaults"));
+    if let Err(e) = cfg.validate(label) {
+        eprintln!("snaked: bad configuration (with the command line's overrides): {e}");
+        return ExitCode::from(2);
+    }
     if args.check_config {
         println!("{cfg:#?}");
         return ExitCode::SUCCESS;

@@ -11,6 +11,7 @@ use serde_json::Value;
 use serde_json::value::RawValue;
 
 use crate::gait::{GaitKind, ParamPatch};
+use crate::num::Num;
 
 /// Error codes (JSON-RPC 2.0 style). See `docs/control-socket.md`.
 pub mod code {
@@ -228,7 +229,10 @@ impl Params {
     pub fn take_f64_in(&mut self, name: &str, min: f64, max: f64) -> Result<Option<f64>, RpcError> {
         match self.take_f64(name)? {
             Some(v) if !(min..=max).contains(&v) => Err(RpcError::invalid_params(format!(
-                "`{name}` = {v} is out of range [{min}, {max}]"
+                "`{name}` = {} is out of range [{}, {}]",
+                Num(v),
+                Num(min),
+                Num(max)
             ))),
             other => Ok(other),
         }

@@ -7,7 +7,7 @@ use std::time::Duration;
 
 use serde_json::{Value, json};
 
-use super::api::RpcError;
+use super::api::{RpcError, code};
 
 /// Where the daemon listens.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -48,12 +48,14 @@ pub enum ClientError {
 }
 
 /// One connection. Requests are answered in order; stream messages (no `id`)
-/// that arrive while `call` waits for an answer are skipped.
+/// that arrive while `call` waits for an answer are skipped, and the server's notices
+/// (`id` null, -32004: over the client limit, idle) are kept in [`Client::notices`].
 pub struct Client {
     reader: BufReader<Box<dyn io::Read + Send>>,
     writer: Box<dyn Write + Send>,
     next_id: u64,
     timeout: Option<Duration>,
+    notices: Vec<RpcError>,
 }
 
 impl Client {
@@ -81,6 +83,7 @@ impl Client {
             writer,
             next_id: 1,
             timeout,
+            notices: Vec::new(),
         })
     }
 
@@ -95,10 +98,21 @@ impl Client {
         self.send_line(&req.to_string())?;
         loop {
             let msg = self.next_message()?;
-            if msg.get("id").is_none() {
+            let Some(answer_id) = msg.get("id") else {
                 continue; // A stream message.
+            };
+            if answer_id.is_null() {
+                // The server could not read our id (a bad line: this is our answer), or
+                // it speaks on its own (-32004: over the limit, idle): a notice, and
+                // the answer still follows (a stop over the limit is served).
+                let e = wire_error(&msg)?;
+                if e.code == code::TOO_MANY_CLIENTS {
+                    self.notices.push(e);
+                    continue;
+                }
+                return Err(ClientError::Rpc(e));
             }
-            if msg["id"] != json!(id) {
+            if *answer_id != json!(id) {
                 return Err(ClientError::Protocol(format!(
                     "answer for another id: {msg}"
                 )));
@@ -106,11 +120,14 @@ impl Client {
             if let Some(result) = msg.get("result") {
                 return Ok(result.clone());
             }
-            return match serde_json::from_value::<RpcErrorWire>(msg["error"].clone()) {
-                Ok(e) => Err(ClientError::Rpc(RpcError::new(e.code, e.message))),
-                Err(_) => Err(ClientError::Protocol(msg.to_string())),
-            };
+            return Err(ClientError::Rpc(wire_error(&msg)?));
         }
+    }
+
+    /// What the server said on its own while calls waited (its -32004 notices), oldest
+    /// first.
+    pub fn notices(&self) -> &[RpcError] {
+        &self.notices
     }
 
     /// Send one raw line (a newline is appended).
@@ -146,3 +163,14 @@ struct RpcErrorWire {
     code: i64,
     message: String,
 }
+
+/// The `error` of an answer or notice.
+fn wire_error(msg: &Value) -> Result<RpcError, ClientError> {
+    serde_json::from_value::<RpcErrorWire>(msg["error"].clone())
+        .map(|e| RpcError::new(e.code, e.message))
+        .map_err(|_| ClientError::Protocol(msg.to_string()))
+}
+
+#[cfg(test)]
+#[path = "client_tests.rs"]
+mod tests;

@@ -8,7 +8,7 @@
 use std::sync::Arc;
 
 use tokio::io::{AsyncRead, AsyncWrite, AsyncWriteExt, BufWriter};
-use tokio::sync::mpsc;
+use tokio::sync::{mpsc, watch};
 
 use super::api::{self, RpcError, code};
 use super::clients::Client;
@@ -32,15 +32,18 @@ enum Wake {
     Evicted,
     /// No request and no stream for the idle timeout.
     Idle,
+    /// The server shuts down.
+    Closing,
 }
 
-/// Serve one client until it closes, is evicted or idles out (or the runtime shuts
-/// down).
+/// Serve one client until it closes, is evicted or idles out, or the server shuts
+/// down (after answering the request in hand).
 pub(crate) async fn serve<S>(
     stream: S,
     shared: Arc<Shared>,
     client: Arc<Client>,
     transport: super::server::Transport,
+    closing: watch::Receiver<bool>,
 ) where
     S: AsyncRead + AsyncWrite + Send + Unpin + 'static,
 {
@@ -48,7 +51,7 @@ pub(crate) async fn serve<S>(
     let (out, out_rx) = mpsc::channel::<String>(OUT_QUEUE);
     let writer = tokio::spawn(write_lines(write_half, out_rx));
     let mut reader = LineReader::new(read_half, shared.max_line_bytes);
-    let mut session = Session::new(out);
+    let mut session = Session::new(out, closing);
     session.set_authorized(transport == super::server::Transport::Unix);
     loop {
         let idle = shared.idle_timeout.filter(|_| !session.subscribed());
@@ -56,9 +59,11 @@ pub(crate) async fn serve<S>(
             line = reader.next() => Wake::Line(line),
             () = client.evicted.notified() => Wake::Evicted,
             () = sleep_or_never(idle) => Wake::Idle,
+            () = session.closing() => Wake::Closing,
         };
         let line = match wake {
             Wake::Line(line) => line,
+            Wake::Closing => break,
             Wake::Evicted | Wake::Idle => {
                 let why = if matches!(wake, Wake::Evicted) {
                     "closing: this connection was idle while the client limit was reached"
@@ -88,8 +93,11 @@ pub(crate) async fn serve<S>(
             Ok(Line::Eof) => {
                 // Half-closed (`echo '...subscribe...' | socat`): a subscriber keeps
                 // its stream until the peer closes completely and the writer fails.
-                if let Some(stream) = session.take_stream() {
-                    let _ = stream.await;
+                if let Some(mut stream) = session.take_stream() {
+                    tokio::select! {
+                        _ = &mut stream => {}
+                        () = session.closing() => stream.abort(),
+                    }
                 }
                 break;
             }
@@ -119,8 +127,12 @@ async fn sleep_or_never(d: Option<std::time::Duration>) {
 /// A connection beyond the client limit: told so at once, then served for one stop
 /// request (`estop`, `limp`, `hold`) if it sends one within two seconds, then closed.
 /// An e-stop always gets through, however many connections hold the slots.
-pub(crate) async fn serve_over_limit<S>(stream: S, shared: Arc<Shared>, max: usize)
-where
+pub(crate) async fn serve_over_limit<S>(
+    stream: S,
+    shared: Arc<Shared>,
+    max: usize,
+    closing: watch::Receiver<bool>,
+) where
     S: AsyncRead + AsyncWrite + Send + Unpin + 'static,
 {
     let (read_half, mut write_half) = tokio::io::split(stream);
@@ -145,7 +157,7 @@ where
             Err(bad) => api::error_line(&bad.id, &bad.error),
             Ok(req) if STOP_METHODS.contains(&req.method.as_str()) => {
                 let (out, _unused) = mpsc::channel::<String>(1);
-                let mut session = Session::new(out);
+                let mut session = Session::new(out, closing);
                 session.set_authorized(true); // Unix only: see `server::admit`.
                 match methods::dispatch(&shared, &mut session, &req.method, req.params).await {
                     Ok(result) => api::result_line(&req.id, &result),

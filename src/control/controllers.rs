@@ -6,6 +6,7 @@
 use serde_json::{Map, Value, json};
 
 use super::api::{RpcError, code};
+use super::session::Session;
 use super::shared::Shared;
 use crate::controller::ControllerCommand;
 use crate::controller::catalog::{Catalog, ControllerInfo, NO_CONTROLLER};
@@ -15,8 +16,9 @@ use crate::controllers::REGISTRY;
 use crate::gait::{BodyLayout, GaitKind, GaitParams, ParamPatch};
 use crate::rt::controller_slots::Engagement;
 use crate::rt::controller_slots::{ControllerTelemetry, Installed};
-use crate::rt::messages::LoopRequest;
+use crate::rt::messages::{LoopRequest, Rejection};
 use crate::rt::telemetry::Snapshot;
+use crate::safety::failsafe::Reason;
 
 /// `controller.list`: per gait, every controller that runs it with its presets,
 /// default configuration and report names, and which one is installed.
@@ -150,9 +152,11 @@ pub(crate) enum Calibration {
 /// `controller.calibrate`: starts `gait`'s controller's calibration and answers when it
 /// has finished (its `calibration` signal reads 2) with the controller's signals, or
 /// clears it. The controller measures only while it drives, so the gait must be the
-/// one running; the answer says so when it is not.
+/// one running; the answer says so when it is not, and when the daemon shuts down
+/// meanwhile (`session`: the server's shutdown).
 pub(crate) async fn calibrate(
     shared: &Shared,
+    session: &Session,
     gait: Option<GaitKind>,
     what: Calibration,
 ) -> Result<Value, RpcError> {
@@ -194,9 +198,25 @@ pub(crate) async fn calibrate(
     // Wall time: the loop runs in real time; a held loop or another gait makes no progress.
     let deadline =
         tokio::time::Instant::now() + std::time::Duration::from_secs_f64(seconds * 1.5 + 5.0);
+    let shutting_down = || {
+        RpcError::new(
+            code::REFUSED,
+            format!(
+                "refused: {} (the calibration of {} did not finish)",
+                Rejection::ShuttingDown,
+                gait.name()
+            ),
+        )
+    };
     loop {
-        tokio::time::sleep(std::time::Duration::from_millis(50)).await;
+        tokio::select! {
+            () = tokio::time::sleep(std::time::Duration::from_millis(50)) => {}
+            () = session.closing() => return Err(shutting_down()),
+        }
         let snap = shared.telemetry.latest();
+        if snap.reason == Reason::Shutdown {
+            return Err(shutting_down());
+        }
         let c = &snap.controller;
         if c.installed[gait.index()] != id {
             return Err(RpcError::new(

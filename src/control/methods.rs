@@ -129,7 +129,7 @@ pub(crate) async fn dispatch(
                 (true, None) => controllers::Calibration::Clear,
                 (false, s) => controllers::Calibration::Run(s),
             };
-            controllers::calibrate(shared, gait, what).await
+            controllers::calibrate(shared, session, gait, what).await
         }
         "controller.heading" => {
             let gait = p.take_gait("gait")?;

@@ -4,8 +4,14 @@
 //! sent (so an ack can never arrive first), then goes out with `try_send`: a full
 //! channel is an immediate "busy", never a wait. A plain thread blocks on the
 //! loop's crossbeam ack channel and completes the oneshot with the same ticket.
+//!
+//! The loop answers with `try_send` and drops an answer that finds the ack channel
+//! full, so the router keeps at most that channel's capacity of requests in flight
+//! (sent, answer not yet taken off the channel); one more is "busy". The loop answers
+//! each request once, so the channel can never hold more answers than are in flight,
+//! and none is ever dropped, however late this thread runs.
 use std::collections::HashMap;
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 use std::time::Duration;
@@ -25,6 +31,8 @@ const STOP_POLL: Duration = Duration::from_millis(50);
 pub(crate) struct AckRouter {
     requests: Sender<Envelope>,
     pending: Pending,
+    /// Requests sent whose answer has not left the ack channel yet.
+    in_flight: Arc<InFlight>,
     next_ticket: AtomicU64,
     ack_timeout: Duration,
     stop: Arc<AtomicBool>,
@@ -51,6 +59,27 @@ fn lock(
     p.lock().unwrap_or_else(|e| e.into_inner())
 }
 
+/// A count of requests in flight, bounded by the ack channel's capacity.
+struct InFlight {
+    count: AtomicUsize,
+    max: usize,
+}
+
+impl InFlight {
+    /// Takes a place; `false` when all are taken.
+    fn enter(&self) -> bool {
+        self.count
+            .fetch_update(Ordering::AcqRel, Ordering::Acquire, |n| {
+                (n < self.max).then_some(n + 1)
+            })
+            .is_ok()
+    }
+
+    fn leave(&self) {
+        self.count.fetch_sub(1, Ordering::AcqRel);
+    }
+}
+
 impl AckRouter {
     pub(crate) fn start(
         requests: Sender<Envelope>,
@@ -59,16 +88,22 @@ impl AckRouter {
     ) -> std::io::Result<Self> {
         let pending: Pending = Arc::default();
         let stop = Arc::new(AtomicBool::new(false));
+        let in_flight = Arc::new(InFlight {
+            count: AtomicUsize::new(0),
+            max: acks.capacity().unwrap_or(usize::MAX),
+        });
         let thread = {
             let pending = pending.clone();
             let stop = stop.clone();
+            let in_flight = in_flight.clone();
             std::thread::Builder::new()
                 .name("snaked-ctl-acks".into())
-                .spawn(move || route_acks(&acks, &pending, &stop))?
+                .spawn(move || route_acks(&acks, &pending, &in_flight, &stop))?
         };
         Ok(Self {
             requests,
             pending,
+            in_flight,
             next_ticket: AtomicU64::new(1),
             ack_timeout,
             stop,
@@ -100,15 +135,18 @@ impl AckRouter {
             request,
             controller,
         };
+        if !self.in_flight.enter() {
+            return Err(busy());
+        }
         match self.requests.try_send(envelope) {
             Ok(()) => {}
-            Err(TrySendError::Full(_)) => {
-                return Err(RpcError::new(
-                    code::BUSY,
-                    "busy: the loop's request queue is full; try again",
-                ));
+            Err(e) => {
+                self.in_flight.leave();
+                return Err(match e {
+                    TrySendError::Full(_) => busy(),
+                    TrySendError::Disconnected(_) => not_running(),
+                });
             }
-            Err(TrySendError::Disconnected(_)) => return Err(not_running()),
         }
         match tokio::time::timeout(self.ack_timeout, rx).await {
             Ok(Ok(Ok(()))) => Ok(()),
@@ -143,6 +181,13 @@ impl Drop for AckRouter {
     }
 }
 
+fn busy() -> RpcError {
+    RpcError::new(
+        code::BUSY,
+        "busy: the loop's request queue is full; try again",
+    )
+}
+
 fn not_running() -> RpcError {
     RpcError::new(
         code::REFUSED,
@@ -153,10 +198,11 @@ fn not_running() -> RpcError {
     )
 }
 
-fn route_acks(acks: &Receiver<Ack>, pending: &Pending, stop: &AtomicBool) {
+fn route_acks(acks: &Receiver<Ack>, pending: &Pending, in_flight: &InFlight, stop: &AtomicBool) {
     while !stop.load(Ordering::Relaxed) {
         match acks.recv_timeout(STOP_POLL) {
             Ok(ack) => {
+                in_flight.leave();
                 // No entry: the requester timed out or left; the ack is dropped.
                 if let Some(tx) = lock(pending).remove(&ack.ticket) {
                     let _ = tx.send(ack.result);
@@ -230,6 +276,85 @@ mod tests {
             lock(&router.pending).is_empty(),
             "timed-out tickets are forgotten"
         );
+    }
+
+    /// Issue 25: the loop answers with `try_send` and drops an answer that finds the
+    /// ack channel full. The server never has more requests in flight (sent, answer not
+    /// yet routed) than that channel holds, so however late the router is, no answer is
+    /// dropped: a second wave while the first's answers wait is busy at once.
+    #[test]
+    fn no_answer_is_dropped_however_late_the_acks_are_routed() {
+        const CAP: usize = 8;
+        let (req_tx, req_rx) = crossbeam_channel::bounded::<Envelope>(CAP);
+        // The loop's ack channel, and a gate standing in for a router that runs late.
+        let (loop_tx, loop_rx) = crossbeam_channel::bounded::<Ack>(CAP);
+        let (fwd_tx, fwd_rx) = crossbeam_channel::bounded::<Ack>(CAP);
+        let router = AckRouter::start(req_tx, fwd_rx, Duration::from_secs(2)).unwrap();
+        let taken = Arc::new(AtomicU64::new(0));
+        let dropped = Arc::new(AtomicU64::new(0));
+        let fake = {
+            let (taken, dropped) = (taken.clone(), dropped.clone());
+            std::thread::spawn(move || {
+                for env in req_rx.iter() {
+                    taken.fetch_add(1, Ordering::SeqCst);
+                    let ack = Ack {
+                        ticket: env.ticket,
+                        result: Ok(()),
+                    };
+                    if loop_tx.try_send(ack).is_err() {
+                        dropped.fetch_add(1, Ordering::SeqCst);
+                    }
+                }
+            })
+        };
+        let open = Arc::new(AtomicBool::new(false));
+        let gate = {
+            let open = open.clone();
+            std::thread::spawn(move || {
+                while !open.load(Ordering::SeqCst) {
+                    std::thread::sleep(Duration::from_millis(1));
+                }
+                for ack in loop_rx.iter() {
+                    let _ = fwd_tx.send(ack);
+                }
+            })
+        };
+        let router = Arc::new(router);
+        let done = Arc::new(AtomicU64::new(0));
+        let results = rt().block_on(async {
+            let mut calls = tokio::task::JoinSet::new();
+            for wave in 1..=2u64 {
+                for _ in 0..CAP {
+                    let (r, done) = (router.clone(), done.clone());
+                    calls.spawn(async move {
+                        let result = r.call(LoopRequest::Hold).await;
+                        done.fetch_add(1, Ordering::SeqCst);
+                        result
+                    });
+                }
+                // Until each call of this wave is with the loop or answered.
+                let want = CAP as u64 * wave;
+                let deadline = tokio::time::Instant::now() + Duration::from_secs(5);
+                while taken.load(Ordering::SeqCst) + done.load(Ordering::SeqCst) < want
+                    && tokio::time::Instant::now() < deadline
+                {
+                    tokio::time::sleep(Duration::from_millis(1)).await;
+                }
+            }
+            open.store(true, Ordering::SeqCst);
+            calls.join_all().await
+        });
+        let answered = results.iter().filter(|r| r.is_ok()).count();
+        let busy = results
+            .iter()
+            .filter(|r| matches!(r, Err(e) if e.code == code::BUSY))
+            .count();
+        assert_eq!(dropped.load(Ordering::SeqCst), 0, "answers dropped");
+        assert_eq!(answered as u64, taken.load(Ordering::SeqCst), "{results:?}");
+        assert_eq!(answered + busy, 2 * CAP, "{results:?}");
+        drop(router);
+        fake.join().unwrap();
+        gate.join().unwrap();
     }
 
     #[test]

@@ -18,6 +18,11 @@ use super::router::AckRouter;
 use super::shared::Shared;
 use super::{LoopHandle, ServerConfig, conn};
 
+/// How long a shutdown waits for the connections to answer what they are doing and
+/// close (an answer the loop owes comes within its ack timeout, or at once when the
+/// loop has stopped).
+const CLOSE_GRACE: Duration = Duration::from_secs(1);
+
 /// Why the server could not start. Every variant names the path or port.
 #[derive(Debug, thiserror::Error)]
 pub enum ServerError {
@@ -81,8 +86,8 @@ impl RunningServer {
         self.tcp_addr
     }
 
-    /// Stop accepting, close every connection, remove the socket file. Waits for
-    /// the server's threads (a fraction of a second).
+    /// Stop accepting, let every connection answer the request in hand and close (at
+    /// most a second), remove the socket file.
     pub fn shutdown(mut self) {
         self.stop_now();
     }
@@ -165,6 +170,8 @@ pub fn start(cfg: ServerConfig, handle: LoopHandle) -> Result<RunningServer, Ser
         controller_change: tokio::sync::Mutex::new(()),
     });
     let clients = Clients::new(cfg.max_clients);
+    let (closing_tx, closing) = tokio::sync::watch::channel(false);
+    let mut accepts = Vec::new();
     {
         // Listeners must be registered with the runtime they will run on.
         let _enter = rt.enter();
@@ -174,20 +181,38 @@ pub fn start(cfg: ServerConfig, handle: LoopHandle) -> Result<RunningServer, Ser
                 what: "cannot register listener",
                 source,
             })?;
-            rt.spawn(accept_unix(l, shared.clone(), clients.clone()));
+            let accept = Accept {
+                shared: shared.clone(),
+                clients: clients.clone(),
+                closing: closing.clone(),
+            };
+            accepts.push(rt.spawn(accept_unix(l, accept)));
         }
         if let Some(l) = tcp {
             let port = cfg.tcp_port.unwrap_or_default();
             let l = TcpListener::from_std(l).map_err(|source| ServerError::Tcp { port, source })?;
-            rt.spawn(accept_tcp(l, shared.clone(), clients));
+            let accept = Accept {
+                shared: shared.clone(),
+                clients,
+                closing,
+            };
+            accepts.push(rt.spawn(accept_tcp(l, accept)));
         }
     }
     let (stop_tx, stop_rx) = tokio::sync::oneshot::channel::<()>();
     let thread = std::thread::Builder::new()
         .name("snaked-ctl".into())
         .spawn(move || {
-            let _ = rt.block_on(stop_rx);
-            // Drops every task: listeners and connections close here.
+            rt.block_on(async {
+                let _ = stop_rx.await;
+                accepts.iter().for_each(tokio::task::JoinHandle::abort);
+                // Every connection answers the request in hand (a calibration that
+                // waits is told the daemon shuts down) and closes; each holds a
+                // receiver until it has.
+                closing_tx.send_replace(true);
+                let _ = tokio::time::timeout(CLOSE_GRACE, closing_tx.closed()).await;
+            });
+            // Drops what is left: a connection still waiting past the grace.
             rt.shutdown_timeout(Duration::from_secs(1));
         })
         .map_err(ServerError::Runtime)?;
@@ -305,21 +330,29 @@ impl Drop for SocketFile {
     }
 }
 
-async fn accept_unix(l: UnixListener, shared: Arc<Shared>, clients: Arc<Clients>) {
+/// What an accept loop hands each connection.
+struct Accept {
+    shared: Arc<Shared>,
+    clients: Arc<Clients>,
+    /// Each connection holds a clone while it lives (see `start`'s shutdown).
+    closing: tokio::sync::watch::Receiver<bool>,
+}
+
+async fn accept_unix(l: UnixListener, a: Accept) {
     loop {
         match l.accept().await {
-            Ok((s, _)) => admit(s, &shared, &clients, Transport::Unix),
+            Ok((s, _)) => admit(s, &a, Transport::Unix),
             Err(e) => accept_failed(e).await,
         }
     }
 }
 
-async fn accept_tcp(l: TcpListener, shared: Arc<Shared>, clients: Arc<Clients>) {
+async fn accept_tcp(l: TcpListener, a: Accept) {
     loop {
         match l.accept().await {
             Ok((s, _)) => {
                 let _ = s.set_nodelay(true);
-                admit(s, &shared, &clients, Transport::Tcp);
+                admit(s, &a, Transport::Tcp);
             }
             Err(e) => accept_failed(e).await,
         }
@@ -340,15 +373,15 @@ pub(crate) enum Transport {
     Tcp,
 }
 
-fn admit<S>(stream: S, shared: &Arc<Shared>, clients: &Arc<Clients>, transport: Transport)
+fn admit<S>(stream: S, a: &Accept, transport: Transport)
 where
     S: AsyncRead + AsyncWrite + Send + Unpin + 'static,
 {
-    let shared = shared.clone();
+    let (shared, clients, closing) = (a.shared.clone(), &a.clients, a.closing.clone());
     match clients.admit() {
         Admission::Served(client, seat) => {
             tokio::spawn(async move {
-                conn::serve(stream, shared, client, transport).await;
+                conn::serve(stream, shared, client, transport, closing).await;
                 drop(seat);
             });
         }
@@ -360,7 +393,7 @@ where
         Admission::OverLimit(seat) => {
             let max = clients.max();
             tokio::spawn(async move {
-                conn::serve_over_limit(stream, shared, max).await;
+                conn::serve_over_limit(stream, shared, max, closing).await;
                 drop(seat);
             });
         }

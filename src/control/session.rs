@@ -3,7 +3,7 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Duration;
 
-use tokio::sync::mpsc;
+use tokio::sync::{mpsc, watch};
 use tokio::task::JoinHandle;
 use tokio::time::MissedTickBehavior;
 
@@ -22,17 +22,28 @@ pub(crate) struct Session {
     dropped: Arc<AtomicU64>,
     /// May call methods (Unix clients always; TCP clients after `auth`).
     authorized: bool,
+    /// True once the server shuts down. Held while the connection lives: the server
+    /// waits for every holder to go before it drops the connections.
+    closing: watch::Receiver<bool>,
 }
 
 impl Session {
-    pub(crate) fn new(out: mpsc::Sender<String>) -> Self {
+    pub(crate) fn new(out: mpsc::Sender<String>, closing: watch::Receiver<bool>) -> Self {
         Self {
             out,
             stream: None,
             pending_rate_hz: None,
             dropped: Arc::default(),
             authorized: false,
+            closing,
         }
+    }
+
+    /// Resolves once the server has begun to shut down.
+    pub(crate) async fn closing(&self) {
+        let mut rx = self.closing.clone();
+        // An error: the server is gone, which is closing too.
+        let _ = rx.wait_for(|closing| *closing).await;
     }
 
     pub(crate) fn authorized(&self) -> bool {

@@ -7,6 +7,7 @@ use serde::de::DeserializeOwned;
 use serde_json::Value;
 
 use super::interface::NominalMismatch;
+use crate::num::Num;
 
 /// Why a controller selection or configuration was refused.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -32,7 +33,7 @@ pub enum ConfigError {
     /// The JSON does not match the configuration's type (unknown field, wrong type).
     #[error("`{path}`: {reason}")]
     Field { path: String, reason: String },
-    #[error("`{field}` = {} is out of range [{}, {}]", num(*value), num(*min), num(*max))]
+    #[error("`{field}` = {} is out of range [{}, {}]", Num(*value), Num(*min), Num(*max))]
     OutOfRange {
         field: String,
         value: f64,
@@ -43,16 +44,6 @@ pub enum ConfigError {
     Invalid { field: String, reason: String },
     #[error(transparent)]
     Nominal(#[from] NominalMismatch),
-}
-
-/// A number as a person reads it: plain, or in exponent form when very large or small.
-fn num(x: f64) -> String {
-    let a = x.abs();
-    if a != 0.0 && a.is_finite() && !(1e-4..1e6).contains(&a) {
-        format!("{x:e}")
-    } else {
-        format!("{x}")
-    }
 }
 
 impl ConfigError {

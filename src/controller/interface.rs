@@ -9,6 +9,7 @@
 
 use super::report::ControllerReport;
 use crate::gait::{BodyLayout, GaitParams};
+use crate::num::Num;
 
 /// One module's inertial sensors, in the module's frame.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -75,7 +76,7 @@ pub struct Handover<'a> {
 /// A nominal parameter a controller cannot follow (built without allocating, so the
 /// loop can refuse a request with it).
 #[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
-#[error("the nominal {field} = {value} is outside the controller's range {}", range(*.min, *.max))]
+#[error("the nominal {field} = {} is outside the controller's range {}", Num(*.value), range(*.min, *.max))]
 pub struct NominalMismatch {
     pub field: &'static str,
     pub value: f64,
@@ -87,7 +88,7 @@ pub struct NominalMismatch {
 /// controller's reach, which can exceed it).
 fn range(min: f64, max: f64) -> String {
     if min <= max {
-        format!("[{min}, {max}]")
+        format!("[{}, {}]", Num(min), Num(max))
     } else {
         "(none: the controller's amplitude reach alone exceeds the joint limit; \
          lower its amplitude bound or turning reach)"

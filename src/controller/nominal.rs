@@ -65,7 +65,7 @@ pub fn within(field: &'static str, value: f64, min: f64, max: f64) -> Result<(),
 /// The lateral offset of `params` must leave room in the joints' range for a lateral
 /// amplitude of up to `reach_rad`.
 pub fn lateral_room(params: &GaitParams, reach_rad: f64) -> Result<(), NominalMismatch> {
-    let room = JOINT_LIMIT_RAD - reach_rad + 1e-12;
+    let room = JOINT_LIMIT_RAD - reach_rad;
     within("offset_lat_rad", params.offset_lat_rad, -room, room)
 }
 
@@ -87,5 +87,32 @@ mod tests {
         p.offset_lat_rad = 0.0;
         let e = lateral_room(&p, 1.8).unwrap_err().to_string();
         assert!(e.contains("exceeds the joint limit"), "{e}");
+    }
+
+    /// Issue 25: the room is exact: its printed end is accepted, the next double is not.
+    #[test]
+    fn the_offset_s_room_is_exact_and_printed_as_it_is() {
+        let mut p = GaitParams {
+            offset_lat_rad: 1.0,
+            ..GaitParams::default()
+        };
+        let e = lateral_room(&p, 1.2).unwrap_err();
+        assert_eq!(e.max, JOINT_LIMIT_RAD - 1.2);
+        let printed = e.to_string();
+        let max: f64 = printed
+            .rsplit(", ")
+            .next()
+            .unwrap()
+            .trim_end_matches(']')
+            .parse()
+            .unwrap();
+        assert_eq!(max, e.max, "{printed}");
+        p.offset_lat_rad = max;
+        assert!(lateral_room(&p, 1.2).is_ok());
+        p.offset_lat_rad = max.next_up();
+        assert!(lateral_room(&p, 1.2).is_err(), "one ulp beyond");
+        p.offset_lat_rad = 1e308;
+        let e = lateral_room(&p, 1.2).unwrap_err().to_string();
+        assert!(e.contains("1e308") && e.len() < 120, "{e}");
     }
 }

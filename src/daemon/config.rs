@@ -408,6 +408,71 @@ mod tests {
         assert!(err.to_string().contains("gait.blend_time_s"), "{err}");
     }
 
+    /// Issue 25: docs/failsafe.md's 1 ms minimum holds in the file too, a bound refuses
+    /// the very next double beyond it, and a message prints a huge value readably.
+    #[test]
+    fn bounds_are_exact_documented_and_readable() {
+        let parse = |text: &str| Config::parse(text, Path::new("x.toml"));
+        let err = parse("[failsafe]\nlimp_after_s = 0.0\n")
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("failsafe.limp_after_s"), "{err}");
+        parse("[failsafe]\nlimp_after_s = 0.001\n").unwrap();
+        for (key, lo, hi) in [
+            ("failsafe.limp_after_s", 0.001f64, 60.0f64),
+            ("failsafe.feedback_timeout_s", 0.001, 10.0),
+            ("gait.blend_time_s", 0.1, 30.0),
+            ("control.ack_timeout_s", 0.01, 60.0),
+        ] {
+            let (section, name) = key.split_once('.').unwrap();
+            for (v, ok) in [
+                (lo, true),
+                (hi, true),
+                (lo.next_down(), false),
+                (hi.next_up(), false),
+            ] {
+                // `{:?}` of an f64 is its shortest round-trip form: the very value.
+                let text = format!("[{section}]\n{name} = {v:?}\n");
+                assert_eq!(parse(&text).is_ok(), ok, "{text}");
+            }
+        }
+        let err = parse("[failsafe]\nlimp_after_s = 1e308\n")
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("1e308"), "{err}");
+        assert!(err.len() < 160, "no 309-digit numbers: {err}");
+    }
+
+    /// Issue 25: what the daemon refuses when it starts, `--check-config` refuses too: a
+    /// TCP token file every user can read.
+    #[test]
+    fn a_token_file_every_user_can_read_is_refused_by_the_check() {
+        use std::os::unix::fs::PermissionsExt;
+        let dir = tempfile::tempdir().unwrap();
+        let token = dir.path().join("token");
+        std::fs::write(&token, "s3cret\n").unwrap();
+        let text = format!(
+            "[control]\ntcp_port = 7878\ntcp_token_file = \"{}\"\n",
+            token.display()
+        );
+        std::fs::set_permissions(&token, std::fs::Permissions::from_mode(0o640)).unwrap();
+        Config::parse(&text, Path::new("x.toml")).unwrap();
+        std::fs::set_permissions(&token, std::fs::Permissions::from_mode(0o644)).unwrap();
+        let err = Config::parse(&text, Path::new("x.toml"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("control.tcp_token_file") && err.contains("readable by every user"),
+            "{err}"
+        );
+        std::fs::write(&token, "\n").unwrap();
+        std::fs::set_permissions(&token, std::fs::Permissions::from_mode(0o600)).unwrap();
+        let err = Config::parse(&text, Path::new("x.toml"))
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("empty"), "{err}");
+    }
+
     #[test]
     fn wrong_types_and_bad_gait_names_are_rejected() {
         assert!(Config::parse("[loop]\nrate_hz = \"fast\"\n", Path::new("x")).is_err());

@@ -5,6 +5,7 @@ use std::path::Path;
 
 use super::{Config, ConfigError, LookupBy, parse_mac};
 use crate::gait::GaitKind;
+use crate::num::Num;
 
 impl Config {
     /// The default gait parameters with `[gait.params.*]` applied, every gait checked
@@ -50,11 +51,12 @@ impl Config {
         if !(self.loop_.busy_wait_s >= 0.0 && self.loop_.busy_wait_s < half_period_s) {
             return Err(bad(
                 "loop.busy_wait_s",
-                self.loop_.busy_wait_s.to_string(),
+                Num(self.loop_.busy_wait_s).to_string(),
                 format!(
-                    "must be at least 0 and less than half a period ({half_period_s} s at \
+                    "must be at least 0 and less than half a period ({} s at \
                      loop.rate_hz = {}): the loop spins that long every cycle",
-                    self.loop_.rate_hz
+                    Num(half_period_s),
+                    Num(self.loop_.rate_hz)
                 ),
             ));
         }
@@ -66,7 +68,7 @@ impl Config {
         if net.command_lifetime_s < 2.0 * period_s {
             return Err(bad(
                 "network.command_lifetime_s",
-                net.command_lifetime_s.to_string(),
+                Num(net.command_lifetime_s).to_string(),
                 format!(
                     "must be at least two periods of the loop and of the feedback \
                      ({:.4} s at loop.rate_hz = {} and network.feedback_rate_hz = {}), \
@@ -77,7 +79,8 @@ impl Config {
                 ),
             ));
         }
-        if self.control.tcp_port != 0 && self.control.tcp_token_file.as_os_str().is_empty() {
+        let token = &self.control.tcp_token_file;
+        if self.control.tcp_port != 0 && token.as_os_str().is_empty() {
             return Err(bad(
                 "control.tcp_token_file",
                 "\"\"".into(),
@@ -86,14 +89,24 @@ impl Config {
                     .into(),
             ));
         }
+        if self.control.tcp_port != 0 {
+            // The daemon reads it when it starts: whatever it would refuse, refuse now.
+            crate::daemon::token::read_token(token).map_err(|e| {
+                bad(
+                    "control.tcp_token_file",
+                    token.display().to_string(),
+                    e.to_string(),
+                )
+            })?;
+        }
         let cap = crate::rt::control_loop::MAX_REQUESTS_PER_CYCLE;
         if self.control.channel_capacity < cap {
             return Err(bad(
                 "control.channel_capacity",
                 self.control.channel_capacity.to_string(),
                 format!(
-                    "must be at least the loop's {cap} requests per cycle (the loop's answers \
-                     share the capacity; fewer would be lost and time out)"
+                    "must be at least the loop's {cap} requests per cycle: a smaller queue could \
+                     not hold one cycle's worth"
                 ),
             ));
         }
@@ -165,11 +178,13 @@ impl Config {
             value,
             why: why.to_owned(),
         };
+        // Exact: a bound accepts up to the value it prints, which reads back as itself.
         let range = |key: &'static str, v: f64, lo: f64, hi: f64| {
-            if v.is_finite() && v >= lo && v <= hi {
+            if v.is_finite() && (lo..=hi).contains(&v) {
                 Ok(())
             } else {
-                Err(bad(key, v.to_string(), &format!("must be in [{lo}, {hi}]")))
+                let why = format!("must be in [{}, {}]", Num(lo), Num(hi));
+                Err(bad(key, Num(v).to_string(), &why))
             }
         };
         range("loop.rate_hz", self.loop_.rate_hz, 1.0, 10_000.0)?;
@@ -213,10 +228,12 @@ impl Config {
             0.001,
             10.0,
         )?;
+        // docs/failsafe.md: at least 1 ms (0 would go limp at a fault's first cycle and
+        // count a fault cleared by one healthy cycle).
         range(
             "failsafe.limp_after_s",
             self.failsafe.limp_after_s,
-            0.0,
+            0.001,
             60.0,
         )?;
         range(

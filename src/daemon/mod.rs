@@ -6,6 +6,7 @@ pub mod config;
 pub mod logging;
 pub mod paths;
 pub mod service;
+pub mod token;
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -194,8 +195,9 @@ pub fn run(cfg: Config, emulated: bool) -> Result<()> {
 
     let (req_tx, req_rx) =
         crossbeam_channel::bounded::<messages::Envelope>(cfg.control.channel_capacity);
-    let (ack_tx, ack_rx) =
-        crossbeam_channel::bounded::<messages::Ack>(cfg.control.channel_capacity);
+    let (ack_tx, ack_rx) = crossbeam_channel::bounded::<messages::Ack>(
+        crate::rt::control_loop::ack_capacity(cfg.control.channel_capacity),
+    );
     // Each request retires at most one controller and the server drains before it
     // sends one: this never fills.
     let (retired_tx, retired_rx) = crossbeam_channel::bounded(cfg.control.channel_capacity + 2);
@@ -216,7 +218,10 @@ pub fn run(cfg: Config, emulated: bool) -> Result<()> {
                  the robot"
             );
         }
-        server_cfg.tcp_token = Some(read_token(&cfg.control.tcp_token_file)?);
+        let path = &cfg.control.tcp_token_file;
+        let token = token::read_token(path)
+            .with_context(|| format!("control.tcp_token_file {}", path.display()))?;
+        server_cfg.tcp_token = Some(token);
     }
     let server = control::start(
         server_cfg,
@@ -289,29 +294,6 @@ pub fn run(cfg: Config, emulated: bool) -> Result<()> {
         "stopped safely"
     );
     Ok(())
-}
-
-/// The TCP token: the file's first line, which must not be empty, from a file that not
-/// every user can read.
-pub fn read_token(path: &std::path::Path) -> Result<String> {
-    use std::os::unix::fs::MetadataExt;
-    let meta = std::fs::metadata(path)
-        .with_context(|| format!("control.tcp_token_file {}", path.display()))?;
-    if meta.mode() & 0o004 != 0 {
-        anyhow::bail!(
-            "control.tcp_token_file {}: readable by every user (mode {:o}); make it 0640 for \
-             the operators' group",
-            path.display(),
-            meta.mode() & 0o777
-        );
-    }
-    let text = std::fs::read_to_string(path)
-        .with_context(|| format!("control.tcp_token_file {}", path.display()))?;
-    let token = text.lines().next().unwrap_or_default().trim().to_owned();
-    if token.is_empty() {
-        anyhow::bail!("control.tcp_token_file {}: empty", path.display());
-    }
-    Ok(token)
 }
 
 fn stopped_in_discovery(e: &anyhow::Error) -> bool {
@@ -465,30 +447,5 @@ fn supervise(
             tracing::info!(mode = ?snap.mode, reason = ?snap.reason, gait = snap.gait.name(), t_s = snap.t_s, "state");
             last = Some(now);
         }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use std::os::unix::fs::PermissionsExt;
-
-    #[test]
-    fn a_token_file_every_user_can_read_is_refused() {
-        let dir = tempfile::tempdir().unwrap();
-        let f = dir.path().join("token");
-        std::fs::write(&f, "abc\nignored\n").unwrap();
-        std::fs::set_permissions(&f, std::fs::Permissions::from_mode(0o640)).unwrap();
-        assert_eq!(super::read_token(&f).unwrap(), "abc");
-        std::fs::set_permissions(&f, std::fs::Permissions::from_mode(0o644)).unwrap();
-        let e = super::read_token(&f).unwrap_err().to_string();
-        assert!(e.contains("readable by every user"), "{e}");
-        std::fs::write(&f, "\n").unwrap();
-        std::fs::set_permissions(&f, std::fs::Permissions::from_mode(0o600)).unwrap();
-        assert!(
-            super::read_token(&f)
-                .unwrap_err()
-                .to_string()
-                .contains("empty")
-        );
     }
 }

@@ -8,6 +8,7 @@ use std::f64::consts::{FRAC_PI_2, FRAC_PI_4, FRAC_PI_8, PI};
 use serde::{Deserialize, Serialize};
 
 use super::serpenoid::Serpenoid;
+use crate::num::Num;
 
 /// Maximum output speed of an SEA Snake module (33 rpm), rad/s (SPEC §1).
 pub const SEA_MAX_JOINT_SPEED_RAD_S: f64 = 3.46;
@@ -125,7 +126,7 @@ pub struct ParamPatch {
 pub enum ParamError {
     #[error("{field} must be finite")]
     NotFinite { field: &'static str },
-    #[error("{field} = {value} is out of range [{min}, {max}]")]
+    #[error("{field} = {} is out of range [{}, {}]", Num(*.value), Num(*.min), Num(*.max))]
     OutOfRange {
         field: &'static str,
         value: f64,
@@ -153,8 +154,8 @@ pub enum ParamError {
     },
     /// |offset| + amplitude would bend some joint past its range.
     #[error(
-        "{gait}: {plane} joints would reach {excursion_rad:.3} rad (|offset| + amplitude), \
-         beyond the joint range of {max_rad:.3} rad"
+        "{gait}: {plane} joints would reach {} rad (|offset| + amplitude), beyond the joint \
+         range of {} rad", Num(*.excursion_rad), Num(*.max_rad)
     )]
     JointRange {
         gait: &'static str,
@@ -346,7 +347,7 @@ impl GaitParams {
             (super::layout::Plane::Dorsal, "dorsal"),
         ] {
             let excursion_rad = wave.max_excursion_rad(plane);
-            if excursion_rad.is_nan() || excursion_rad > JOINT_LIMIT_RAD + 1e-12 {
+            if excursion_rad.is_nan() || excursion_rad > JOINT_LIMIT_RAD {
                 return Err(ParamError::JointRange {
                     gait: kind.name(),
                     plane: name,

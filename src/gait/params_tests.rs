@@ -250,3 +250,30 @@ fn module_length_changes_the_helix_check() {
     assert_eq!(p.validate_for(GaitKind::RollingHelix, 0.064), Ok(()));
     assert!(p.validate_for(GaitKind::RollingHelix, 0.12).is_err());
 }
+
+/// Issue 25: |offset| + amplitude one double beyond the joint limit is refused (no
+/// tolerance), and messages print the values readably.
+#[test]
+fn the_joint_range_is_exact_and_messages_readable() {
+    let mut p = GaitParams::default_for(GaitKind::Slithering);
+    p.offset_lat_rad = 0.5;
+    p.amplitude_lat_rad = JOINT_LIMIT_RAD - 0.5;
+    assert!(0.5 + p.amplitude_lat_rad <= JOINT_LIMIT_RAD);
+    p.temporal_freq_rad_s = 0.5;
+    assert_eq!(p.validate(GaitKind::Slithering), Ok(()));
+    p.amplitude_lat_rad = p.amplitude_lat_rad.next_up();
+    assert!(0.5 + p.amplitude_lat_rad > JOINT_LIMIT_RAD);
+    assert!(matches!(
+        p.validate(GaitKind::Slithering),
+        Err(ParamError::JointRange { .. })
+    ));
+    let patch = ParamPatch {
+        temporal_freq_rad_s: Some(-1e308),
+        ..ParamPatch::default()
+    };
+    let e = GaitParams::default_for(GaitKind::Slithering)
+        .patched(GaitKind::Slithering, &patch)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("-1e308") && e.len() < 100, "{e}");
+}

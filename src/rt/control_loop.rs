@@ -26,6 +26,14 @@ use crate::safety::failsafe::{Event, Failsafe, Health, Mode, Output};
 /// Requests applied per cycle at most, so a flood cannot stretch a cycle.
 pub const MAX_REQUESTS_PER_CYCLE: usize = 8;
 
+/// The ack channel for a request channel of `requests`: a full queue and one cycle's
+/// answers. The server keeps no more requests in flight than this (`control::router`),
+/// so the loop's `try_send` of an answer never finds it full; while the server takes
+/// the answers within a cycle, only a full queue makes it answer "busy".
+pub const fn ack_capacity(requests: usize) -> usize {
+    requests + MAX_REQUESTS_PER_CYCLE
+}
+
 /// Everything the loop is built from.
 pub struct LoopParts {
     pub bus: Box<dyn Bus>,
@@ -275,7 +283,8 @@ impl ControlLoop {
         self.publish(c);
         self.record_cycle(c, fault);
         // Answers leave after the telemetry that shows their effect (read-your-writes).
-        // A full ack queue means nobody is waiting any more; the client times out.
+        // The server never has more requests in flight than the channel holds, so
+        // `try_send` does not fail while it runs (`ack_capacity`).
         for ack in &self.pending_acks[..self.pending] {
             let _ = self.p.acks.try_send(*ack);
         }

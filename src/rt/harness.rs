@@ -84,13 +84,26 @@ pub fn echo_harness_on(
     hold_at_start: bool,
     failsafe: FailsafeConfig,
 ) -> Harness {
+    echo_harness_sized(bus, table, gait, hold_at_start, failsafe, 16)
+}
+
+/// [`echo_harness_on`] with request and ack channels of `capacity`, as the daemon
+/// sizes them from `control.channel_capacity`.
+pub fn echo_harness_sized(
+    bus: EchoBus,
+    table: GaitTable,
+    gait: GaitKind,
+    hold_at_start: bool,
+    failsafe: FailsafeConfig,
+    capacity: usize,
+) -> Harness {
     use crate::bus::Bus;
     let n = bus.module_count();
     let faults = bus.faults();
     let layout = BodyLayout::alternating(n, Plane::Lateral, MODULE_LENGTH_M);
     let estimators = crate::estimation::standard_estimators(&layout);
-    let (req_tx, req_rx) = crossbeam_channel::bounded(16);
-    let (ack_tx, ack_rx) = crossbeam_channel::bounded(16);
+    let (req_tx, req_rx) = crossbeam_channel::bounded(capacity);
+    let (ack_tx, ack_rx) = crossbeam_channel::bounded(capacity);
     let (retired_tx, retired_rx) = crossbeam_channel::bounded(18);
     let (writer, reader) = telemetry::channel(Snapshot::new(n, gait, table, 2.0));
     let stop = Arc::new(AtomicBool::new(false));

@@ -12,6 +12,7 @@
 //!   therefore escalates to limp instead of thrashing between hold and run.
 use serde::Serialize;
 
+use crate::num::Num;
 use crate::rt::messages::Rejection;
 
 /// What the loop does with the joints.
@@ -74,7 +75,12 @@ impl Default for FailsafeConfig {
 
 /// A [`FailsafeConfig`] value that cannot work.
 #[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
-#[error("failsafe.{field} = {value} must be finite and within [{min}, {max}] s")]
+#[error(
+    "failsafe.{field} = {} must be finite and within [{}, {}] s",
+    Num(*.value),
+    Num(*.min),
+    Num(*.max)
+)]
 pub struct FailsafeConfigError {
     pub field: &'static str,
     pub value: f64,

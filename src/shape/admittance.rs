@@ -5,6 +5,7 @@
 //! an unforced wave runs at ωT instead of lagging by `B·ωT/K`.
 
 use crate::controller::config::{ConfigError, check_range};
+use crate::num::Num;
 
 /// Compliant (`+1`: the shape gives way to the force) or anti-compliant (`−1`: it
 /// pushes back).
@@ -88,7 +89,7 @@ impl AdmittanceGains {
         if min > max {
             return Err(ConfigError::invalid(
                 "min",
-                format!("min {min} is above max {max}"),
+                format!("min {} is above max {}", Num(min), Num(max)),
             ));
         }
         let shift = if lo.is_finite() && hi.is_finite() {

@@ -13,6 +13,8 @@ use snaked::control::client::{Client, Endpoint};
 use snaked::control::{BusKind, DaemonInfo, LoopHandle, Pacing, RunningServer, ServerConfig};
 use snaked::controller::catalog::Catalog;
 use snaked::gait::{BodyLayout, GaitKind, GaitParams, GaitTable, Plane};
+use snaked::rt::control_loop::ControlLoop;
+use snaked::rt::harness::Harness as LoopHarness;
 use snaked::rt::messages::{Ack, Envelope, LoopRequest, Rejection};
 use snaked::rt::telemetry::{self, Snapshot};
 use snaked::safety::failsafe::{Mode, Reason};
@@ -286,4 +288,74 @@ pub fn error_message(answer: &Value) -> String {
         .as_str()
         .unwrap_or_default()
         .to_owned()
+}
+
+/// A real loop (`snaked::rt::harness`) behind the real server, stepped on its own
+/// thread; stops both when dropped.
+pub struct RealLoop {
+    stop: Arc<AtomicBool>,
+    thread: Option<JoinHandle<()>>,
+    pub server: Option<RunningServer>,
+    pub path: PathBuf,
+    _dir: tempfile::TempDir,
+}
+
+impl Drop for RealLoop {
+    fn drop(&mut self) {
+        if let Some(s) = self.server.take() {
+            s.shutdown();
+        }
+        self.stop.store(true, Ordering::Relaxed);
+        if let Some(t) = self.thread.take() {
+            t.join().unwrap();
+        }
+    }
+}
+
+/// Serves `h`'s loop on a socket in a temporary directory; `pace` runs on the loop's
+/// thread until the loop is dropped (e.g. a few steps, then a sleep).
+pub fn serve_real_loop(
+    h: LoopHarness,
+    mut pace: impl FnMut(&mut ControlLoop) + Send + 'static,
+) -> RealLoop {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("snaked.sock");
+    let handle = LoopHandle {
+        requests: h.requests.clone(),
+        acks: h.acks.clone(),
+        telemetry: h.telemetry.clone(),
+        info: DaemonInfo {
+            version: "test".into(),
+            module_count: h.layout.len(),
+            loop_rate_hz: 1000.0,
+            bus: BusKind::Emulated,
+            pacing: Pacing::Lockstep,
+            ..DaemonInfo::default()
+        },
+        layout: h.layout.clone(),
+        retired: h.retired.clone(),
+        catalog: h.catalog.clone(),
+    };
+    let cfg = ServerConfig {
+        unix_path: Some(path.clone()),
+        ..ServerConfig::default()
+    };
+    let server = snaked::control::start(cfg, handle).unwrap();
+    let stop = Arc::new(AtomicBool::new(false));
+    let mut control = h.control;
+    let thread = {
+        let stop = stop.clone();
+        std::thread::spawn(move || {
+            while !stop.load(Ordering::Relaxed) {
+                pace(&mut control);
+            }
+        })
+    };
+    RealLoop {
+        stop,
+        thread: Some(thread),
+        server: Some(server),
+        path,
+        _dir: dir,
+    }
 }

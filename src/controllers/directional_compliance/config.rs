@@ -207,14 +207,14 @@ impl DirectionalComplianceConfig {
         d.gains
             .check(lo, hi, 0.0)
             .map_err(|e| e.under("dorsal.gains"))?;
-        if d.enabled {
-            check_range(
-                "dorsal.amplitude_rad",
-                d.amplitude_rad,
-                d.gains.min,
-                d.gains.max,
-            )?;
-        }
+        // Checked while the wave is off too: the configuration is stored and shown,
+        // and turning the wave on must not find a runaway nominal in it.
+        check_range(
+            "dorsal.amplitude_rad",
+            d.amplitude_rad,
+            d.gains.min,
+            d.gains.max,
+        )?;
         check_range("dorsal.spatial_ratio", d.spatial_ratio, 0.0, 4.0)?;
         check_range("dorsal.temporal_ratio", d.temporal_ratio, 0.0, 4.0)?;
         check_range(

@@ -360,7 +360,7 @@ impl Controller for DirectionalCompliance {
         )?;
         lateral_room(params, g.max)?;
         if self.config.dorsal.enabled {
-            let room = JOINT_LIMIT_RAD - self.config.dorsal.gains.max + 1e-12;
+            let room = JOINT_LIMIT_RAD - self.config.dorsal.gains.max;
             within("offset_dor_rad", params.offset_dor_rad, -room, room)?;
         }
         Ok(())

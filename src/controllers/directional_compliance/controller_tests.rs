@@ -312,3 +312,17 @@ fn the_configuration_is_checked_field_by_field() {
     params.offset_lat_rad = 0.1;
     assert_eq!(c.accepts(&params).unwrap_err().field, "offset_lat_rad");
 }
+
+/// Issue 25: the dorsal wave's nominal amplitude is checked while the wave is off too
+/// (a planar preset stores and echoes it; turning the wave on later must not find 1e308).
+#[test]
+fn the_dorsal_amplitude_is_checked_while_the_dorsal_wave_is_off() {
+    for bad in [1e308, -1.0, f64::NAN] {
+        let mut c = preset("dc_switching");
+        assert!(!c.dorsal.enabled);
+        c.dorsal.amplitude_rad = bad;
+        let e = c.check().unwrap_err().to_string();
+        assert!(e.contains("dorsal.amplitude_rad"), "{bad}: {e}");
+        assert!(e.len() < 120, "{bad}: a readable message: {e}");
+    }
+}

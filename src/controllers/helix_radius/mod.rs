@@ -275,7 +275,7 @@ impl Controller for HelixRadius {
             let by_speed = rho * a0 * wt.abs() / SEA_MAX_JOINT_SPEED_RAD_S;
             by_reach.max(by_speed)
         };
-        if reach > JOINT_LIMIT_RAD + 1e-12 || speed > SEA_MAX_JOINT_SPEED_RAD_S + 1e-12 {
+        if reach > JOINT_LIMIT_RAD || speed > SEA_MAX_JOINT_SPEED_RAD_S {
             // The smallest nominal radius (the pitch scaled with it) the bound leaves
             // room for: A is nearly ∝ 1/radius, so a few fixed-point steps find it.
             let mut p = *params;

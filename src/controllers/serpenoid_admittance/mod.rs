@@ -225,7 +225,7 @@ impl Controller for SerpenoidAdmittance {
                 Plane::Lateral => "amplitude_lat_rad",
                 Plane::Dorsal => "amplitude_dor_rad",
             };
-            if reach > JOINT_LIMIT_RAD + 1e-12 || speed > SEA_MAX_JOINT_SPEED_RAD_S + 1e-12 {
+            if reach > JOINT_LIMIT_RAD || speed > SEA_MAX_JOINT_SPEED_RAD_S {
                 let by_reach = (JOINT_LIMIT_RAD - w.offset_rad.abs()) / k;
                 let by_speed = SEA_MAX_JOINT_SPEED_RAD_S / (k * wave.temporal_freq_rad_s.abs());
                 return Err(NominalMismatch {

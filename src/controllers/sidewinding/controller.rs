@@ -133,7 +133,7 @@ impl Controller for AntiCompliantSidewinding {
             params.amplitude_lat_rad
         };
         lateral_room(params, reach * grow)?;
-        let room = JOINT_LIMIT_RAD - params.amplitude_dor_rad * grow + 1e-12;
+        let room = JOINT_LIMIT_RAD - params.amplitude_dor_rad * grow;
         within("offset_dor_rad", params.offset_dor_rad, -room, room)
     }
 
