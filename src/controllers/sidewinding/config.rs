@@ -62,9 +62,9 @@ impl SidewindingConfig {
                     // joints' ±π/2: 1.1 × 1.4 = 1.54 rad.
                     max: 1.1,
                     bias_force: 0.0,
-                    // ∂θ/∂A = sin φ (× the taper's 1.4 at most): ≤ 1.4 rad/s of joint
-                    // speed on top of the wave's own.
-                    max_rate: 1.0,
+                    // ∂θ/∂A = sin φ (× the taper's 1.4 at most): ≤ 0.98 rad/s of joint
+                    // speed on top of the wave's own (the budget: docs/compliance.md).
+                    max_rate: 0.7,
                 },
             },
             spatial_freq: ParamConfig {
@@ -84,8 +84,9 @@ impl SidewindingConfig {
                     min: 2.0 * PI,
                     max: 4.0 * PI,
                     bias_force: 0.0,
-                    // ∂θ/∂ωS = A·s ≤ 1.54 rad: ≤ 1.5 rad/s of joint speed.
-                    max_rate: 1.0,
+                    // ∂θ/∂ωS = A·s ≤ 1.54 rad: ≤ 0.92 rad/s of joint speed. With the
+                    // wave's 1.54 and the amplitude's 0.98: 3.44, within the motor's 3.46.
+                    max_rate: 0.6,
                 },
             },
             sign: AdmittanceSign::AntiCompliant,
@@ -230,6 +231,26 @@ mod tests {
                 .unwrap_err()
                 .to_string()
                 .contains("amplitude.gains")
+        );
+    }
+
+    /// The speed budget (docs/compliance.md): at the default gait the nominal wave and
+    /// the two parameters at their rate caps, each at its largest `∂θ/∂σ`, move a joint
+    /// no faster than the motor turns.
+    #[test]
+    fn the_presets_fit_the_joints_speed_at_the_default_gait() {
+        use crate::gait::{GaitKind, GaitParams, SEA_MAX_JOINT_SPEED_RAD_S};
+        let c = SidewindingConfig::full();
+        let wt = GaitParams::default_for(GaitKind::Sidewinding).temporal_freq_rad_s;
+        let grow = 1.0 + c.heading.turn_taper;
+        let a_max = c.amplitude.gains.max * grow;
+        let wave = a_max * wt.abs();
+        let amplitude = c.amplitude.gains.max_rate * grow;
+        let spatial = c.spatial_freq.gains.max_rate * a_max;
+        let total = wave + amplitude + spatial;
+        assert!(
+            total <= SEA_MAX_JOINT_SPEED_RAD_S,
+            "{wave:.2} + {amplitude:.2} + {spatial:.2} = {total:.2} rad/s"
         );
     }
 }
