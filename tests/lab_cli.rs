@@ -62,12 +62,22 @@ fn pegboard_writes_csv_summary_and_plots() {
             "stuck_s",
             "self_contacts",
             "side_exit",
-            "progress_m"
+            "progress_m",
+            "guard_limited_pct",
+            "peak_joint_speed_rad_s",
+            "mean_joint_speed_rad_s",
+            "fast_joint_pct",
+            "torque_limit_pct"
         ]
     );
     assert_eq!(rows.len(), 3, "header + 2 layouts x 1 start:\n{csv}");
     for (row, layout) in rows[1..].iter().zip(["seed1000", "seed1001"]) {
-        assert_eq!(row.len(), 13);
+        assert_eq!(row.len(), 18);
+        // 2 s of open loop from rest: the blend and the wave stay within the motors.
+        let guarded: f64 = row[13].parse().unwrap();
+        assert_eq!(guarded, 0.0, "{row:?}");
+        let peak: f64 = row[14].parse().unwrap();
+        assert!(peak.is_finite() && peak > 0.0, "{row:?}");
         assert_eq!(row[10], "0", "no self-contact in 2 s of open loop");
         assert_eq!(row[11], "false", "no side exit in 2 s");
         let progress_m: f64 = row[12].parse().unwrap();
@@ -83,6 +93,10 @@ fn pegboard_writes_csv_summary_and_plots() {
     assert!(
         summary.contains("| controller | trials | success | side exits |"),
         "{summary}"
+    );
+    assert!(
+        summary.contains("| controller | guard-limited % (median / max) |"),
+        "the strain table: {summary}"
     );
     assert!(
         summary.contains("| open_loop | 2 | 0/2 (0 %) |"),
