@@ -11,7 +11,7 @@
 //! touch the ground, and with this choice the thesis' `δ = 3π/4` sidewinds (with +y
 //! it travels obliquely; see docs/emulator.md).
 
-use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, Matrix3, Translation3, UnitQuaternion, Vector3};
 use rapier3d::math::{Pose, Rotation, Vector};
 
 use crate::gait::{BodyLayout, Plane, kinematics};
@@ -84,4 +84,54 @@ pub fn twist_angle(parent: &Rotation, child: &Rotation, axis: Vector) -> f64 {
     } else {
         a
     }
+}
+
+/// Axis direction, centre (on the axis) and radius of the helix through the links'
+/// centres: the axis is the mean binormal, the circle a least-squares fit of the
+/// centres projected on the plane across it.
+fn fit_helix(pts: &[Vector3<f64>]) -> (Vector3<f64>, Vector3<f64>, f64) {
+    let mut d = Vector3::zeros();
+    for w in pts.windows(3) {
+        d += (w[1] - w[0]).cross(&(w[2] - w[1])).normalize();
+    }
+    let d = d.normalize();
+    let e1 = d
+        .cross(&Vector3::x())
+        .try_normalize(1e-6)
+        .unwrap_or_else(|| d.cross(&Vector3::y()).normalize());
+    let e2 = d.cross(&e1);
+    // u² + v² = a·u + b·v + c.
+    let mut m = Matrix3::zeros();
+    let mut r = Vector3::zeros();
+    for p in pts {
+        let (u, v) = (p.dot(&e1), p.dot(&e2));
+        let row = Vector3::new(u, v, 1.0);
+        m += row * row.transpose();
+        r += row * (u * u + v * v);
+    }
+    let s = m.lu().solve(&r).unwrap();
+    let (cu, cv) = (0.5 * s.x, 0.5 * s.y);
+    let radius = (s.z + cu * cu + cv * cv).sqrt();
+    let mean_d = pts.iter().map(|p| p.dot(&d)).sum::<f64>() / pts.len() as f64;
+    (d, e1 * cu + e2 * cv + d * mean_d, radius)
+}
+
+/// A helical body stood upright: the head pose that puts the helix of `angles_rad`
+/// (joint 0 in `first`) with its axis on the world's z axis and its middle at height
+/// `z_m`, and the radius of the helix through the links' centres, m.
+pub fn upright_helix(
+    first: Plane,
+    angles_rad: &[f64],
+    link_length_m: f64,
+    z_m: f64,
+) -> (Isometry3<f64>, f64) {
+    let poses = chain_poses(Isometry3::identity(), first, angles_rad, link_length_m);
+    let pts: Vec<Vector3<f64>> = poses.iter().map(|p| p.translation.vector).collect();
+    let (axis, centre, r) = fit_helix(&pts);
+    let rot = UnitQuaternion::rotation_between(&axis, &Vector3::z())
+        .unwrap_or_else(UnitQuaternion::identity);
+    (
+        Translation3::new(0.0, 0.0, z_m) * rot * Translation3::from(-centre),
+        r,
+    )
 }

@@ -64,6 +64,13 @@ pub struct PhysicsConfig {
     /// Projected Gauss-Seidel sweeps inside each solver iteration (rapier's
     /// `num_internal_pgs_iterations`): cheaper than whole iterations, no re-integration.
     pub pgs_iterations: usize,
+    /// Unbiased (velocity-only) sweeps after each solver iteration's position update
+    /// (rapier's `num_internal_stabilization_iterations`; rapier's default is 1). They
+    /// converge the velocities the servos read at the next step: with 1, the end links'
+    /// joints oscillated odd–even at the 1 ms step under open-loop rolling (the servo's
+    /// velocity feedback is applied explicitly over each step); see docs/emulator.md,
+    /// "Joint speeds above the motor's".
+    pub stabilization_iterations: usize,
     /// Coulomb: one friction cone per contact point. Simplified: one cone per manifold plus
     /// a twist constraint (faster). Both cap the friction impulse by magnitude (a cone).
     pub coulomb_friction: bool,
@@ -98,6 +105,7 @@ impl Default for PhysicsConfig {
             substeps: 1,
             solver_iterations: 3,
             pgs_iterations: 1,
+            stabilization_iterations: 3,
             coulomb_friction: true,
             warmstart_joints: false,
             contact_natural_frequency_hz: 120.0,
@@ -166,6 +174,7 @@ impl PhysicsPlant {
         };
         ip.num_solver_iterations = config.solver_iterations;
         ip.num_internal_pgs_iterations = config.pgs_iterations;
+        ip.num_internal_stabilization_iterations = config.stabilization_iterations;
         ip.warmstart_joints = config.warmstart_joints;
         // The same softness against fixed bodies (the world) and dynamic ones (another
         // link, with self-collision).
@@ -253,6 +262,9 @@ fn validate(c: &PhysicsConfig) -> Result<(), PhysicsError> {
     }
     if c.pgs_iterations == 0 {
         return Err(PhysicsError::BadValue("pgs_iterations"));
+    }
+    if c.stabilization_iterations == 0 {
+        return Err(PhysicsError::BadValue("stabilization_iterations"));
     }
     for (name, x) in [
         (

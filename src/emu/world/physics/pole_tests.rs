@@ -3,9 +3,7 @@
 
 use std::f64::consts::TAU;
 
-use nalgebra::{Isometry3, Matrix3, Translation3, UnitQuaternion, Vector3};
-
-use super::kinematics::chain_poses;
+use super::kinematics::upright_helix;
 use super::tests::{hold, quiet};
 use super::*;
 use crate::controller::Controller;
@@ -33,36 +31,6 @@ fn helix_angles(radius_m: f64) -> Vec<f64> {
     out
 }
 
-/// Axis direction, centre (on the axis) and radius of the helix through the links'
-/// centres: the axis is the mean binormal, the circle a least-squares fit of the
-/// centres projected on the plane across it.
-fn fit_helix(pts: &[Vector3<f64>]) -> (Vector3<f64>, Vector3<f64>, f64) {
-    let mut d = Vector3::zeros();
-    for w in pts.windows(3) {
-        d += (w[1] - w[0]).cross(&(w[2] - w[1])).normalize();
-    }
-    let d = d.normalize();
-    let e1 = d
-        .cross(&Vector3::x())
-        .try_normalize(1e-6)
-        .unwrap_or_else(|| d.cross(&Vector3::y()).normalize());
-    let e2 = d.cross(&e1);
-    // u² + v² = a·u + b·v + c.
-    let mut m = Matrix3::zeros();
-    let mut r = Vector3::zeros();
-    for p in pts {
-        let (u, v) = (p.dot(&e1), p.dot(&e2));
-        let row = Vector3::new(u, v, 1.0);
-        m += row * row.transpose();
-        r += row * (u * u + v * v);
-    }
-    let s = m.lu().solve(&r).unwrap();
-    let (cu, cv) = (0.5 * s.x, 0.5 * s.y);
-    let radius = (s.z + cu * cu + cv * cv).sqrt();
-    let mean_d = pts.iter().map(|p| p.dot(&d)).sum::<f64>() / pts.len() as f64;
-    (d, e1 * cu + e2 * cv + d * mean_d, radius)
-}
-
 /// A plant coiled with the helix of `start_radius_m` around a pole at the origin
 /// whose radius leaves `clearance_m` inside the coil, the coil's middle at 0.6 m.
 /// Returns the plant and the pole's radius.
@@ -84,18 +52,8 @@ fn coiled_stepped(
     step: (f64, f64),
 ) -> (PhysicsPlant, f64) {
     let angles = helix_angles(start_radius_m);
-    let poses = chain_poses(
-        Isometry3::identity(),
-        Plane::Lateral,
-        &angles,
-        MODULE_LENGTH_M,
-    );
-    let pts: Vec<Vector3<f64>> = poses.iter().map(|p| p.translation.vector).collect();
-    let (axis, centre, r) = fit_helix(&pts);
+    let (place, r) = upright_helix(Plane::Lateral, &angles, MODULE_LENGTH_M, 0.6);
     let pole_r = r - 0.5 * build::MODULE_DIAMETER_M - clearance_m;
-    let rot = UnitQuaternion::rotation_between(&axis, &Vector3::z())
-        .unwrap_or_else(UnitQuaternion::identity);
-    let place = Translation3::new(0.0, 0.0, 0.6) * rot * Translation3::from(-centre);
     let spec = WorldSpec {
         poles: vec![Pole {
             x_m: 0.0,
