@@ -296,6 +296,8 @@ fn validate(c: &PhysicsConfig) -> Result<(), PhysicsError> {
 #[cfg(test)]
 mod coulomb_model;
 #[cfg(test)]
+mod joint_speed_tests;
+#[cfg(test)]
 mod no_slip_bound;
 #[cfg(test)]
 mod pole_tests;
