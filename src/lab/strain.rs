@@ -170,18 +170,10 @@ impl StrainSummary {
     }
 }
 
+/// Median of the finite values (NaN when there are none).
 fn median(v: &[f64]) -> f64 {
-    let mut v: Vec<f64> = v.iter().copied().filter(|x| x.is_finite()).collect();
-    if v.is_empty() {
-        return f64::NAN;
-    }
-    v.sort_by(f64::total_cmp);
-    let m = v.len() / 2;
-    if v.len() % 2 == 1 {
-        v[m]
-    } else {
-        0.5 * (v[m - 1] + v[m])
-    }
+    let finite: Vec<f64> = v.iter().copied().filter(|x| x.is_finite()).collect();
+    super::metrics::mean_sd_median(&finite).map_or(f64::NAN, |(_, _, m)| m)
 }
 
 fn max(v: &[f64]) -> f64 {
