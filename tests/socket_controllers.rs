@@ -482,14 +482,21 @@ fn a_controller_is_calibrated_through_the_socket_and_snakectl() {
     let s = c.call("status", None).unwrap();
     let sig = &s["controller"]["signals"];
     assert_eq!(sig["calibration"], 2.0, "{s}");
-    // The scripted pegs press the body: the measured offsets are not zero.
-    let offsets = ["offset_lat_head", "offset_lat_mid", "offset_lat_tail"];
-    assert!(
-        offsets
-            .iter()
-            .any(|k| sig[*k].as_f64().unwrap().abs() > 1e-4),
-        "{sig}"
-    );
+    // The scripted pegs press the body: the measured offsets (one per body section,
+    // in the `sections_lateral` field) are not zero.
+    let sections = s["controller"]["fields"]
+        .as_array()
+        .and_then(|f| f.iter().find(|f| f["name"] == "sections_lateral"))
+        .cloned()
+        .unwrap_or_else(|| panic!("a sections field: {s}"));
+    let offsets: Vec<f64> = sections["windows"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|w| w["offset"].as_f64().unwrap())
+        .collect();
+    assert_eq!(offsets.len(), 3, "{sections}");
+    assert!(offsets.iter().any(|v| v.abs() > 1e-4), "{offsets:?}");
     // The default is three gait cycles (2.1 s each at ωT = 3 rad/s).
     let r = c
         .call("controller.calibrate", Some(json!({"gait": "slithering"})))

@@ -232,6 +232,7 @@ pub(crate) async fn calibrate(
                 "controller": info.controller,
                 "seconds": seconds,
                 "signals": view["signals"],
+                "fields": view["fields"],
             }));
         }
         if tokio::time::Instant::now() > deadline {

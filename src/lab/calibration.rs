@@ -2,9 +2,10 @@
 //! (the experiment's ground, its obstacles removed), through the daemon's loop, with
 //! the `controller.calibrate` command (`ControllerCommand::Calibrate`). A controller
 //! calibrates when its report has a `calibration` signal (0 none, 1 running,
-//! 2 calibrated); directional compliance measures its friction offset and reports it
-//! as `offset_{lat,dor}_{head,mid,tail}`, which the experiment's trials then get as
-//! the `friction_offset` of their configuration.
+//! 2 calibrated); directional compliance measures its friction offset per body section
+//! and reports it in its `sections_lateral` / `sections_dorsal` fields (column
+//! `offset`), which the experiment's trials then get as the `friction_offset` of their
+//! configuration.
 
 use serde_json::{Value, json};
 
@@ -69,6 +70,17 @@ pub fn calibrate(
     let Some(state) = names.iter().position(|n| n == "calibration") else {
         return Ok(None);
     };
+    let (layout, _) = super::trial::slithering_setup(config.modules);
+    let fields: Vec<String> = controller
+        .build(&layout, config.gaits.get(controller.gait))?
+        .info
+        .report
+        .fields
+        .iter()
+        .map(|f| f.name.clone())
+        .collect();
+    let field = |name: &str| fields.iter().position(|n| n == name);
+    let (lateral, dorsal) = (field("sections_lateral"), field("sections_dorsal"));
     // The blend into the gait first (the controller measures only while it drives).
     let limit = seconds + 4.0 * config.blend_time_s + 10.0;
     let steps = (limit / config.dt_s).round() as usize;
@@ -82,20 +94,17 @@ pub fn calibrate(
         if report.signals[state] != 2.0 {
             continue;
         }
-        let signal = |name: &str| {
-            names
-                .iter()
-                .position(|n| n == name)
-                .map_or(0.0, |k| report.signals[k])
-        };
-        let thirds = |plane: &str| -> Vec<f64> {
-            ["head", "mid", "tail"]
-                .iter()
-                .map(|t| signal(&format!("offset_{plane}_{t}")))
+        // The sections' `offset` column (the fourth); a plane without its field (planar:
+        // no dorsal wave) gets zeros, one per section.
+        let sections = lateral.map_or(0, |f| report.fields[f].len());
+        let offsets_of = |f: Option<usize>| -> Vec<f64> {
+            (0..sections)
+                .map(|k| f.map_or(0.0, |f| report.fields[f].columns[3][k]))
                 .map(|v| if v.is_finite() { v } else { 0.0 })
                 .collect()
         };
-        let offsets = json!({ "lateral_rad": thirds("lat"), "dorsal_rad": thirds("dor") });
+        let offsets =
+            json!({ "lateral_rad": offsets_of(lateral), "dorsal_rad": offsets_of(dorsal) });
         let mut c = controller.clone();
         let config = c.selection.config.get_or_insert_with(|| json!({}));
         crate::controller::config::merge(config, &json!({ "friction_offset": offsets }));

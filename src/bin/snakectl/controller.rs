@@ -312,31 +312,32 @@ pub fn print_calibration(r: &Value) {
         text(&r["gait"]),
         num(&r["seconds"], 1)
     );
-    let signals = r["signals"].as_object();
-    let get = |k: &str| {
-        signals
-            .and_then(|s| s.get(k))
-            .cloned()
-            .unwrap_or(Value::Null)
-    };
+    // Directional compliance reports its offsets per body section in the fields
+    // `sections_lateral` / `sections_dorsal` (column `offset`).
+    let fields = r["fields"].as_array().cloned().unwrap_or_default();
     let mut keep = Map::new();
-    for (plane, key) in [("lat", "lateral_rad"), ("dor", "dorsal_rad")] {
-        let values: Vec<Value> = ["head", "mid", "tail"]
-            .iter()
-            .map(|t| get(&format!("offset_{plane}_{t}")))
-            .collect();
-        if values.iter().all(Value::is_null) {
+    for (name, key) in [
+        ("sections_lateral", "lateral_rad"),
+        ("sections_dorsal", "dorsal_rad"),
+    ] {
+        let Some(f) = fields.iter().find(|f| f["name"] == name) else {
             continue;
-        }
+        };
+        let values: Vec<Value> = f["windows"]
+            .as_array()
+            .map(|w| w.iter().map(|s| s["offset"].clone()).collect())
+            .unwrap_or_default();
         let shown: Vec<String> = values.iter().map(|v| num(v, 4)).collect();
-        println!(
-            "  offset {key:<12} head {}  mid {}  tail {}",
-            shown[0], shown[1], shown[2]
-        );
+        println!("  offset {key:<12} {} (head to tail)", shown.join("  "));
         let values = values
             .into_iter()
             .map(|v| if v.is_number() { v } else { json!(0.0) });
         keep.insert(key.to_owned(), Value::Array(values.collect()));
+    }
+    if !keep.is_empty() && !keep.contains_key("dorsal_rad") {
+        // A planar controller keeps a dorsal offset per section too (zeros).
+        let n = keep["lateral_rad"].as_array().map_or(0, Vec::len);
+        keep.insert("dorsal_rad".into(), json!(vec![0.0; n]));
     }
     if !keep.is_empty() {
         println!(

@@ -1,6 +1,7 @@
-//! One window's amplitude in one plane under directional compliance (SPEC §8): its
-//! admittance with the mode's filter on the amplitude rate, its mean amplitude, its
-//! absition, and the switching between NC, PDC and NDC. Pure and `Copy`.
+//! Directional compliance's two pieces of state (SPEC §8): a travelling window's
+//! amplitude, whose admittance passes the amplitude rate through its mode's filter,
+//! and a body section's absition, which chooses the mode (NC, PDC, NDC). Pure and
+//! `Copy`.
 
 use super::config::{Reference, Thresholds};
 use crate::shape::admittance::AdmittanceGains;
@@ -36,52 +37,39 @@ impl Mode {
     }
 }
 
-/// A window's amplitude state in one plane.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct PlaneWindow {
+/// A travelling window's amplitude in one plane: its deviation from nominal and its
+/// rate, stepped through the filter of the mode it is given (its section's).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct AmplitudeState {
     /// Deviation of the amplitude from nominal, rad, and its rate, rad/s.
     pub deviation: f64,
     pub rate: f64,
-    /// Ā − A₀: the exponential mean of the deviation, rad.
-    pub mean_deviation: f64,
-    /// S: the running integral of `Ā − A₀ − c`, rad·s (from the crossed threshold while
-    /// in PDC or NDC when the reference is the threshold).
-    pub absition: f64,
-    pub mode: Mode,
 }
 
-impl PlaneWindow {
-    /// A window born at the head: nominal amplitude, zero absition, in `mode`.
-    pub fn nominal(mode: Mode) -> Self {
-        Self {
-            deviation: 0.0,
-            rate: 0.0,
-            mean_deviation: 0.0,
-            absition: 0.0,
-            mode,
-        }
-    }
-
-    /// Semi-implicit Euler of `M·δ̈ + B·δ̇ + K·(δ − δ_m) = F + τ_D` with the mode's filter
+impl AmplitudeState {
+    /// Semi-implicit Euler of `M·δ̈ + B·δ̇ + K·(δ − δ_m) = F + τ_D` with `mode`'s filter
     /// on the rate: a filtered rate is the state's rate (no wind-up behind the filter),
     /// and the amplitude `nominal + δ` stays in the gains' range. `δ_m` is where the
-    /// spring pulls in the window's mode: 0 in NC, `+shift` in PDC, `−shift` in NDC.
-    pub fn step_amplitude(
+    /// spring pulls in the mode: 0 in NC, `+shift` in PDC, `−shift` in NDC.
+    pub fn step(
         &mut self,
         g: &AdmittanceGains,
+        mode: Mode,
         force: f64,
         nominal: f64,
         shift: f64,
         dt_s: f64,
     ) {
-        let rest = match self.mode {
+        let rest = match mode {
             Mode::Nc => 0.0,
             Mode::Pdc => shift,
             Mode::Ndc => -shift,
         };
         let spring = g.stiffness * (self.deviation - rest);
         let accel = (force + g.bias_force - g.damping * self.rate - spring) / g.mass;
-        self.rate = self.mode.filter(self.rate + accel * dt_s);
+        self.rate = mode
+            .filter(self.rate + accel * dt_s)
+            .clamp(-g.max_rate, g.max_rate);
         self.deviation += self.rate * dt_s;
         let value = nominal + self.deviation;
         if value > g.max || value < g.min {
@@ -89,19 +77,37 @@ impl PlaneWindow {
             self.rate = 0.0;
         }
     }
+}
 
-    /// Advances the mean and the absition by `dt_s` with friction offset `offset`; with
-    /// `switching`, changes the mode by the thresholds. Returns whether the mode changed.
+/// A body section's absition in one plane and the mode it sets (SPEC §8).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Absition {
+    /// S: the running integral of `Ā − A₀ − c`, rad·s (from the crossed threshold while
+    /// in PDC or NDC when the reference is the threshold).
+    pub absition: f64,
+    pub mode: Mode,
+}
+
+impl Absition {
+    /// Zero absition, in `mode`.
+    pub fn new(mode: Mode) -> Self {
+        Self {
+            absition: 0.0,
+            mode,
+        }
+    }
+
+    /// Advances the absition by `dt_s` with the mean deviation `mean_deviation` (`Ā −
+    /// A₀`) and friction offset `offset`; with `switching`, changes the mode by the
+    /// thresholds. Returns whether the mode changed.
     pub fn observe(
         &mut self,
+        mean_deviation: f64,
         offset: f64,
         dt_s: f64,
-        mean_time_s: f64,
         switching: Option<&Thresholds>,
     ) -> bool {
-        let alpha = dt_s / (mean_time_s + dt_s);
-        self.mean_deviation += alpha * (self.deviation - self.mean_deviation);
-        self.absition += (self.mean_deviation - offset) * dt_s;
+        self.absition += (mean_deviation - offset) * dt_s;
         let Some(t) = switching else {
             return false;
         };
@@ -132,6 +138,36 @@ impl PlaneWindow {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::controllers::directional_compliance::sections::Boxcar;
+
+    /// A window that is its own section (the old per-window state, for these tests):
+    /// its amplitude, its mean over 1.5 s and its absition.
+    #[derive(Debug, Clone, Copy)]
+    struct PlaneWindow {
+        amplitude: AmplitudeState,
+        mean: Boxcar,
+        state: Absition,
+    }
+
+    impl PlaneWindow {
+        fn nominal(mode: Mode) -> Self {
+            Self {
+                amplitude: AmplitudeState::default(),
+                mean: Boxcar::new(1.5),
+                state: Absition::new(mode),
+            }
+        }
+
+        fn step_amplitude(&mut self, g: &AdmittanceGains, force: f64, nominal: f64, dt: f64) {
+            self.amplitude
+                .step(g, self.state.mode, force, nominal, 0.0, dt);
+        }
+
+        fn observe(&mut self, offset: f64, dt: f64, switching: Option<&Thresholds>) -> bool {
+            self.mean.add(self.amplitude.deviation, dt);
+            self.state.observe(self.mean.mean(), offset, dt, switching)
+        }
+    }
 
     fn gains() -> AdmittanceGains {
         AdmittanceGains {
@@ -156,8 +192,8 @@ mod tests {
     fn run(w: &mut PlaneWindow, seconds: f64, switching: bool, force: impl Fn(f64) -> f64) {
         let dt = 1e-3;
         for k in 0..(seconds / dt) as usize {
-            w.step_amplitude(&gains(), force(k as f64 * dt), 0.785, 0.0, dt);
-            w.observe(0.0, dt, 1.5, switching.then_some(&T));
+            w.step_amplitude(&gains(), force(k as f64 * dt), 0.785, dt);
+            w.observe(0.0, dt, switching.then_some(&T));
         }
     }
 
@@ -179,20 +215,26 @@ mod tests {
         run(&mut nc, 2.0, false, force);
         run(&mut pdc, 2.0, false, force);
         run(&mut ndc, 2.0, false, force);
-        assert!(nc.deviation > 0.3 && pdc.deviation > 0.3, "{nc:?} {pdc:?}");
-        assert_eq!(ndc.deviation, 0.0, "NDC never opens");
-        let pdc_high = pdc.deviation;
+        assert!(
+            nc.amplitude.deviation > 0.3 && pdc.amplitude.deviation > 0.3,
+            "{nc:?} {pdc:?}"
+        );
+        assert_eq!(ndc.amplitude.deviation, 0.0, "NDC never opens");
+        let pdc_high = pdc.amplitude.deviation;
         // Closing push and release: NC follows, PDC holds what it gained (Fig. 3).
         for w in [&mut nc, &mut pdc, &mut ndc] {
             run(w, 6.0, false, |t| force(t + 2.0));
         }
-        assert!(nc.deviation.abs() < 0.02, "NC returns to nominal: {nc:?}");
         assert!(
-            pdc.deviation >= pdc_high - 1e-12,
+            nc.amplitude.deviation.abs() < 0.02,
+            "NC returns to nominal: {nc:?}"
+        );
+        assert!(
+            pdc.amplitude.deviation >= pdc_high - 1e-12,
             "PDC never closes: {pdc:?}"
         );
         assert!(
-            ndc.deviation < -0.3,
+            ndc.amplitude.deviation < -0.3,
             "NDC closed under the closing push: {ndc:?}"
         );
     }
@@ -209,9 +251,9 @@ mod tests {
         let mut out = Vec::new();
         for k in 0..(seconds / dt) as usize {
             let t = t0 + k as f64 * dt;
-            w.step_amplitude(&gains(), force(t), 0.785, 0.0, dt);
-            if w.observe(0.0, dt, 1.5, Some(&T)) {
-                out.push((t, w.mode));
+            w.step_amplitude(&gains(), force(t), 0.785, dt);
+            if w.observe(0.0, dt, Some(&T)) {
+                out.push((t, w.state.mode));
             }
         }
         out
@@ -253,9 +295,12 @@ mod tests {
         );
         // Still pushed open, harder than the spring pulls: NDC holds the amplitude
         // where it was (never opens further) and stays on.
-        let held = w.deviation;
+        let held = w.amplitude.deviation;
         assert!(switches(&mut w, 4.0, 2.0, |_| 2.0).is_empty());
-        assert!(w.deviation <= held && w.absition > 0.0, "{w:?}");
+        assert!(
+            w.amplitude.deviation <= held && w.state.absition > 0.0,
+            "{w:?}"
+        );
         // Pushed both ways: only the closings are kept, the mean falls below nominal.
         let s = switches(&mut w, 6.0, 20.0, alternating);
         assert_eq!(s.first().map(|x| x.1), Some(Mode::Nc), "{s:?} {w:?}");
@@ -263,26 +308,22 @@ mod tests {
 
     #[test]
     fn the_offset_is_subtracted_and_the_zero_reference_keeps_the_absition() {
-        let mut w = PlaneWindow::nominal(Mode::Nc);
-        w.deviation = 0.1;
-        w.mean_deviation = 0.1;
+        let mut a = Absition::new(Mode::Nc);
         for _ in 0..1000 {
-            w.observe(0.1, 1e-3, 1.5, None);
+            a.observe(0.1, 0.1, 1e-3, None);
         }
         assert!(
-            w.absition.abs() < 1e-12,
-            "an offset equal to the mean: {w:?}"
+            a.absition.abs() < 1e-12,
+            "an offset equal to the mean: {a:?}"
         );
         let zero = Thresholds {
             reference: Reference::Zero,
             ..T
         };
-        let mut w = PlaneWindow::nominal(Mode::Nc);
-        w.absition = 0.49;
-        w.mean_deviation = 0.2;
-        w.deviation = 0.2;
-        assert!(w.observe(0.0, 0.1, 1.5, Some(&zero)));
-        assert_eq!(w.mode, Mode::Ndc);
-        assert!(w.absition > 0.5, "runs on from where it was: {w:?}");
+        let mut a = Absition::new(Mode::Nc);
+        a.absition = 0.49;
+        assert!(a.observe(0.2, 0.0, 0.1, Some(&zero)));
+        assert_eq!(a.mode, Mode::Ndc);
+        assert!(a.absition > 0.5, "runs on from where it was: {a:?}");
     }
 }

@@ -1,13 +1,15 @@
-//! The ground's friction offset of the absition (SPEC §8): how far each window's
+//! The ground's friction offset of the absition (SPEC §8): how far each body section's
 //! amplitude sits from nominal while the snake runs on open ground, measured over a
-//! few gait cycles per plane and body third, on the operator's command
+//! few gait cycles per plane and section, on the operator's command
 //! (`controller.calibrate`), and kept with the controller until cleared.
 
-use super::config::{FrictionOffset, OFFSET_BINS, clamp_offset};
+use super::config::{FrictionOffset, MAX_SECTIONS, SectionValues, clamp_offset};
 use crate::controller::CommandRefused;
 
 /// Longest calibration accepted, s.
 const MAX_DURATION_S: f64 = 3600.0;
+/// Share of a calibration spent letting the shape settle before it measures.
+pub const SETTLE_SHARE: f64 = 1.0 / 3.0;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum State {
@@ -20,24 +22,30 @@ enum State {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Calibration {
     offsets: FrictionOffset,
+    sections: usize,
     state: State,
     duration_s: f64,
     elapsed_s: f64,
-    /// ∫ deviation dt and ∫ dt per plane and body third.
-    sums: [[f64; OFFSET_BINS]; 2],
-    times: [[f64; OFFSET_BINS]; 2],
+    /// ∫ deviation dt and ∫ dt per plane and body section.
+    sums: [[f64; MAX_SECTIONS]; 2],
+    times: [[f64; MAX_SECTIONS]; 2],
 }
 
-pub const ZERO_OFFSET: FrictionOffset = FrictionOffset {
-    lateral_rad: [0.0; OFFSET_BINS],
-    dorsal_rad: [0.0; OFFSET_BINS],
-};
+/// No offset, for `sections` body sections.
+pub fn zero_offset(sections: usize) -> FrictionOffset {
+    FrictionOffset {
+        lateral_rad: SectionValues::zeros(sections),
+        dorsal_rad: SectionValues::zeros(sections),
+    }
+}
 
 impl Calibration {
-    /// Calibrated from a configuration's offsets, or uncalibrated (offset 0).
-    pub fn new(from_config: Option<FrictionOffset>) -> Self {
+    /// Calibrated from a configuration's offsets, or uncalibrated (offset 0), for
+    /// `sections` body sections.
+    pub fn new(from_config: Option<FrictionOffset>, sections: usize) -> Self {
         Self {
-            offsets: from_config.unwrap_or(ZERO_OFFSET),
+            offsets: from_config.unwrap_or(zero_offset(sections)),
+            sections,
             state: if from_config.is_some() {
                 State::Calibrated
             } else {
@@ -45,8 +53,8 @@ impl Calibration {
             },
             duration_s: 0.0,
             elapsed_s: 0.0,
-            sums: [[0.0; OFFSET_BINS]; 2],
-            times: [[0.0; OFFSET_BINS]; 2],
+            sums: [[0.0; MAX_SECTIONS]; 2],
+            times: [[0.0; MAX_SECTIONS]; 2],
         }
     }
 
@@ -64,22 +72,27 @@ impl Calibration {
     /// A measurement in progress starts over (the controller was engaged afresh).
     pub fn restart(&mut self) {
         self.elapsed_s = 0.0;
-        self.sums = [[0.0; OFFSET_BINS]; 2];
-        self.times = [[0.0; OFFSET_BINS]; 2];
+        self.sums = [[0.0; MAX_SECTIONS]; 2];
+        self.times = [[0.0; MAX_SECTIONS]; 2];
     }
 
     pub fn clear(&mut self) {
-        *self = Self::new(None);
+        *self = Self::new(None, self.sections);
     }
 
     pub fn running(&self) -> bool {
         self.state == State::Running
     }
 
-    /// Adds one window's amplitude deviation in `plane` and body third `bin` over `dt_s`.
-    pub fn add(&mut self, plane: usize, bin: usize, deviation_rad: f64, dt_s: f64) {
-        self.sums[plane][bin] += deviation_rad * dt_s;
-        self.times[plane][bin] += dt_s;
+    /// Adds a section's amplitude deviation in `plane` over `dt_s`. The first
+    /// [`SETTLE_SHARE`] of the measurement is not counted: the shape settles onto the
+    /// ground's friction first (a drag that opens the wave does so over a few seconds).
+    pub fn add(&mut self, plane: usize, section: usize, deviation_rad: f64, dt_s: f64) {
+        if self.elapsed_s < SETTLE_SHARE * self.duration_s {
+            return;
+        }
+        self.sums[plane][section] += deviation_rad * dt_s;
+        self.times[plane][section] += dt_s;
     }
 
     /// Advances the measurement by `dt_s`; returns true when it has just finished
@@ -100,9 +113,13 @@ impl Calibration {
                 0.0
             }
         };
+        let plane = |p: usize| {
+            let values: [f64; MAX_SECTIONS] = std::array::from_fn(|k| mean(p, k));
+            SectionValues::from_slice(&values[..self.sections])
+        };
         self.offsets = FrictionOffset {
-            lateral_rad: std::array::from_fn(|k| mean(0, k)),
-            dorsal_rad: std::array::from_fn(|k| mean(1, k)),
+            lateral_rad: plane(0),
+            dorsal_rad: plane(1),
         };
         self.state = State::Calibrated;
         true
@@ -137,8 +154,8 @@ mod tests {
     use super::*;
 
     #[test]
-    fn measures_the_mean_deviation_per_plane_and_third() {
-        let mut c = Calibration::new(None);
+    fn measures_the_mean_deviation_per_plane_and_section() {
+        let mut c = Calibration::new(None, 3);
         assert_eq!(c.state_code(), 0.0);
         assert_eq!(c.start(f64::NAN), Err(CommandRefused::BadDuration));
         assert_eq!(c.start(0.0), Err(CommandRefused::BadDuration));
@@ -156,12 +173,13 @@ mod tests {
         assert_eq!(finished, 1);
         assert_eq!(c.state_code(), 2.0);
         let o = c.offsets();
-        assert!((o.lateral_rad[0] - 0.1).abs() < 1e-9, "{o:?}");
-        assert_eq!(o.lateral_rad[1], 0.0, "no window there: 0");
-        assert!((o.lateral_rad[2] + 0.1).abs() < 1e-9, "{o:?}");
-        assert!((o.dorsal_rad[1] - 0.05).abs() < 1e-9, "{o:?}");
+        assert_eq!(o.lateral_rad.len(), 3);
+        assert!((o.lateral_rad.get(0) - 0.1).abs() < 1e-9, "{o:?}");
+        assert_eq!(o.lateral_rad.get(1), 0.0, "nothing measured there: 0");
+        assert!((o.lateral_rad.get(2) + 0.1).abs() < 1e-9, "{o:?}");
+        assert!((o.dorsal_rad.get(1) - 0.05).abs() < 1e-9, "{o:?}");
         c.clear();
-        assert_eq!(c.offsets(), ZERO_OFFSET);
+        assert_eq!(c.offsets(), zero_offset(3));
         assert_eq!(c.state_code(), 0.0);
     }
 }

@@ -10,9 +10,8 @@ use crate::controller::config::{ConfigError, check_range};
 use crate::gait::JOINT_LIMIT_RAD;
 use crate::shape::admittance::AdmittanceGains;
 
-/// Body thirds the friction offset is calibrated in (head, middle, tail), by the
-/// window's centre.
-pub const OFFSET_BINS: usize = 3;
+/// Most body sections (each keeps its absition and mode per plane; issue 26).
+pub const MAX_SECTIONS: usize = 4;
 
 /// Which amplitude rates the admittance admits (SPEC §8).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -97,13 +96,92 @@ pub struct PhaseCompliance {
     pub gains: AdmittanceGains,
 }
 
-/// The ground's friction offset `c` of the absition per plane and body third, rad:
-/// how far the windows' mean amplitude sits from nominal on open ground.
+/// The body sections whose absitions choose the windows' modes (reference 001, Fig. 2:
+/// head, middle and tail).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SectionsConfig {
+    /// Equal stretches of the body, head to tail (1..=4; the reference's 3).
+    pub count: usize,
+    /// The span of a section's mean amplitude `Ā`, in nominal gait cycles (`2π/ωT`;
+    /// the reference's "about one gait cycle").
+    pub mean_cycles: f64,
+}
+
+/// One value per body section (a JSON array of 1..=4 numbers, head first).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SectionValues {
+    values: [f64; MAX_SECTIONS],
+    len: usize,
+}
+
+impl SectionValues {
+    /// `len` zeros.
+    pub fn zeros(len: usize) -> Self {
+        Self {
+            values: [0.0; MAX_SECTIONS],
+            len: len.clamp(1, MAX_SECTIONS),
+        }
+    }
+
+    /// From `values` (at most [`MAX_SECTIONS`] are kept).
+    pub fn from_slice(values: &[f64]) -> Self {
+        let mut v = Self::zeros(values.len());
+        for (d, s) in v.values.iter_mut().zip(values) {
+            *d = *s;
+        }
+        v
+    }
+
+    pub fn as_slice(&self) -> &[f64] {
+        &self.values[..self.len]
+    }
+
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// Section `k`'s value (0 past the end).
+    pub fn get(&self, k: usize) -> f64 {
+        self.as_slice().get(k).copied().unwrap_or(0.0)
+    }
+
+    /// All [`MAX_SECTIONS`] slots, zero past the end.
+    pub fn padded(&self) -> [f64; MAX_SECTIONS] {
+        std::array::from_fn(|k| self.get(k))
+    }
+}
+
+impl Serialize for SectionValues {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        self.as_slice().serialize(s)
+    }
+}
+
+impl<'de> Deserialize<'de> for SectionValues {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let v = Vec::<f64>::deserialize(d)?;
+        if v.is_empty() || v.len() > MAX_SECTIONS {
+            return Err(serde::de::Error::invalid_length(
+                v.len(),
+                &"1 to 4 values, one per body section",
+            ));
+        }
+        Ok(Self::from_slice(&v))
+    }
+}
+
+/// The ground's friction offset `c` of the absition per plane and body section, rad:
+/// how far each section's mean amplitude sits from nominal on open ground.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct FrictionOffset {
-    pub lateral_rad: [f64; OFFSET_BINS],
-    pub dorsal_rad: [f64; OFFSET_BINS],
+    pub lateral_rad: SectionValues,
+    pub dorsal_rad: SectionValues,
 }
 
 /// Everything that defines a directional-compliance controller besides the gait's
@@ -117,9 +195,8 @@ pub struct DirectionalComplianceConfig {
     pub dorsal: DorsalWave,
     pub phase: PhaseCompliance,
     pub thresholds: Thresholds,
-    /// Time constant of the windows' mean amplitude Ā (an exponential mean over about
-    /// one half-wave's passage), s.
-    pub mean_time_s: f64,
+    /// The body sections that keep the absitions and set the windows' modes.
+    pub sections: SectionsConfig,
     /// A calibration from an earlier run (`controller.calibrate` reports one); `null`:
     /// uncalibrated (offset 0) until calibrated.
     #[serde(default)]
@@ -189,7 +266,10 @@ impl DirectionalComplianceConfig {
                     0.0
                 },
             },
-            mean_time_s: 1.5,
+            sections: SectionsConfig {
+                count: 3,
+                mean_cycles: 1.0,
+            },
             friction_offset: None,
             torque_cutoff_hz: 5.0,
             torque_deadband_nm: 0.3,
@@ -237,13 +317,30 @@ impl DirectionalComplianceConfig {
             0.0,
             JOINT_LIMIT_RAD / 2.0,
         )?;
-        check_range("mean_time_s", self.mean_time_s, 0.01, 60.0)?;
+        let sections = &self.sections;
+        if !(1..=MAX_SECTIONS).contains(&sections.count) {
+            return Err(ConfigError::invalid(
+                "sections.count",
+                format!("must be 1 to {MAX_SECTIONS}"),
+            ));
+        }
+        check_range("sections.mean_cycles", sections.mean_cycles, 0.1, 10.0)?;
         if let Some(o) = &self.friction_offset {
             for (plane, values) in [
                 ("lateral_rad", &o.lateral_rad),
                 ("dorsal_rad", &o.dorsal_rad),
             ] {
-                for (k, &v) in values.iter().enumerate() {
+                if values.len() != sections.count {
+                    return Err(ConfigError::invalid(
+                        format!("friction_offset.{plane}"),
+                        format!(
+                            "has {} values: one per body section ({}) is needed",
+                            values.len(),
+                            sections.count
+                        ),
+                    ));
+                }
+                for (k, &v) in values.as_slice().iter().enumerate() {
                     let field = format!("friction_offset.{plane}[{k}]");
                     check_range(&field, v, -OFFSET_MAX_RAD, OFFSET_MAX_RAD)?;
                 }

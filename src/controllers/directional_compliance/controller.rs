@@ -1,11 +1,13 @@
 //! Directional compliance (reference 001, SPEC §8): the lateral serpenoid (and in 3-D
 //! a dorsal one on the other joints, eq. 10) whose amplitudes are windowed per plane
-//! on travelling half-wave windows, each following shape-space admittance through its
-//! mode's filter (NC, PDC, NDC), with the temporal phase compliant and central.
+//! on travelling half-wave windows, each following shape-space admittance through the
+//! filter (NC, PDC, NDC) of the body section its centre is in, the sections keeping
+//! the absitions; the temporal phase compliant and central.
 
-use super::absition::{Mode, PlaneWindow};
+use super::absition::{AmplitudeState, Mode};
 use super::calibration::Calibration;
-use super::config::{DirectionalComplianceConfig, FrictionOffset, OFFSET_BINS, Strategy};
+use super::config::{DirectionalComplianceConfig, MAX_SECTIONS, Strategy};
+use super::sections::Sections;
 use crate::controller::nominal::{Nominal, lateral_room, within};
 use crate::controller::report::{ControllerReport, MAX_WINDOWS as REPORT_WINDOWS, WindowField};
 use crate::controller::{
@@ -22,13 +24,11 @@ pub(super) const MAX_WINDOWS: usize = 16;
 /// Planes by index.
 pub(super) const LAT: usize = 0;
 pub(super) const DOR: usize = 1;
-/// Signals reported (names in `super::report_spec`).
-pub(super) const SIGNALS: usize = 30;
-/// Where along the body the head, middle and tail windows are read for the signals.
-const PROBES: [f64; OFFSET_BINS] = [1.0 / 6.0, 0.5, 5.0 / 6.0];
+/// Signals reported before the per-section ones (names in `super::report_spec`).
+pub(super) const FIXED_SIGNALS: usize = 14;
 
 /// A travelling window's state: its amplitude in each plane.
-type Payload = [PlaneWindow; 2];
+type Payload = [AmplitudeState; 2];
 
 /// The controller. Construction allocates; nothing else does.
 pub struct DirectionalCompliance {
@@ -47,6 +47,9 @@ pub struct DirectionalCompliance {
     forces: [[f64; MAX_WINDOWS]; 2],
     phase_force: f64,
     calibration: Calibration,
+    sections: Sections,
+    /// Each section's amplitude deviation this step, per plane (mean over its joints).
+    section_deviation: [[f64; MAX_SECTIONS]; 2],
     switches: u64,
     /// Dorsal fade-in factor now (0..1).
     ramp: f64,
@@ -77,7 +80,9 @@ impl DirectionalCompliance {
             weights: vec![0.0; MAX_WINDOWS * n],
             forces: [[0.0; MAX_WINDOWS]; 2],
             phase_force: 0.0,
-            calibration: Calibration::new(config.friction_offset),
+            calibration: Calibration::new(config.friction_offset, config.sections.count),
+            sections: Sections::new(config.sections.count, 1.0, Mode::Nc),
+            section_deviation: [[0.0; MAX_SECTIONS]; 2],
             switches: 0,
             ramp: 0.0,
             last_t: None,
@@ -92,14 +97,25 @@ impl DirectionalCompliance {
         &self.config
     }
 
-    /// What a window is born with.
+    /// What a window is born with: the nominal amplitudes.
     fn born(&self) -> Payload {
-        let mode = match self.config.strategy {
+        [AmplitudeState::default(); 2]
+    }
+
+    /// The mode a section starts in (and the fixed strategies' for good).
+    fn start_mode(&self) -> Mode {
+        match self.config.strategy {
             Strategy::Nc | Strategy::Switching => Mode::Nc,
             Strategy::Pdc => Mode::Pdc,
             Strategy::Ndc => Mode::Ndc,
-        };
-        [PlaneWindow::nominal(mode); 2]
+        }
+    }
+
+    /// The span of the sections' mean amplitude: `mean_cycles` nominal gait cycles (a
+    /// stopped wave, ωT = 0, counts as a cycle of 2π s).
+    fn mean_span_s(&self) -> f64 {
+        let wt = self.nominal.params.temporal_freq_rad_s.abs().max(1.0);
+        self.config.sections.mean_cycles * std::f64::consts::TAU / wt
     }
 
     /// Forgets everything learnt but the calibration.
@@ -114,6 +130,12 @@ impl DirectionalCompliance {
         self.last_t = None;
         self.t = self.nominal.t0_s;
         self.calibration.restart();
+        self.sections = Sections::new(
+            self.config.sections.count,
+            self.mean_span_s(),
+            self.start_mode(),
+        );
+        self.section_deviation = [[0.0; MAX_SECTIONS]; 2];
         self.anchor_windows();
     }
 
@@ -206,27 +228,21 @@ impl DirectionalCompliance {
     fn integrate(&mut self, dt: f64) {
         let planes = self.planes();
         let calibrating = self.calibration.running();
-        let switching = (self.config.strategy == Strategy::Switching && !calibrating)
-            .then_some(&self.config.thresholds);
         let gains = [self.config.lateral, self.config.dorsal.gains];
         let nominal = [self.amplitude0(LAT), self.amplitude0(DOR)];
-        let offsets = self.calibration.offsets();
-        let mean_time = self.config.mean_time_s;
         let shift = self.config.thresholds.shift_rad;
-        let mut switches = 0;
+        let sections = &self.sections;
         for (j, w) in self.manager.windows_mut().enumerate() {
-            let bin = bin_of(w.window.a, w.window.b);
+            let centre = centre_of(w.window.a, w.window.b);
             for p in 0..planes {
-                let pw = &mut w.payload[p];
-                if calibrating {
-                    pw.mode = Mode::Nc;
-                }
-                pw.step_amplitude(&gains[p], self.forces[p][j], nominal[p], shift, dt);
-                let offset = offset_of(&offsets, p, bin);
-                switches += u64::from(pw.observe(offset, dt, mean_time, switching));
+                let mode = if calibrating {
+                    Mode::Nc
+                } else {
+                    sections.mode_at(centre, p)
+                };
+                w.payload[p].step(&gains[p], mode, self.forces[p][j], nominal[p], shift, dt);
             }
         }
-        self.switches += switches;
         if self.config.phase.enabled {
             let g = &self.config.phase.gains;
             let nominal = self.nominal.phase_at(self.t);
@@ -235,27 +251,66 @@ impl DirectionalCompliance {
         }
     }
 
-    /// Feeds the calibration this step's deviations; when it ends, every window
-    /// starts afresh from NC with zero absition.
+    /// Each section's amplitude deviation now, per plane: the mean over the section's
+    /// joints of that plane of `Σ_j w_j(s_i)·δ_j` (what the joints there are driven by).
+    fn measure_sections(&mut self) {
+        let n = self.layout.len();
+        let (mut sum, mut count) = ([[0.0; MAX_SECTIONS]; 2], [[0usize; MAX_SECTIONS]; 2]);
+        for i in 0..n {
+            let plane = match self.layout.planes[i] {
+                Plane::Lateral => LAT,
+                Plane::Dorsal => DOR,
+            };
+            let k = self.sections.index_of(self.layout.s[i]);
+            let mut deviation = 0.0;
+            for (j, w) in self.manager.windows().enumerate() {
+                deviation += self.weights[j * n + i] * w.payload[plane].deviation;
+            }
+            sum[plane][k] += deviation;
+            count[plane][k] += 1;
+        }
+        for p in 0..2 {
+            for k in 0..MAX_SECTIONS {
+                self.section_deviation[p][k] = if count[p][k] > 0 {
+                    sum[p][k] / count[p][k] as f64
+                } else {
+                    0.0
+                };
+            }
+        }
+    }
+
+    /// The sections' means and absitions, and their modes when switching (not while
+    /// calibrating).
+    fn observe_sections(&mut self, dt: f64) {
+        let switching = (self.config.strategy == Strategy::Switching
+            && !self.calibration.running())
+        .then_some(&self.config.thresholds);
+        let o = self.calibration.offsets();
+        let offsets = [o.lateral_rad.padded(), o.dorsal_rad.padded()];
+        self.switches += self.sections.update(
+            self.planes(),
+            &self.section_deviation,
+            &offsets,
+            dt,
+            switching,
+        );
+    }
+
+    /// Feeds the calibration this step's section deviations; when it ends, every
+    /// section starts afresh in its start mode with zero absition.
     fn calibrate_step(&mut self, dt: f64) {
         if !self.calibration.running() {
             return;
         }
-        let planes = self.planes();
-        for w in self.manager.windows() {
-            let bin = bin_of(w.window.a, w.window.b);
-            for p in 0..planes {
-                self.calibration.add(p, bin, w.payload[p].deviation, dt);
+        for p in 0..self.planes() {
+            for k in 0..self.sections.count() {
+                self.calibration.add(p, k, self.section_deviation[p][k], dt);
             }
         }
         if self.calibration.advance(dt) {
-            let born = self.born();
-            for w in self.manager.payloads_mut() {
-                for (pw, b) in w.iter_mut().zip(born) {
-                    pw.absition = 0.0;
-                    pw.mode = b.mode;
-                }
-            }
+            let mode = self.start_mode();
+            self.sections.restart_absitions(mode);
         }
     }
 
@@ -264,18 +319,6 @@ impl DirectionalCompliance {
             let (_, phi, amplitude, gain) = self.joint_wave(i);
             *x = gain * amplitude * phi.sin();
         }
-    }
-
-    /// The window whose weight at `s` is largest.
-    fn window_at(&self, s: f64) -> Option<&Payload> {
-        let mut best: Option<(&Payload, f64)> = None;
-        for w in self.manager.windows() {
-            let weight = w.window.weight(s, self.m);
-            if best.is_none_or(|(_, b)| weight > b) {
-                best = Some((&w.payload, weight));
-            }
-        }
-        best.map(|(p, _)| p)
     }
 
     /// Each plane's amplitude averaged over its joints (NaN for a plane without joints
@@ -317,32 +360,47 @@ impl DirectionalCompliance {
         self.switches
     }
 
+    /// The sections, head to tail.
+    pub fn sections(&self) -> &Sections {
+        &self.sections
+    }
+
     fn fill_field(&self, plane: usize, out: &mut WindowField) {
         out.count = self.manager.len();
         for (k, w) in self.manager.windows().take(REPORT_WINDOWS).enumerate() {
-            let pw = &w.payload[plane];
+            let centre = centre_of(w.window.a, w.window.b);
             out.a[k] = w.window.a;
             out.b[k] = w.window.b;
-            out.columns[0][k] = self.amplitude0(plane) + pw.deviation;
-            out.columns[1][k] = pw.absition;
-            out.columns[2][k] = pw.mode.code();
+            out.columns[0][k] = self.amplitude0(plane) + w.payload[plane].deviation;
+            out.columns[1][k] = self.sections.index_of(centre) as f64;
+            out.columns[2][k] = self.sections.mode_at(centre, plane).code();
             out.columns[3][k] = self.forces[plane][k];
+        }
+    }
+
+    /// The sections of `plane` as a field: edges, mean deviation, absition, mode, offset.
+    fn fill_sections(&self, plane: usize, out: &mut WindowField) {
+        let offsets = self.calibration.offsets();
+        let offsets = if plane == LAT {
+            offsets.lateral_rad
+        } else {
+            offsets.dorsal_rad
+        };
+        out.count = self.sections.count();
+        for k in 0..self.sections.count() {
+            let sp = self.sections.get(k, plane);
+            (out.a[k], out.b[k]) = self.sections.edges(k);
+            out.columns[0][k] = sp.mean.mean();
+            out.columns[1][k] = sp.absition.absition;
+            out.columns[2][k] = sp.absition.mode.code();
+            out.columns[3][k] = offsets.get(k);
         }
     }
 }
 
-/// The body third of a window's centre (open ends clipped to the body).
-fn bin_of(a: f64, b: f64) -> usize {
-    let centre = 0.5 * (a.max(0.0) + b.min(1.0));
-    ((centre * OFFSET_BINS as f64).floor().max(0.0) as usize).min(OFFSET_BINS - 1)
-}
-
-fn offset_of(o: &FrictionOffset, plane: usize, bin: usize) -> f64 {
-    if plane == LAT {
-        o.lateral_rad[bin]
-    } else {
-        o.dorsal_rad[bin]
-    }
+/// A window's centre in normalised arc length (open ends clipped to the body).
+fn centre_of(a: f64, b: f64) -> f64 {
+    0.5 * (a.max(0.0) + b.min(1.0))
 }
 
 impl Controller for DirectionalCompliance {
@@ -387,6 +445,8 @@ impl Controller for DirectionalCompliance {
         self.anchor_windows();
         self.compute_forces();
         self.integrate(dt);
+        self.measure_sections();
+        self.observe_sections(dt);
         self.calibrate_step(dt);
         self.set_points(set_points_rad);
         self.nominal.add_offsets(&self.layout, set_points_rad);
@@ -395,22 +455,23 @@ impl Controller for DirectionalCompliance {
     fn report(&self, out: &mut ControllerReport) {
         out.clear();
         let planes = self.planes();
-        let probe = |plane: usize, k: usize, f: fn(&PlaneWindow) -> f64| {
-            if plane >= planes {
-                return f64::NAN;
+        let windows_in = |mode: Mode| {
+            let mut n = 0;
+            for w in self.manager.windows() {
+                let centre = centre_of(w.window.a, w.window.b);
+                n += (0..planes)
+                    .filter(|&p| self.sections.mode_at(centre, p) == mode)
+                    .count();
             }
-            self.window_at(PROBES[k]).map_or(f64::NAN, |w| f(&w[plane]))
+            n as f64
         };
-        let count = |mode: Mode| {
-            self.manager
-                .windows()
-                .flat_map(|w| w.payload[..planes].iter())
-                .filter(|p| p.mode == mode)
-                .count() as f64
+        let sections_in = |mode: Mode| {
+            (0..planes)
+                .map(|p| self.sections.count_in(p, mode))
+                .sum::<usize>() as f64
         };
-        let offsets = self.calibration.offsets();
         let t = &self.config.thresholds;
-        let mut s = [f64::NAN; SIGNALS];
+        let s = &mut out.signals;
         s[0] = self.mean_amplitude(LAT);
         s[1] = self.mean_amplitude(DOR);
         s[2] = self.phase.deviation;
@@ -419,25 +480,30 @@ impl Controller for DirectionalCompliance {
         s[5] = t.high_rad_s;
         s[6] = self.calibration.state_code();
         s[7] = self.calibration.progress();
-        for k in 0..OFFSET_BINS {
-            s[8 + k] = offsets.lateral_rad[k];
-            s[11 + k] = if planes > 1 {
-                offsets.dorsal_rad[k]
-            } else {
-                f64::NAN
-            };
-            s[14 + k] = probe(LAT, k, |w| w.absition);
-            s[17 + k] = probe(DOR, k, |w| w.absition);
-            s[20 + k] = probe(LAT, k, |w| w.mode.code());
-            s[23 + k] = probe(DOR, k, |w| w.mode.code());
+        s[8] = windows_in(Mode::Pdc);
+        s[9] = windows_in(Mode::Ndc);
+        s[10] = sections_in(Mode::Pdc);
+        s[11] = sections_in(Mode::Ndc);
+        s[12] = self.switches as f64;
+        s[13] = if planes > 1 { self.ramp } else { f64::NAN };
+        // Per section, per plane: absition then mode (`super::report_spec`).
+        let mut at = FIXED_SIGNALS;
+        for p in 0..2 {
+            for k in 0..self.sections.count() {
+                let sp = self.sections.get(k, p);
+                let (absition, mode) = if p < planes {
+                    (sp.absition.absition, sp.absition.mode.code())
+                } else {
+                    (f64::NAN, f64::NAN)
+                };
+                s[at] = absition;
+                s[at + 1] = mode;
+                at += 2;
+            }
         }
-        s[26] = count(Mode::Pdc);
-        s[27] = count(Mode::Ndc);
-        s[28] = self.switches as f64;
-        s[29] = if planes > 1 { self.ramp } else { f64::NAN };
-        out.signals[..SIGNALS].copy_from_slice(&s);
         for p in 0..planes {
             self.fill_field(p, &mut out.fields[p]);
+            self.fill_sections(p, &mut out.fields[planes + p]);
         }
     }
 

@@ -1,7 +1,9 @@
 use super::*;
 use crate::controller::ControllerKind;
 use crate::controller::testing::{ObservationBuf, engage_at};
-use crate::controllers::directional_compliance::DirectionalComplianceKind;
+use crate::controllers::directional_compliance::{
+    DirectionalComplianceKind, FrictionOffset, SectionValues,
+};
 use crate::controllers::open_loop::OpenLoop;
 use crate::gait::GaitKind;
 
@@ -97,7 +99,7 @@ fn a_push_along_the_bend_opens_nc_and_pdc_windows_but_not_ndc_ones() {
 }
 
 #[test]
-fn windows_are_born_at_the_head_in_nc_at_nominal_with_zero_absition() {
+fn windows_are_born_at_the_head_at_nominal_and_the_held_section_switches() {
     let (mut c, ..) = engaged("dc_switching");
     let mut born = 0;
     let mut switched = 0;
@@ -117,31 +119,41 @@ fn windows_are_born_at_the_head_in_nc_at_nominal_with_zero_absition() {
             born += 1;
             let (_, head) = c.windows().next().unwrap();
             for p in head {
-                assert_eq!(*p, PlaneWindow::nominal(Mode::Nc), "a new head window");
+                assert_eq!(*p, AmplitudeState::default(), "a new head window");
             }
         }
         switched = c.switches();
     });
     assert!(born >= 3, "windows travel: {born} born");
-    assert!(switched > 0, "the flattened windows switch");
+    assert!(switched > 0, "the flattened middle switches");
+    // The jam stays with the middle section while the windows pass it: the middle is
+    // directional, the head (no pegs) is not. (The tail may follow: the windows carry
+    // the flattened amplitude on down the body.)
+    let s = c.sections();
+    assert_eq!(s.get(1, LAT).absition.mode, Mode::Pdc, "{s:?}");
+    assert_eq!(s.get(0, LAT).absition.mode, Mode::Nc, "{s:?}");
     let mut report = ControllerReport::default();
     c.report(&mut report);
-    assert!(report.signals[26] + report.signals[27] >= 0.0);
+    assert!(report.signals[10] >= 1.0, "sections in PDC");
+}
+
+/// The modes the sections of `c` are in now (lateral).
+fn section_modes(c: &DirectionalCompliance, modes: &mut Vec<Mode>) {
+    for k in 0..c.sections().count() {
+        let m = c.sections().get(k, LAT).absition.mode;
+        if !modes.contains(&m) {
+            modes.push(m);
+        }
+    }
 }
 
 #[test]
-fn a_window_flattened_for_long_switches_to_pdc() {
+fn a_body_flattened_for_long_switches_to_pdc() {
     let (mut c, ..) = engaged("dc_switching");
     let mut modes = Vec::new();
-    // Every lateral joint is pushed flatter: every window's absition falls.
+    // Every lateral joint is pushed flatter: every section's absition falls.
     let flatten = |_: f64, sp: &[f64]| bend_further(sp).map(|t| -t);
-    run(&mut c, 0.0, 6.0, flatten, |c| {
-        for (_, p) in c.windows() {
-            if !modes.contains(&p[LAT].mode) {
-                modes.push(p[LAT].mode);
-            }
-        }
-    });
+    run(&mut c, 0.0, 6.0, flatten, |c| section_modes(c, &mut modes));
     assert!(modes.contains(&Mode::Pdc), "{modes:?}");
     assert!(!modes.contains(&Mode::Ndc), "{modes:?}");
     // And bent further for long: NDC.
@@ -152,13 +164,7 @@ fn a_window_flattened_for_long_switches_to_pdc() {
         0.0,
         6.0,
         |_, sp| bend_further(sp),
-        |c| {
-            for (_, p) in c.windows() {
-                if !modes.contains(&p[LAT].mode) {
-                    modes.push(p[LAT].mode);
-                }
-            }
-        },
+        |c| section_modes(c, &mut modes),
     );
     assert!(modes.contains(&Mode::Ndc), "{modes:?}");
     assert!(!modes.contains(&Mode::Pdc), "{modes:?}");
@@ -249,14 +255,14 @@ fn calibration_measures_the_open_ground_offset_and_then_the_absition_stays_near_
     assert_eq!(signal(&c, 6), 2.0, "calibrated");
     let o = c.calibration().offsets();
     assert!(
-        o.lateral_rad.iter().all(|&x| x > 0.02),
+        o.lateral_rad.as_slice().iter().all(|&x| x > 0.02),
         "the drag opens the wave: {o:?}"
     );
     // The same ground afterwards: the absitions stay well inside the thresholds.
     let mut worst: f64 = 0.0;
     run(&mut c, 12.5, 20.0, drag, |c| {
-        for (_, p) in c.windows() {
-            worst = worst.max(p[LAT].absition.abs());
+        for k in 0..c.sections().count() {
+            worst = worst.max(c.sections().get(k, LAT).absition.absition.abs());
         }
     });
     assert!(worst < 0.3, "{worst}");
@@ -281,7 +287,18 @@ fn the_configuration_is_checked_field_by_field() {
     assert!(err(&|c| c.thresholds.high_rad_s = f64::NAN).contains("thresholds.high_rad_s"));
     assert!(err(&|c| c.lateral.max = 3.0).contains("lateral.max"));
     assert!(err(&|c| c.dorsal.gains.stiffness = 1e9).contains("dorsal.gains.stiffness"));
-    assert!(err(&|c| c.mean_time_s = 0.0).contains("mean_time_s"));
+    assert!(err(&|c| c.sections.mean_cycles = 0.0).contains("sections.mean_cycles"));
+    assert!(err(&|c| c.sections.count = 0).contains("sections.count"));
+    assert!(err(&|c| c.sections.count = 5).contains("sections.count"));
+    assert!(
+        err(&|c| {
+            c.friction_offset = Some(FrictionOffset {
+                lateral_rad: SectionValues::zeros(2),
+                dorsal_rad: SectionValues::zeros(2),
+            })
+        })
+        .contains("one per body section (3)")
+    );
     assert!(
         err(&|c| {
             c.dorsal.enabled = true;
@@ -292,8 +309,8 @@ fn the_configuration_is_checked_field_by_field() {
     assert!(
         err(&|c| {
             c.friction_offset = Some(FrictionOffset {
-                lateral_rad: [0.0, 9.0, 0.0],
-                dorsal_rad: [0.0; 3],
+                lateral_rad: SectionValues::from_slice(&[0.0, 9.0, 0.0]),
+                dorsal_rad: SectionValues::zeros(3),
             })
         })
         .contains("friction_offset.lateral_rad[1]")

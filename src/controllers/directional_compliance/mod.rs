@@ -1,20 +1,22 @@
 //! Directional compliance (reference 001, SPEC §8): windowed amplitudes that comply
-//! in one direction only while a window is obstructed, chosen per window by its
-//! absition, planar (the lateral wave) or in 3-D (a dorsal wave on the other joints,
-//! each plane's windows complying independently). See docs/compliance.md.
+//! in one direction only while the body section they are in is obstructed, chosen per
+//! section by its absition, planar (the lateral wave) or in 3-D (a dorsal wave on the
+//! other joints, each plane complying independently). See docs/compliance.md.
 
 mod absition;
 mod calibration;
 mod config;
 mod controller;
+mod sections;
 
-pub use absition::{Mode, PlaneWindow};
+pub use absition::{Absition, AmplitudeState, Mode};
 pub use calibration::Calibration;
 pub use config::{
-    DirectionalComplianceConfig, DorsalWave, FrictionOffset, OFFSET_BINS, PhaseCompliance,
-    Reference, Strategy, Thresholds,
+    DirectionalComplianceConfig, DorsalWave, FrictionOffset, MAX_SECTIONS, PhaseCompliance,
+    Reference, SectionValues, SectionsConfig, Strategy, Thresholds,
 };
 pub use controller::DirectionalCompliance;
+pub use sections::{Boxcar, Sections};
 
 use crate::controller::report::{FieldSpec, ReportSpec, SignalSpec};
 use crate::controller::{BuildContext, ConfigError, Controller, ControllerKind};
@@ -89,51 +91,61 @@ impl ControllerKind for DirectionalComplianceKind {
             s("threshold_high_rad_s", "rad·s"),
             s("calibration", ""),
             s("calibration_progress", ""),
-        ];
-        let thirds = ["head", "mid", "tail"];
-        for (what, unit) in [
-            ("offset_lat", "rad"),
-            ("offset_dor", "rad"),
-            ("absition_lat", "rad·s"),
-            ("absition_dor", "rad·s"),
-            ("mode_lat", ""),
-            ("mode_dor", ""),
-        ] {
-            for t in thirds {
-                signals.push(SignalSpec::new(format!("{what}_{t}"), unit));
-            }
-        }
-        signals.extend([
             s("windows_pdc", "count"),
             s("windows_ndc", "count"),
+            s("sections_pdc", "count"),
+            s("sections_ndc", "count"),
             s("mode_switches", "count"),
             s("dorsal_ramp", ""),
-        ]);
-        debug_assert_eq!(signals.len(), controller::SIGNALS);
-        let columns = vec![
+        ];
+        debug_assert_eq!(signals.len(), controller::FIXED_SIGNALS);
+        let names = section_names(config.sections.count);
+        for plane in ["lat", "dor"] {
+            for name in &names {
+                signals.push(SignalSpec::new(format!("absition_{plane}_{name}"), "rad·s"));
+                signals.push(SignalSpec::new(format!("mode_{plane}_{name}"), ""));
+            }
+        }
+        let windows = vec![
             s("amplitude", "rad"),
-            s("absition", "rad·s"),
+            s("section", "index"),
             s("mode", ""),
             s("force", "N·m"),
         ];
-        let mut fields = vec![FieldSpec {
-            name: "amplitude_lateral".into(),
-            centralization: "windowed".into(),
+        let sections = vec![
+            s("mean_deviation", "rad"),
+            s("absition", "rad·s"),
+            s("mode", ""),
+            s("offset", "rad"),
+        ];
+        let field = |name: &str, centralization: &str, columns: &Vec<SignalSpec>| FieldSpec {
+            name: name.into(),
+            centralization: centralization.into(),
             enabled: true,
             columns: columns.clone(),
-        }];
+        };
+        let mut fields = vec![field("amplitude_lateral", "windowed", &windows)];
         if config.dorsal.enabled {
-            fields.push(FieldSpec {
-                name: "amplitude_dorsal".into(),
-                centralization: "windowed".into(),
-                enabled: true,
-                columns,
-            });
+            fields.push(field("amplitude_dorsal", "windowed", &windows));
+        }
+        fields.push(field("sections_lateral", "sections", &sections));
+        if config.dorsal.enabled {
+            fields.push(field("sections_dorsal", "sections", &sections));
         }
         ReportSpec { signals, fields }
     }
 
     fn build(config: &Self::Config, ctx: &BuildContext<'_>) -> Box<dyn Controller> {
         Box::new(DirectionalCompliance::new(ctx.layout, ctx.params, *config))
+    }
+}
+
+/// The sections' names in signal names: the reference's head, middle and tail for
+/// three, `s1`… (head first) otherwise.
+pub fn section_names(count: usize) -> Vec<String> {
+    if count == 3 {
+        ["head", "mid", "tail"].map(String::from).to_vec()
+    } else {
+        (1..=count).map(|k| format!("s{k}")).collect()
     }
 }

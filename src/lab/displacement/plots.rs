@@ -1,9 +1,9 @@
 //! The displacement experiments' figures:
 //! - [`velocity_plot`]: each controller's velocity per pose (black bars) and over all
 //!   trials (red bar, ± one sd), the paper's Fig. 6;
-//! - [`absition_plot`]: one trial's mean amplitudes and its head, middle and tail
-//!   windows' absitions over time, per plane, with the thresholds and the moments a
-//!   window switched into PDC or NDC, the paper's Fig. 2 and 5.
+//! - [`absition_plot`]: one trial's mean amplitudes and its body sections' absitions
+//!   (head, middle and tail for three) over time, per plane, with the thresholds and
+//!   the moments a section switched into PDC or NDC, the paper's Fig. 2 and 5.
 
 use std::path::Path;
 
@@ -115,9 +115,20 @@ fn reported(rec: &TrialRecord, name: &str) -> bool {
 pub fn absition_plot(path: &Path, title: &str, rec: &TrialRecord) -> Result<(), LabError> {
     register_fonts();
     let err = plot_err(path);
+    // The sections by name, head first, as the controller reports them
+    // (`absition_{plane}_{section}`).
+    let sections: Vec<&str> = rec
+        .signal_names
+        .iter()
+        .filter_map(|n| n.strip_prefix("absition_lat_"))
+        .collect();
     let planes: Vec<(&str, &str)> = [("lat", "lateral"), ("dor", "dorsal")]
         .into_iter()
-        .filter(|(p, _)| reported(rec, &format!("absition_{p}_head")))
+        .filter(|(p, _)| {
+            sections
+                .iter()
+                .any(|s| reported(rec, &format!("absition_{p}_{s}")))
+        })
         .collect();
     let panels = 1 + planes.len();
     let root = BitMapBackend::new(path, (1100, 60 + 260 * panels as u32)).into_drawing_area();
@@ -139,8 +150,8 @@ pub fn absition_plot(path: &Path, title: &str, rec: &TrialRecord) -> Result<(), 
         RGBColor(210, 30, 30),
         RGBColor(30, 60, 210),
         RGBColor(20, 150, 40),
+        RGBColor(230, 140, 20),
     ];
-    let thirds = ["head", "mid", "tail"];
     // Amplitudes (mean over each plane's joints).
     {
         let names: Vec<String> = planes
@@ -164,7 +175,10 @@ pub fn absition_plot(path: &Path, title: &str, rec: &TrialRecord) -> Result<(), 
         .map_err(&err)?;
     }
     for (k, (p, plane)) in planes.iter().enumerate() {
-        let names: Vec<String> = thirds.iter().map(|t| format!("absition_{p}_{t}")).collect();
+        let names: Vec<String> = sections
+            .iter()
+            .map(|t| format!("absition_{p}_{t}"))
+            .collect();
         let lines: Vec<(&str, &[f64], RGBColor)> = names
             .iter()
             .zip(colours)
@@ -174,9 +188,9 @@ pub fn absition_plot(path: &Path, title: &str, rec: &TrialRecord) -> Result<(), 
             .iter()
             .filter_map(|n| series(rec, n).iter().copied().find(|v| v.is_finite()))
             .collect();
-        // A switch into PDC (+1) or NDC (−1) of the head, middle or tail window.
+        // A switch into PDC (+1) or NDC (−1) of a section.
         let mut switches = Vec::new();
-        for t in thirds {
+        for t in &sections {
             let modes = series(rec, &format!("mode_{p}_{t}"));
             for (i, w) in modes.windows(2).enumerate() {
                 if w[0] == 0.0 && (w[1] == 1.0 || w[1] == -1.0) {
@@ -184,7 +198,13 @@ pub fn absition_plot(path: &Path, title: &str, rec: &TrialRecord) -> Result<(), 
                 }
             }
         }
-        let label = format!("{plane} absition, rad·s (head red, middle blue, tail green)");
+        let order = ["red", "blue", "green", "orange"];
+        let key: Vec<String> = sections
+            .iter()
+            .zip(order)
+            .map(|(s, c)| format!("{s} {c}"))
+            .collect();
+        let label = format!("{plane} absition per section, rad·s ({})", key.join(", "));
         draw_panel(
             &areas[k + 1],
             &label,
