@@ -13,7 +13,7 @@ pub const MAX_FIELDS: usize = 4;
 /// Windows kept per field (a per-joint field of a 64-module body has 32).
 pub const MAX_WINDOWS: usize = 32;
 /// Columns per window (e.g. value, force, mode, absition).
-pub const MAX_COLUMNS: usize = 4;
+pub const MAX_COLUMNS: usize = 6;
 
 /// One windowed field: `count` windows on the body, the first [`MAX_WINDOWS`] kept.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -86,6 +86,29 @@ pub struct Absition {
     /// in PDC or NDC when the reference is the threshold).
     pub absition: f64,
     pub mode: Mode,
+    /// Time since the mode last changed, s.
+    pub in_mode_s: f64,
+}
+
+/// How one step of the absition is weighed (issue 26, point 2).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Weighing {
+    /// How still the section is, 0..=1: the share of `Ā − A₀ − c` that accumulates;
+    /// the rest of the step the absition leaks (1: the reference's plain integral).
+    pub still: f64,
+    /// The leak's time constant, s (infinite: no leak).
+    pub leak_s: f64,
+    /// Longest stay in PDC or NDC, s (then NC with zero absition; infinite: no limit).
+    pub max_dwell_s: f64,
+}
+
+impl Weighing {
+    /// The reference's plain integral: no leak, no dwell limit.
+    pub const PLAIN: Weighing = Weighing {
+        still: 1.0,
+        leak_s: f64::INFINITY,
+        max_dwell_s: f64::INFINITY,
+    };
 }
 
 impl Absition {
@@ -94,20 +117,25 @@ impl Absition {
         Self {
             absition: 0.0,
             mode,
+            in_mode_s: 0.0,
         }
     }
 
     /// Advances the absition by `dt_s` with the mean deviation `mean_deviation` (`Ā −
-    /// A₀`) and friction offset `offset`; with `switching`, changes the mode by the
-    /// thresholds. Returns whether the mode changed.
+    /// A₀`) and friction offset `offset`, weighed by `w`; with `switching`, changes the
+    /// mode by the thresholds. Returns whether the mode changed.
     pub fn observe(
         &mut self,
         mean_deviation: f64,
         offset: f64,
         dt_s: f64,
+        w: &Weighing,
         switching: Option<&Thresholds>,
     ) -> bool {
-        self.absition += (mean_deviation - offset) * dt_s;
+        let still = w.still.clamp(0.0, 1.0);
+        let leak = (1.0 - still) * self.absition / w.leak_s;
+        self.absition += (still * (mean_deviation - offset) - leak) * dt_s;
+        self.in_mode_s += dt_s;
         let Some(t) = switching else {
             return false;
         };
@@ -116,6 +144,7 @@ impl Absition {
             Reference::Zero => 0.0,
         };
         let s = self.absition;
+        let expired = self.in_mode_s >= w.max_dwell_s;
         let next = match self.mode {
             Mode::Nc if s < t.low_rad_s => {
                 self.absition -= rebase(t.low_rad_s);
@@ -127,9 +156,16 @@ impl Absition {
             }
             Mode::Pdc if s >= 0.0 => Mode::Nc,
             Mode::Ndc if s <= 0.0 => Mode::Nc,
+            Mode::Pdc | Mode::Ndc if expired => {
+                self.absition = 0.0;
+                Mode::Nc
+            }
             m => m,
         };
         let changed = next != self.mode;
+        if changed {
+            self.in_mode_s = 0.0;
+        }
         self.mode = next;
         changed
     }
@@ -165,7 +201,8 @@ mod tests {
 
         fn observe(&mut self, offset: f64, dt: f64, switching: Option<&Thresholds>) -> bool {
             self.mean.add(self.amplitude.deviation, dt);
-            self.state.observe(self.mean.mean(), offset, dt, switching)
+            self.state
+                .observe(self.mean.mean(), offset, dt, &Weighing::PLAIN, switching)
         }
     }
 
@@ -310,7 +347,7 @@ mod tests {
     fn the_offset_is_subtracted_and_the_zero_reference_keeps_the_absition() {
         let mut a = Absition::new(Mode::Nc);
         for _ in 0..1000 {
-            a.observe(0.1, 0.1, 1e-3, None);
+            a.observe(0.1, 0.1, 1e-3, &Weighing::PLAIN, None);
         }
         assert!(
             a.absition.abs() < 1e-12,
@@ -322,8 +359,67 @@ mod tests {
         };
         let mut a = Absition::new(Mode::Nc);
         a.absition = 0.49;
-        assert!(a.observe(0.2, 0.0, 0.1, Some(&zero)));
+        assert!(a.observe(0.2, 0.0, 0.1, &Weighing::PLAIN, Some(&zero)));
         assert_eq!(a.mode, Mode::Ndc);
         assert!(a.absition > 0.5, "runs on from where it was: {a:?}");
+    }
+
+    /// A section being moved past obstacles (still 0) forgets its absition with the
+    /// leak's time constant instead of accumulating its offset; a still one
+    /// accumulates all of it.
+    #[test]
+    fn a_moving_section_leaks_and_a_still_one_accumulates() {
+        let moving = Weighing {
+            still: 0.0,
+            leak_s: 2.0,
+            max_dwell_s: f64::INFINITY,
+        };
+        let mut a = Absition::new(Mode::Nc);
+        a.absition = -1.0;
+        for _ in 0..2000 {
+            a.observe(-0.4, 0.0, 1e-3, &moving, None);
+        }
+        let expected = -(-1.0f64).exp(); // 2 s at a 2 s time constant
+        assert!((a.absition - expected).abs() < 1e-3, "{a:?}");
+        let still = Weighing {
+            still: 1.0,
+            ..moving
+        };
+        let mut a = Absition::new(Mode::Nc);
+        for _ in 0..2000 {
+            a.observe(-0.4, 0.0, 1e-3, &still, None);
+        }
+        assert!((a.absition + 0.8).abs() < 1e-9, "{a:?}");
+    }
+
+    /// A section PDC could not free returns to NC after the longest stay, with zero
+    /// absition; without a limit it stays.
+    #[test]
+    fn a_directional_section_returns_after_its_longest_stay() {
+        let dwell = Weighing {
+            max_dwell_s: 3.0,
+            ..Weighing::PLAIN
+        };
+        for (w, back) in [(dwell, true), (Weighing::PLAIN, false)] {
+            let mut a = Absition::new(Mode::Nc);
+            let mut changes = Vec::new();
+            for k in 0..10_000usize {
+                if a.observe(-0.5, 0.0, 1e-3, &w, Some(&T)) {
+                    changes.push((k, a.mode));
+                }
+            }
+            assert_eq!(changes[0].1, Mode::Pdc, "{changes:?}");
+            if back {
+                // PDC at 1 s (0.5 rad·s), NC 3 s later, PDC again 1 s after that.
+                assert_eq!(changes[1].1, Mode::Nc, "{changes:?}");
+                assert!(
+                    (changes[1].0 - changes[0].0).abs_diff(3000) <= 1,
+                    "{changes:?}"
+                );
+                assert_eq!(changes.len(), 5, "{changes:?}");
+            } else {
+                assert_eq!(changes.len(), 1, "{changes:?}");
+            }
+        }
     }
 }

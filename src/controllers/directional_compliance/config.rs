@@ -108,6 +108,35 @@ pub struct SectionsConfig {
     pub mean_cycles: f64,
 }
 
+/// Which sections count as held (issue 26, point 2; docs/compliance.md, "Held or
+/// helped"). Among obstacles a section's mean amplitude sits away from nominal whether
+/// the obstacles hold it or help it along; what tells them apart in the physics is that
+/// a held section's mean stays still from one gait cycle to the next while a section
+/// carried past obstacles keeps changing. The absition accumulates `Ā − A₀ − c` by the
+/// share `still = s²/(s² + a²)` (`a`: the change of the section's mean over the last
+/// span, itself averaged over a span) and leaks for the rest.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HoldConfig {
+    /// `s`: the change of a section's mean amplitude from one span to the next at which
+    /// half of `Ā − A₀ − c` accumulates, rad; 0: off (the reference's plain integral).
+    pub still_rad: f64,
+    /// Time constant of the leak while the section moves, s.
+    pub leak_s: f64,
+    /// Longest stay of a section in PDC or NDC, in nominal gait cycles; then it returns
+    /// to NC with zero absition (0: no limit, the reference's rule alone).
+    pub max_dwell_cycles: f64,
+}
+
+impl HoldConfig {
+    /// Off: the reference's plain integral and return rule.
+    pub const PLAIN: HoldConfig = HoldConfig {
+        still_rad: 0.0,
+        leak_s: 5.0,
+        max_dwell_cycles: 0.0,
+    };
+}
+
 /// One value per body section (a JSON array of 1..=4 numbers, head first).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SectionValues {
@@ -197,6 +226,8 @@ pub struct DirectionalComplianceConfig {
     pub thresholds: Thresholds,
     /// The body sections that keep the absitions and set the windows' modes.
     pub sections: SectionsConfig,
+    /// Which sections count as held.
+    pub hold: HoldConfig,
     /// A calibration from an earlier run (`controller.calibrate` reports one); `null`:
     /// uncalibrated (offset 0) until calibrated.
     #[serde(default)]
@@ -254,7 +285,7 @@ impl DirectionalComplianceConfig {
                     max_rate: f64::INFINITY,
                 },
             },
-            // Tuned on peg-array layouts 500-503 (docs/measurements.md); the fixed
+            // Tuned on peg-array layouts 500-519 (docs/measurements.md); the fixed
             // strategies are the reference's bare filters.
             thresholds: Thresholds {
                 low_rad_s: -1.2,
@@ -269,6 +300,13 @@ impl DirectionalComplianceConfig {
             sections: SectionsConfig {
                 count: 3,
                 mean_cycles: 1.0,
+            },
+            // Measured and tuned on peg-array layouts 500-519 (docs/compliance.md,
+            // "Held or helped"); it only changes what the fixed strategies report.
+            hold: HoldConfig {
+                still_rad: 0.02,
+                leak_s: 5.0,
+                max_dwell_cycles: 3.0,
             },
             friction_offset: None,
             torque_cutoff_hz: 5.0,
@@ -325,6 +363,14 @@ impl DirectionalComplianceConfig {
             ));
         }
         check_range("sections.mean_cycles", sections.mean_cycles, 0.1, 10.0)?;
+        check_range("hold.still_rad", self.hold.still_rad, 0.0, 1.0)?;
+        check_range("hold.leak_s", self.hold.leak_s, 0.1, 600.0)?;
+        check_range(
+            "hold.max_dwell_cycles",
+            self.hold.max_dwell_cycles,
+            0.0,
+            100.0,
+        )?;
         if let Some(o) = &self.friction_offset {
             for (plane, values) in [
                 ("lateral_rad", &o.lateral_rad),

@@ -114,8 +114,12 @@ impl DirectionalCompliance {
     /// The span of the sections' mean amplitude: `mean_cycles` nominal gait cycles (a
     /// stopped wave, ωT = 0, counts as a cycle of 2π s).
     fn mean_span_s(&self) -> f64 {
-        let wt = self.nominal.params.temporal_freq_rad_s.abs().max(1.0);
-        self.config.sections.mean_cycles * std::f64::consts::TAU / wt
+        self.config.sections.mean_cycles * self.cycle_s()
+    }
+
+    /// A nominal gait cycle, s (a wave slower than 1 rad/s counts as 2π s).
+    fn cycle_s(&self) -> f64 {
+        std::f64::consts::TAU / self.nominal.params.temporal_freq_rad_s.abs().max(1.0)
     }
 
     /// Forgets everything learnt but the calibration.
@@ -288,11 +292,19 @@ impl DirectionalCompliance {
         .then_some(&self.config.thresholds);
         let o = self.calibration.offsets();
         let offsets = [o.lateral_rad.padded(), o.dorsal_rad.padded()];
+        let hold = self.config.hold;
+        let max_dwell_s = if hold.max_dwell_cycles > 0.0 {
+            hold.max_dwell_cycles * self.cycle_s()
+        } else {
+            f64::INFINITY
+        };
         self.switches += self.sections.update(
             self.planes(),
             &self.section_deviation,
             &offsets,
             dt,
+            &hold,
+            max_dwell_s,
             switching,
         );
     }
@@ -394,6 +406,8 @@ impl DirectionalCompliance {
             out.columns[1][k] = sp.absition.absition;
             out.columns[2][k] = sp.absition.mode.code();
             out.columns[3][k] = offsets.get(k);
+            out.columns[4][k] = sp.change.mean();
+            out.columns[5][k] = sp.still(&self.config.hold);
         }
     }
 }

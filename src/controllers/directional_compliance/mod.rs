@@ -117,6 +117,8 @@ impl ControllerKind for DirectionalComplianceKind {
             s("absition", "rad·s"),
             s("mode", ""),
             s("offset", "rad"),
+            s("change", "rad"),
+            s("still", ""),
         ];
         let field = |name: &str, centralization: &str, columns: &Vec<SignalSpec>| FieldSpec {
             name: name.into(),
