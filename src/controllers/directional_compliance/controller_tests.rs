@@ -151,9 +151,10 @@ fn section_modes(c: &DirectionalCompliance, modes: &mut Vec<Mode>) {
 fn a_body_flattened_for_long_switches_to_pdc() {
     let (mut c, ..) = engaged("dc_switching");
     let mut modes = Vec::new();
-    // Every lateral joint is pushed flatter: every section's absition falls.
+    // Every lateral joint is pushed flatter, steadily: every section's absition falls
+    // once two spans have shown the sections still (the hold).
     let flatten = |_: f64, sp: &[f64]| bend_further(sp).map(|t| -t);
-    run(&mut c, 0.0, 6.0, flatten, |c| section_modes(c, &mut modes));
+    run(&mut c, 0.0, 25.0, flatten, |c| section_modes(c, &mut modes));
     assert!(modes.contains(&Mode::Pdc), "{modes:?}");
     assert!(!modes.contains(&Mode::Ndc), "{modes:?}");
     // And bent further for long: NDC.
@@ -162,7 +163,7 @@ fn a_body_flattened_for_long_switches_to_pdc() {
     run(
         &mut c,
         0.0,
-        6.0,
+        25.0,
         |_, sp| bend_further(sp),
         |c| section_modes(c, &mut modes),
     );
@@ -269,7 +270,7 @@ fn calibration_measures_the_open_ground_offset_and_then_the_absition_stays_near_
     assert_eq!(c.switches(), 0);
     // Uncalibrated, the same drag reads as an obstruction.
     let (mut c, ..) = engaged("dc_switching");
-    run(&mut c, 0.0, 20.0, drag, |_| {});
+    run(&mut c, 0.0, 30.0, drag, |_| {});
     assert!(c.switches() > 0);
     // Cleared: back to none.
     c.command(ControllerCommand::ClearCalibration).unwrap();
