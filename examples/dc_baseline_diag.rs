@@ -208,6 +208,39 @@ fn main() {
             .unwrap();
         }
     }
+    println!(
+        "per trial (slowest first) and section: mean Ā − A₀ − c, rad / mean |change of it from one cycle to the next|, rad / BL per cycle moved"
+    );
+    let mut trials: Vec<&str> = all.iter().map(|r| r.trial.as_str()).collect();
+    trials.dedup();
+    let moved = |t: &str| {
+        let v: Vec<f64> = all
+            .iter()
+            .filter(|r| r.trial == t)
+            .map(|r| r.moved_bl)
+            .collect();
+        v.iter().sum::<f64>() / v.len().max(1) as f64
+    };
+    trials.sort_by(|a, b| moved(a).total_cmp(&moved(b)));
+    for t in trials {
+        let mut line = format!("{t:14}");
+        for (sec, s) in SECTIONS.iter().enumerate() {
+            let v: Vec<&Row> = all
+                .iter()
+                .filter(|r| r.trial == t && r.section == sec && r.cycle > 0)
+                .collect();
+            let n = v.len().max(1) as f64;
+            let rate = v.iter().map(|r| r.rate).sum::<f64>() / n;
+            let change = v
+                .windows(2)
+                .map(|w| (w[1].rate - w[0].rate).abs())
+                .sum::<f64>()
+                / (n - 1.0).max(1.0);
+            let mv = v.iter().map(|r| r.moved_bl).sum::<f64>() / n;
+            line += &format!("  {s} {rate:+.2} / {change:.3} / {mv:.3}");
+        }
+        println!("{line}");
+    }
     println!("absition rate Ā − A₀ − c per cycle, rad, by what the section did over the cycle:");
     type Class = (&'static str, fn(&Row) -> bool);
     let classes: [Class; 3] = [
