@@ -501,7 +501,7 @@ fn decode_lookup(r: &mut Reader<'_>) -> Result<LookupFilter, DecodeError> {
     Ok(filter)
 }
 
-/// The full suite (round trips, every error, corruption) is `tests/protocol_codec.rs`.
+/// The full suite (round trips, every error, corruption) is `tests/integration/protocol/codec.rs`.
 #[cfg(test)]
 #[path = "codec_tests.rs"]
 mod tests;

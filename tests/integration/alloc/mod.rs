@@ -1,0 +1,3 @@
+mod control_cycles;
+mod controllers;
+mod gaits;

@@ -1,0 +1,3 @@
+mod integrity;
+mod sim_alloc;
+mod udp;

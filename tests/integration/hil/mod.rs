@@ -1,0 +1,6 @@
+mod compliance;
+mod delay;
+mod determinism;
+mod failsafe;
+mod gaits;
+mod keyed_gateway;

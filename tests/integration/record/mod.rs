@@ -1,0 +1,4 @@
+mod live;
+mod no_alloc;
+mod python;
+mod writer;

@@ -1,0 +1,659 @@
+//! Controllers over the socket, for any gait: `controller.list/get/set` validated
+//! against a fake loop, then `status`, telemetry and `snakectl` against the real loop
+//! (over the echo bus, with scripted torques) behind the real server.
+use crate::support::socket;
+
+use std::process::Command;
+use std::time::{Duration, Instant};
+
+use serde_json::{Value, json};
+use snaked::bus::echo::EchoBus;
+use snaked::control::api::code;
+use snaked::control::client::{Client, Endpoint};
+use snaked::gait::{GaitKind, GaitTable};
+use snaked::rt::harness::{PERIOD_NS, echo_harness_on};
+use snaked::rt::messages::LoopRequest;
+use snaked::safety::failsafe::FailsafeConfig;
+use socket::{Harness, RealLoop, error_code, error_message, raw, serve_real_loop};
+
+fn call(c: &mut Client, method: &str, params: Value) -> Value {
+    let line = json!({"id": 1, "method": method, "params": params}).to_string();
+    raw(c, &line)
+}
+
+#[test]
+fn controller_list_shows_every_gait_s_controllers_from_the_registry() {
+    let h = Harness::default_server();
+    let mut c = h.client();
+    let all = call(&mut c, "controller.list", json!({}));
+    let gaits = all["result"]["gaits"].as_object().expect("per gait");
+    assert_eq!(gaits.len(), GaitKind::ALL.len(), "{all}");
+    for (name, g) in gaits {
+        let names: Vec<&str> = g["controllers"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|c| c["name"].as_str().unwrap())
+            .collect();
+        assert!(names.contains(&"open_loop"), "{name}: {names:?}");
+    }
+    let slithering = &gaits["slithering"]["controllers"];
+    let compliant = slithering
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|c| c["name"] == "compliant_slithering")
+        .expect("listed for slithering");
+    assert_eq!(compliant["default_preset"], "a_ws_omega");
+    let presets: Vec<&str> = compliant["presets"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| p["name"].as_str().unwrap())
+        .collect();
+    assert!(presets.contains(&"a") && presets.contains(&"a_ws_omega_per_joint"));
+    let cfg = &compliant["default_config"];
+    assert_eq!(
+        cfg["phase"]["gains"]["max"],
+        Value::Null,
+        "unbounded shows null"
+    );
+    let signals = compliant["report"]["signals"].as_array().unwrap();
+    let lag = signals
+        .iter()
+        .find(|s| s["name"] == "phase_lag_rad")
+        .unwrap();
+    assert_eq!(lag["unit"], "rad");
+    let fields = compliant["report"]["fields"].as_array().unwrap();
+    assert_eq!(fields[0]["name"], "amplitude");
+    // One gait only.
+    let one = call(&mut c, "controller.list", json!({"gait": "rolling"}));
+    assert_eq!(
+        one["result"]["gaits"].as_object().unwrap().len(),
+        1,
+        "{one}"
+    );
+}
+
+#[test]
+fn controller_set_is_validated_built_off_the_loop_and_sent() {
+    let h = Harness::default_server();
+    let mut c = h.client();
+    let ok = call(
+        &mut c,
+        "controller.set",
+        json!({"gait": "slithering", "controller": "a_ws_omega",
+            "config": {"amplitude": {"gains": {"stiffness": 6.0}}}}),
+    );
+    let r = &ok["result"]["controller"];
+    assert_eq!(
+        (r["controller"].as_str(), r["preset"].as_str()),
+        (Some("compliant_slithering"), Some("a_ws_omega")),
+        "{ok}"
+    );
+    assert_eq!(r["config"]["amplitude"]["gains"]["stiffness"], 6.0);
+    assert_eq!(
+        r["config"]["amplitude"]["gains"]["damping"], 6.0,
+        "the preset's"
+    );
+    // Any gait: open loop for rolling, by controller name.
+    let ok = call(
+        &mut c,
+        "controller.set",
+        json!({"gait": "rolling", "controller": "open_loop"}),
+    );
+    assert_eq!(ok["result"]["controller"]["gait"], "rolling", "{ok}");
+    assert_eq!(
+        h.fake.seen(),
+        [
+            LoopRequest::SetController(GaitKind::Slithering),
+            LoopRequest::SetController(GaitKind::Rolling)
+        ]
+    );
+    assert_eq!(
+        h.fake.controllers(),
+        ["compliant_slithering/a_ws_omega", "open_loop/default"]
+    );
+
+    for (params, needle) in [
+        (
+            json!({"gait": "slithering", "controller": "fast"}),
+            "unknown controller `fast` for slithering",
+        ),
+        (
+            json!({"gait": "rolling", "controller": "cpg"}),
+            "controller cpg does not run rolling",
+        ),
+        (
+            json!({"gait": "slithering", "controller": "compliant_slithering", "preset": "b"}),
+            "no preset `b`",
+        ),
+        (
+            json!({"gait": "slithering", "controller": "a", "config": {"stiff": 1}}),
+            "`config.stiff`: unknown field `stiff`",
+        ),
+        (
+            json!({"gait": "slithering", "controller": "a",
+                "config": {"amplitude": {"gains": {"damping": "x"}}}}),
+            "`config.amplitude.gains.damping`",
+        ),
+        // Bounds are part of the check: a huge bias force would run a parameter away.
+        (
+            json!({"gait": "slithering", "controller": "a_ws_omega",
+                "config": {"spatial_freq": {"gains": {"bias_force": 1e308}}}}),
+            "`config.spatial_freq.gains.bias_force` = 1e308 is out of range",
+        ),
+        (
+            json!({"gait": "slithering", "controller": "a_ws_omega",
+                "config": {"phase": {"gains": {"bias_force": 1000.0}}}}),
+            "`config.phase.gains.bias_force`",
+        ),
+        // The gait's nominal amplitude must lie within the compliant amplitude's range.
+        (
+            json!({"gait": "slithering", "controller": "a",
+                "config": {"amplitude": {"gains": {"min": 0.9, "max": 1.2}}}}),
+            "the nominal amplitude_lat_rad",
+        ),
+        (json!({"gait": "slithering"}), "missing `controller`"),
+        (
+            json!({"gait": "slithering", "controller": "a", "extra": 1}),
+            "unknown field `extra`",
+        ),
+    ] {
+        let a = call(&mut c, "controller.set", params.clone());
+        assert_eq!(error_code(&a), code::INVALID_PARAMS, "{params}: {a}");
+        let m = error_message(&a);
+        assert!(m.contains(needle), "{params}: {m}");
+    }
+    assert_eq!(h.fake.seen().len(), 2, "nothing invalid reaches the loop");
+
+    // What replaced slithering's `compliance` object still works, and says so on
+    // other gaits.
+    let old = call(
+        &mut c,
+        "params.set",
+        json!({"gait": "slithering", "compliance": {"controller": "a",
+            "amplitude": {"gains": {"stiffness": 9.0}}, "compliance": "anti_compliant"}}),
+    );
+    let r = &old["result"]["controller"];
+    assert_eq!(r["preset"], "a", "{old}");
+    assert_eq!(r["config"]["sign"], "anti_compliant");
+    assert_eq!(r["config"]["amplitude"]["gains"]["stiffness"], 9.0);
+    let bad = call(
+        &mut c,
+        "params.set",
+        json!({"gait": "rolling", "compliance": {"controller": "a"}}),
+    );
+    assert!(error_message(&bad).contains("controller.set"), "{bad}");
+
+    // controller.get names what each gait runs (from the loop's telemetry).
+    let deadline = Instant::now() + Duration::from_secs(10);
+    let got = loop {
+        let g = call(&mut c, "controller.get", json!({"gait": "slithering"}));
+        if g["result"]["controller"]["preset"] == "a" || Instant::now() > deadline {
+            break g;
+        }
+        std::thread::sleep(Duration::from_millis(5));
+    };
+    assert_eq!(got["result"]["controller"]["preset"], "a", "{got}");
+}
+
+fn pegs(i: usize, position_rad: f32) -> f32 {
+    if i.is_multiple_of(4) && position_rad.abs() > 0.05 {
+        2.0 * position_rad.signum()
+    } else {
+        0.0
+    }
+}
+
+/// The real loop over an echo bus (torques against the bend at every other lateral
+/// joint), stepped about ten times faster than real time on its own thread.
+fn real_loop() -> RealLoop {
+    let mut table = GaitTable::default();
+    table.get_mut(GaitKind::Slithering).temporal_freq_rad_s = 3.0;
+    let bus = EchoBus::new(18, PERIOD_NS).with_torque(pegs);
+    let h = echo_harness_on(
+        bus,
+        table,
+        GaitKind::Slithering,
+        false,
+        FailsafeConfig::default(),
+    );
+    serve_real_loop(h, |control| {
+        for _ in 0..10 {
+            control.step();
+        }
+        std::thread::sleep(Duration::from_millis(1));
+    })
+}
+
+/// `status` once `ok` holds for it (or the last one after 30 s).
+fn status_when(c: &mut Client, ok: impl Fn(&Value) -> bool) -> Value {
+    let deadline = Instant::now() + Duration::from_secs(30);
+    loop {
+        let s = c.call("status", None).unwrap();
+        if ok(&s) || Instant::now() > deadline {
+            return s;
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    }
+}
+
+fn snakectl(l: &RealLoop, args: &[&str]) -> String {
+    let out = Command::new(env!("CARGO_BIN_EXE_snakectl"))
+        .arg("--socket")
+        .arg(&l.path)
+        .args(args)
+        .output()
+        .unwrap();
+    let text = String::from_utf8(out.stdout).unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{args:?}: {text}{err}");
+    text
+}
+
+#[test]
+fn status_telemetry_and_snakectl_show_any_controller_s_report() {
+    let l = real_loop();
+    let mut c = Client::connect(
+        &Endpoint::Unix(l.path.clone()),
+        Some(Duration::from_secs(10)),
+    )
+    .unwrap();
+    // Every gait starts on its open-loop controller, which takes over after the
+    // start-up blend.
+    let s = status_when(&mut c, |s| s["controller"]["state"] == "engaged");
+    assert_eq!(s["controller"]["controller"], "open_loop", "{s}");
+    assert!(s["controller"]["signals"]["phase_rad"].is_number(), "{s}");
+
+    c.call(
+        "controller.set",
+        Some(json!({"gait": "slithering", "controller": "a_ws_omega"})),
+    )
+    .unwrap();
+    let s = status_when(&mut c, |s| {
+        s["controller"]["preset"] == "a_ws_omega"
+            && s["controller"]["state"] == "engaged"
+            && s["controller"]["signals"]["windows_dropped"].as_f64() > Some(0.0)
+    });
+    let ctl = &s["controller"];
+    assert_eq!(ctl["state"], "engaged", "{ctl}");
+    assert!(
+        ctl["signals"]["windows_born"].as_f64().unwrap() > 0.0,
+        "{ctl}"
+    );
+    assert!(ctl["signals"]["phase_lag_rad"].is_number(), "{ctl}");
+    let fields = ctl["fields"].as_array().unwrap();
+    let amp = &fields[0];
+    assert_eq!(
+        (amp["name"].as_str(), amp["centralization"].as_str()),
+        (Some("amplitude"), Some("windowed"))
+    );
+    let windows = amp["windows"].as_array().unwrap();
+    assert_eq!(
+        windows.len() as f64,
+        ctl["signals"]["windows"].as_f64().unwrap()
+    );
+    assert_eq!(windows[0]["a"], Value::Null, "the head window is open");
+    assert_eq!(
+        windows.last().unwrap()["b"],
+        Value::Null,
+        "so is the tail's"
+    );
+    assert!(
+        windows
+            .iter()
+            .any(|w| w["force"].as_f64().unwrap().abs() > 0.0)
+    );
+    assert!(windows.iter().all(|w| w["value"].is_number()));
+    let phase = &fields[2];
+    assert_eq!(phase["centralization"], "central");
+    assert!(phase["windows"][0]["lag"].is_number(), "{phase}");
+
+    c.call("telemetry.subscribe", Some(json!({"rate_hz": 50})))
+        .unwrap();
+    let msg = loop {
+        let m = c.next_message().unwrap();
+        if m["method"] == "telemetry" {
+            break m;
+        }
+    };
+    let t = &msg["params"]["controller"];
+    assert_eq!(
+        (t["preset"].as_str(), t["state"].as_str()),
+        (Some("a_ws_omega"), Some("engaged"))
+    );
+    assert!(t["fields"][0]["windows"].is_array(), "{t}");
+    c.call("telemetry.unsubscribe", None).unwrap();
+
+    let text = snakectl(&l, &["status"]);
+    assert!(
+        text.contains("control   compliant_slithering/a_ws_omega (engaged)"),
+        "{text}"
+    );
+    assert!(text.contains("amplitude (windowed, compliant"), "{text}");
+    assert!(text.contains("phase (central, compliant"), "{text}");
+
+    // snakectl lists and sets too, with overrides by path; another gait takes the
+    // joints back, and its own controller drives it.
+    let text = snakectl(&l, &["controller", "list", "slithering"]);
+    assert!(
+        text.contains("compliant_slithering") && text.contains("* a_ws_omega"),
+        "{text}"
+    );
+    let text = snakectl(
+        &l,
+        &[
+            "controller",
+            "set",
+            "slithering",
+            "a",
+            "amplitude.gains.stiffness=5",
+        ],
+    );
+    assert!(text.contains("compliant_slithering/a"), "{text}");
+    assert!(text.contains("amplitude.gains.stiffness=5"), "{text}");
+    c.call("gait.set", Some(json!({"gait": "rolling"})))
+        .unwrap();
+    let s = status_when(&mut c, |s| {
+        s["gait"] == "rolling" && s["controller"]["state"] == "engaged"
+    });
+    assert_eq!(s["controller"]["controller"], "open_loop", "{s}");
+    let got = c.call("controller.get", None).unwrap();
+    assert_eq!(got["gaits"]["slithering"]["preset"], "a", "{got}");
+    assert_eq!(
+        got["gaits"]["slithering"]["config"]["amplitude"]["gains"]["stiffness"],
+        5.0
+    );
+    let text = snakectl(&l, &["controller", "get"]);
+    assert!(
+        text.contains("rolling") && text.contains("open_loop/default"),
+        "{text}"
+    );
+}
+
+#[test]
+fn a_controller_of_another_gait_through_the_socket_and_snakectl() {
+    let l = real_loop();
+    let mut c = Client::connect(
+        &Endpoint::Unix(l.path.clone()),
+        Some(Duration::from_secs(10)),
+    )
+    .unwrap();
+    let text = snakectl(&l, &["controller", "list", "sidewinding"]);
+    assert!(text.contains("serpenoid_admittance"), "{text}");
+    assert!(text.contains("scale_lateral []"), "{text}");
+    // A preset's name is enough when only one controller of the gait has it.
+    let text = snakectl(
+        &l,
+        &[
+            "controller",
+            "set",
+            "sidewinding",
+            "anti_compliant",
+            "dorsal.enabled=false",
+            "lateral.gains.stiffness=12",
+        ],
+    );
+    assert!(
+        text.contains("serpenoid_admittance/anti_compliant"),
+        "{text}"
+    );
+    assert!(text.contains("dorsal.enabled=false"), "{text}");
+    c.call("gait.set", Some(json!({"gait": "sidewinding"})))
+        .unwrap();
+    let s = status_when(&mut c, |s| {
+        s["gait"] == "sidewinding"
+            && s["controller"]["state"] == "engaged"
+            && s["controller"]["signals"]["scale_lateral"]
+                .as_f64()
+                .is_some_and(|k| (k - 1.0).abs() > 1e-3)
+    });
+    let ctl = &s["controller"];
+    assert_eq!(ctl["controller"], "serpenoid_admittance", "{s}");
+    let k = ctl["signals"]["scale_lateral"].as_f64().unwrap();
+    // The echo bus pushes every fourth joint against its bend: anti-compliance
+    // pushes back, opening the lateral wave; the dorsal one is off and stays nominal.
+    assert!(k > 1.0, "anti-compliant lateral scale {k}");
+    assert_eq!(ctl["signals"]["scale_dorsal"], 1.0, "{ctl}");
+    let text = snakectl(&l, &["status"]);
+    assert!(
+        text.contains("control   serpenoid_admittance/anti_compliant (engaged)"),
+        "{text}"
+    );
+    assert!(text.contains("scale_lateral"), "{text}");
+    // The helix's amplitude is tied to its radius: not a gait this controller runs.
+    let err = call(
+        &mut c,
+        "controller.set",
+        json!({"gait": "rolling_helix", "controller": "serpenoid_admittance"}),
+    );
+    assert!(
+        error_message(&err).contains("does not run rolling_helix"),
+        "{err}"
+    );
+}
+
+#[test]
+fn a_controller_is_calibrated_through_the_socket_and_snakectl() {
+    let l = real_loop();
+    let mut c = Client::connect(
+        &Endpoint::Unix(l.path.clone()),
+        Some(Duration::from_secs(20)),
+    )
+    .unwrap();
+    status_when(&mut c, |s| s["controller"]["state"] == "engaged");
+    // Open loop has nothing to calibrate: refused by the loop, saying why.
+    let r = call(&mut c, "controller.calibrate", json!({"seconds": 1.0}));
+    assert_eq!(error_code(&r), code::REFUSED, "{r}");
+    assert!(error_message(&r).contains("nothing to calibrate"), "{r}");
+    // Bad input never reaches the loop.
+    for bad in [
+        json!({"seconds": -1.0}),
+        json!({"seconds": 1e9}),
+        json!({"seconds": 1.0, "clear": true}),
+        json!({"clear": "yes"}),
+        json!({"gait": "crawling"}),
+        json!({"cycles": 3}),
+    ] {
+        let r = call(&mut c, "controller.calibrate", bad.clone());
+        assert_eq!(error_code(&r), code::INVALID_PARAMS, "{bad}: {r}");
+    }
+    // Another gait's open-loop controller: the same refusal.
+    let r = call(&mut c, "controller.calibrate", json!({"gait": "rolling"}));
+    assert_eq!(error_code(&r), code::REFUSED, "{r}");
+
+    c.call(
+        "controller.set",
+        Some(json!({"gait": "slithering", "controller": "dc_switching"})),
+    )
+    .unwrap();
+    let s = status_when(&mut c, |s| {
+        s["controller"]["preset"] == "dc_switching" && s["controller"]["state"] == "engaged"
+    });
+    assert_eq!(
+        s["controller"]["signals"]["calibration"], 0.0,
+        "uncalibrated: {s}"
+    );
+    let text = snakectl(&l, &["controller", "calibrate", "--seconds", "1"]);
+    assert!(text.contains("calibrated over 1.0 s"), "{text}");
+    assert!(text.contains("offset lateral_rad"), "{text}");
+    assert!(text.contains("friction_offset"), "{text}");
+    let s = c.call("status", None).unwrap();
+    let sig = &s["controller"]["signals"];
+    assert_eq!(sig["calibration"], 2.0, "{s}");
+    // The scripted pegs press the body: the measured offsets (one per body section,
+    // in the `sections_lateral` field) are not zero.
+    let sections = s["controller"]["fields"]
+        .as_array()
+        .and_then(|f| f.iter().find(|f| f["name"] == "sections_lateral"))
+        .cloned()
+        .unwrap_or_else(|| panic!("a sections field: {s}"));
+    let offsets: Vec<f64> = sections["windows"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|w| w["offset"].as_f64().unwrap())
+        .collect();
+    assert_eq!(offsets.len(), 3, "{sections}");
+    assert!(offsets.iter().any(|v| v.abs() > 1e-4), "{offsets:?}");
+    // The default is three gait cycles (2.1 s each at ωT = 3 rad/s).
+    let r = c
+        .call("controller.calibrate", Some(json!({"gait": "slithering"})))
+        .unwrap();
+    assert!((r["seconds"].as_f64().unwrap() - 3.0 * std::f64::consts::TAU / 3.0).abs() < 1e-9);
+    let text = snakectl(&l, &["controller", "calibrate", "--clear"]);
+    assert!(text.contains("cleared"), "{text}");
+    let s = status_when(&mut c, |s| s["controller"]["signals"]["calibration"] == 0.0);
+    assert_eq!(s["controller"]["signals"]["calibration"], 0.0, "{s}");
+}
+
+/// Issue 25: the server shutting down while a calibration waits answers it with the
+/// documented -32002 before the connection closes (the loop itself still runs here).
+#[test]
+fn a_calibration_waiting_when_the_server_shuts_down_is_refused_not_cut_off() {
+    let mut l = real_loop();
+    let mut c = Client::connect(
+        &Endpoint::Unix(l.path.clone()),
+        Some(Duration::from_secs(20)),
+    )
+    .unwrap();
+    c.call(
+        "controller.set",
+        Some(json!({"gait": "slithering", "controller": "dc_switching"})),
+    )
+    .unwrap();
+    status_when(&mut c, |s| {
+        s["controller"]["preset"] == "dc_switching" && s["controller"]["state"] == "engaged"
+    });
+    let mut waiting = Client::connect(
+        &Endpoint::Unix(l.path.clone()),
+        Some(Duration::from_secs(20)),
+    )
+    .unwrap();
+    waiting
+        .send_line(r#"{"id":3,"method":"controller.calibrate","params":{"seconds":60}}"#)
+        .unwrap();
+    status_when(&mut c, |s| s["controller"]["signals"]["calibration"] == 1.0);
+    l.server.take().unwrap().shutdown();
+    let answer = waiting.next_message().expect("answered before the close");
+    assert_eq!(answer["id"], 3, "{answer}");
+    assert_eq!(error_code(&answer), code::REFUSED, "{answer}");
+    assert!(error_message(&answer).contains("shutting down"), "{answer}");
+}
+
+#[test]
+fn a_nominal_heading_is_set_through_the_socket_and_snakectl() {
+    let l = real_loop();
+    let mut c = Client::connect(
+        &Endpoint::Unix(l.path.clone()),
+        Some(Duration::from_secs(20)),
+    )
+    .unwrap();
+    status_when(&mut c, |s| s["controller"]["state"] == "engaged");
+    // Open loop does not steer: refused by the loop, saying why.
+    let r = call(&mut c, "controller.heading", json!({"heading_rad": 0.5}));
+    assert_eq!(error_code(&r), code::REFUSED, "{r}");
+    assert!(error_message(&r).contains("does not steer"), "{r}");
+    for bad in [
+        json!({}),
+        json!({"heading_rad": 0.5, "here": true}),
+        json!({"heading_rad": 100.0}),
+        json!({"heading_rad": "north"}),
+        json!({"here": "yes"}),
+        json!({"gait": "crawling", "here": true}),
+    ] {
+        let r = call(&mut c, "controller.heading", bad.clone());
+        assert_eq!(error_code(&r), code::INVALID_PARAMS, "{bad}: {r}");
+    }
+    c.call(
+        "controller.set",
+        Some(json!({"gait": "sidewinding", "controller": "ac_sfc"})),
+    )
+    .unwrap();
+    let r = c
+        .call(
+            "controller.heading",
+            Some(json!({"gait": "sidewinding", "heading_rad": -1.0})),
+        )
+        .unwrap();
+    assert_eq!(r["controller"], "anti_compliant_sidewinding", "{r}");
+    assert_eq!(r["heading_rad"], -1.0);
+    let text = snakectl(
+        &l,
+        &["controller", "heading", "here", "--gait", "sidewinding"],
+    );
+    assert!(text.contains("nominal heading \"here\""), "{text}");
+    let text = snakectl(
+        &l,
+        &["controller", "heading", "-0.3", "--gait", "sidewinding"],
+    );
+    assert!(text.contains("nominal heading -0.3"), "{text}");
+}
+
+/// The pole-climbing controller tuned at run time (squeeze, adaptation, nominal radius)
+/// and reported: it takes over as soon as the helix is selected, getting on (its stage
+/// a signal), and its half turns (R, set point, force, grip) are a field of `status`.
+#[test]
+fn the_pole_climbing_controller_is_tuned_and_reported_through_the_socket() {
+    let l = real_loop();
+    let mut c = Client::connect(
+        &Endpoint::Unix(l.path.clone()),
+        Some(Duration::from_secs(10)),
+    )
+    .unwrap();
+    let text = snakectl(
+        &l,
+        &[
+            "controller",
+            "set",
+            "rolling_helix",
+            "windowed_adaptive",
+            "gains.bias_force=20",
+            "adaptive.low_nm=0.5",
+            "adaptive.rate_per_s=0.05",
+            "getting_on.side=right",
+        ],
+    );
+    assert!(text.contains("helix_radius/windowed_adaptive"), "{text}");
+    // A squeeze the stiffness cannot bound is refused, naming the field.
+    let err = call(
+        &mut c,
+        "controller.set",
+        json!({"gait": "rolling_helix", "controller": "helix_radius", "preset": "central",
+               "config": {"gains": {"bias_force": 20.0}, "slip": {"squeeze_gain": 5.0}}}),
+    );
+    assert!(error_message(&err).contains("squeeze_gain"), "{err}");
+    let p = c.call(
+        "params.set",
+        Some(json!({"gait": "rolling_helix", "helix_radius_m": 0.11, "helix_pitch_m": 0.044})),
+    );
+    assert!(p.is_ok(), "{p:?}");
+    c.call("gait.set", Some(json!({"gait": "rolling_helix"})))
+        .unwrap();
+    // Engaged at the switch, getting on (no blend first).
+    let s = status_when(&mut c, |s| {
+        s["controller"]["state"] == "engaged"
+            && s["controller"]["signals"]["getting_on"].as_f64() > Some(0.0)
+    });
+    assert_eq!(s["controller"]["controller"], "helix_radius", "{s}");
+    assert!(
+        s["controller"]["signals"]["getting_on"].as_f64() > Some(0.0),
+        "{s}"
+    );
+    // Once the coil opens its half turns are reported.
+    let s = status_when(&mut c, |s| {
+        s["controller"]["fields"][0]["windows"]
+            .as_array()
+            .is_some_and(|w| !w.is_empty())
+    });
+    let field = &s["controller"]["fields"][0];
+    assert_eq!(field["name"], "radius", "{s}");
+    let w = &field["windows"][0];
+    for col in ["radius_scale", "set_point", "shape_force", "grip_nm"] {
+        assert!(w[col].is_number(), "{col}: {w}");
+    }
+    assert_eq!(s["controller"]["signals"]["squeeze"], 20.0, "{s}");
+    let text = snakectl(&l, &["status"]);
+    assert!(text.contains("helix_radius/windowed_adaptive"), "{text}");
+}

@@ -1,0 +1,5 @@
+mod controllers;
+mod lifecycle;
+mod methods;
+mod protocol;
+mod snakectl;
