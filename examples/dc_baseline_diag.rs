@@ -18,7 +18,7 @@ use snaked::gait::GaitKind;
 use snaked::lab::board::Layout;
 use snaked::lab::calibration::calibrate;
 use snaked::lab::controllers::LabController;
-use snaked::lab::displacement::FullTime;
+use snaked::lab::displacement::FieldEdge;
 use snaked::lab::runner::noise_seed;
 use snaked::lab::trial::{TrialConfig, TrialRecord, nominal_gaits, run_trial};
 
@@ -176,9 +176,16 @@ fn main() {
                         };
                         let layout = &layouts[l];
                         let world = layout.scenario.generate_trial(16, start).expect("world");
-                        let seed = noise_seed(layout.seed(), start as usize, 0);
-                        let rec = run_trial(&controller, &world, &FullTime, seed, &config, None)
-                            .expect("trial");
+                        let seed = noise_seed(layout.identity, start as usize, 0);
+                        let rec = run_trial(
+                            &controller,
+                            &world,
+                            &FieldEdge::FULL_TIME,
+                            seed,
+                            &config,
+                            None,
+                        )
+                        .expect("trial");
                         let label = format!("{}-s{start}", layout.name);
                         eprintln!("{label} done");
                         mine.extend(rows(&label, &rec, body_m));

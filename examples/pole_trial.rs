@@ -59,7 +59,7 @@ fn main() {
         &c,
         &world,
         &goal,
-        noise_seed(layout.seed(), start as usize, 0),
+        noise_seed(layout.identity, start as usize, 0),
         &config,
         None,
     )

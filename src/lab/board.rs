@@ -26,6 +26,10 @@ pub struct Layout {
     /// Its name in the tables: `seed<N>` or the file's stem.
     pub name: String,
     pub scenario: WorldScenario,
+    /// The world's identity, from which its trials' seeds derive (with the start and
+    /// the repeat): never its place in a run's list, so the same world gets the same
+    /// starts and noise in any run.
+    pub identity: u64,
 }
 
 impl Layout {
@@ -36,6 +40,7 @@ impl Layout {
         Self {
             name: format!("seed{seed}"),
             scenario,
+            identity: seed,
         }
     }
 
@@ -46,7 +51,16 @@ impl Layout {
             || path.display().to_string(),
             |s| s.to_string_lossy().into(),
         );
-        Ok(Self { name, scenario })
+        let text = std::fs::read_to_string(path).map_err(|source| LabError::Io {
+            path: path.to_owned(),
+            source,
+        })?;
+        let identity = scenario_identity(&scenario, &text);
+        Ok(Self {
+            name,
+            scenario,
+            identity,
+        })
     }
 
     /// The world of start `start` for `modules` modules and the board to cross in it.
@@ -58,11 +72,31 @@ impl Layout {
         let board = Board::new(region, world.start.yaw_rad);
         Ok((world, board))
     }
+}
 
-    /// The seed this layout mixes into its trials' sensor-noise seeds.
-    pub fn seed(&self) -> u64 {
-        self.scenario.seed
+/// A scenario file's identity: its own `seed` if `text` sets one, otherwise a hash of
+/// what it describes (not of its path, comments or layout), so two seedless files of
+/// different worlds get different noise and one world under two names the same.
+pub fn scenario_identity(scenario: &WorldScenario, text: &str) -> u64 {
+    let sets_seed = text
+        .parse::<toml::Table>()
+        .is_ok_and(|t| t.contains_key("seed"));
+    if sets_seed {
+        scenario.seed
+    } else {
+        identity_of(
+            serde_json::to_string(scenario)
+                .unwrap_or_default()
+                .as_bytes(),
+        )
     }
+}
+
+/// A stable 64-bit identity of `bytes` (FNV-1a; the same on every machine and build).
+pub fn identity_of(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xCBF2_9CE4_8422_2325, |h, &b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01B3)
+    })
 }
 
 /// Bounding box of the scenario's peg-board regions and of the world's peg centres
@@ -299,8 +333,32 @@ mod tests {
         let l = Layout {
             name: "flat".into(),
             scenario: flat,
+            identity: 0,
         };
         assert!(matches!(l.world(18, 0), Err(LabError::NoBoard { .. })));
+    }
+
+    #[test]
+    fn a_files_identity_is_its_seed_or_what_it_describes() {
+        let dir = tempfile::tempdir().unwrap();
+        let write = |name: &str, text: &str| {
+            let p = dir.path().join(name);
+            std::fs::write(&p, text).unwrap();
+            Layout::from_file(&p).unwrap().identity
+        };
+        let peg = "[[peg]]\nx_m = 0.5\ny_m = 0.0\ndiameter_m = 0.04\n";
+        let other = "[[peg]]\nx_m = 0.7\ny_m = 0.0\ndiameter_m = 0.04\n";
+        // Seedless: the world decides, not the name or the comments.
+        let a = write("a.toml", peg);
+        assert_eq!(a, write("b.toml", &format!("# the same world\n{peg}")));
+        assert_ne!(a, write("c.toml", other));
+        // A file that sets its seed is that seed, 0 included.
+        assert_eq!(write("d.toml", &format!("seed = 0\n{peg}")), 0);
+        assert_eq!(write("e.toml", &format!("seed = 42\n{other}")), 42);
+        assert_eq!(
+            Layout::seeded(&WorldScenario::default(), 1003).identity,
+            1003
+        );
     }
 
     #[test]

@@ -147,7 +147,7 @@ pub fn plan<E: ExperimentModule>(
                     repeat,
                     world: Arc::clone(&world),
                     goal: goal.clone(),
-                    noise_seed: noise_seed(l.seed(), start, repeat),
+                    noise_seed: noise_seed(l.identity, start, repeat),
                 });
             }
         }

@@ -20,6 +20,9 @@ pub struct DisplacementMetrics {
     /// (negative: it slid tail first), per body length per minute. The reference's
     /// metric has no sign, so a body drifting backwards scores as if it travelled.
     pub forward_bl_min: f64,
+    /// The body's centre left the obstacle field before the time limit (the trial
+    /// ended there; `seconds` is the time it took).
+    pub left_field: bool,
     /// Contact onsets between non-adjacent links.
     pub self_contacts: u64,
     /// Window mode switches the controller reported (NaN if it reports none).
@@ -83,6 +86,7 @@ pub fn displacement_metrics(rec: &TrialRecord, body_length_m: f64) -> Displaceme
         displacement_m,
         velocity_bl_min: displacement_m / body_length_m / minutes,
         forward_bl_min: forward_m / body_length_m / minutes,
+        left_field: rec.success,
         self_contacts: rec.self_contacts,
         mode_switches: last(rec, "mode_switches").unwrap_or(f64::NAN),
         directional_share,
@@ -113,6 +117,8 @@ pub struct ControllerSummary {
     pub pose_sd: f64,
     /// Lowest pose mean, BL/min.
     pub worst_pose: f64,
+    /// Trials whose body's centre left the obstacle field.
+    pub left_field: usize,
     pub self_contacts_mean: f64,
     pub mode_switches_mean: f64,
     pub directional_share_mean: f64,
@@ -168,6 +174,7 @@ pub fn summarise(results: &[TrialResult<Displacement>]) -> Vec<ControllerSummary
                 pose_sd,
                 worst_pose: pose_means.iter().copied().fold(f64::INFINITY, f64::min),
                 poses,
+                left_field: mine.iter().filter(|r| r.metrics.left_field).count(),
                 self_contacts_mean: mean(mine.iter().map(|r| r.metrics.self_contacts as f64)),
                 mode_switches_mean: mean(mine.iter().map(|r| r.metrics.mode_switches)),
                 directional_share_mean: mean(mine.iter().map(|r| r.metrics.directional_share)),
@@ -223,7 +230,7 @@ mod tests {
         let m = Displacement {
             terrain: Terrain::PegArray,
         }
-        .metrics(&crate::lab::displacement::FullTime, &rec);
+        .metrics(&crate::lab::displacement::FieldEdge::FULL_TIME, &rec);
         assert!(
             (m.velocity_bl_min - 1.3 / 1.024 / 2.0).abs() < 1e-12,
             "16 modules"

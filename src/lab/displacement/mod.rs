@@ -1,22 +1,23 @@
 //! The directional-compliance paper's experiments (reference 001 §IV, SPEC §8): a
 //! controller runs for a fixed time from a pose (position and heading) among the
-//! obstacles, and is scored by how far its body's geometric centre was displaced, in
-//! body lengths per minute. Two terrains: the planar peg array and the rock pile
+//! obstacles, or until its body's centre leaves them ([`field::FieldEdge`]), and is
+//! scored by how far that centre was displaced, in body lengths per minute. Two terrains: the planar peg array and the rock pile
 //! (3-D). Every pose is run several times, the trials differing only in their
 //! sensor-noise seed (the paper: 5 poses × 4 trials). Definitions: docs/lab.md.
 
+pub mod field;
 pub mod metrics;
 pub mod plots;
 pub mod report;
 
 use super::LabError;
 use super::board::Layout;
-use super::experiment::{ExperimentModule, Goal};
+use super::experiment::ExperimentModule;
 use super::trial::TrialRecord;
-use crate::emu::Plant;
 use crate::emu::world::WorldSpec;
 use crate::emu::world::scenario::MODULE_LENGTH_M;
 use crate::gait::GaitKind;
+pub use field::FieldEdge;
 use metrics::{DisplacementMetrics, displacement_metrics};
 
 /// The peg array's scenario (`scenarios/peg-array.toml`), built in.
@@ -46,16 +47,6 @@ pub struct Displacement {
 pub const PEG_ARRAY_CONTROLLERS: &[&str] = &["dc_nc", "dc_ndc", "dc_pdc", "dc_switching"];
 pub const ROCK_PILE_CONTROLLERS: &[&str] = &["dc3d_nc", "dc3d_ndc", "dc3d_pdc", "dc3d_switching"];
 
-/// A trial runs its whole time.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct FullTime;
-
-impl Goal for FullTime {
-    fn reached(&self, _plant: &dyn Plant) -> bool {
-        false
-    }
-}
-
 impl Displacement {
     /// The terrain's built-in scenario.
     pub fn scenario_toml(&self) -> &'static str {
@@ -67,7 +58,7 @@ impl Displacement {
 }
 
 impl ExperimentModule for Displacement {
-    type Goal = FullTime;
+    type Goal = FieldEdge;
     type Metrics = DisplacementMetrics;
 
     fn name(&self) -> &'static str {
@@ -101,11 +92,13 @@ impl ExperimentModule for Displacement {
         layout: &Layout,
         modules: usize,
         start: u64,
-    ) -> Result<(WorldSpec, FullTime), LabError> {
-        Ok((layout.scenario.generate_trial(modules, start)?, FullTime))
+    ) -> Result<(WorldSpec, FieldEdge), LabError> {
+        let world = layout.scenario.generate_trial(modules, start)?;
+        let edge = FieldEdge::of(&world);
+        Ok((world, edge))
     }
 
-    fn metrics(&self, _goal: &FullTime, rec: &TrialRecord) -> DisplacementMetrics {
+    fn metrics(&self, _goal: &FieldEdge, rec: &TrialRecord) -> DisplacementMetrics {
         let modules = rec.start_links_m.len().saturating_sub(1).max(1);
         displacement_metrics(rec, modules as f64 * MODULE_LENGTH_M)
     }

@@ -11,7 +11,7 @@ use crate::lab::runner::TrialResult;
 
 /// The CSV header; one row per trial follows in plan order.
 pub const CSV_HEADER: &str = "controller,layout,pose,repeat,seconds,displacement_m,\
-velocity_bl_min,forward_bl_min,self_contacts,mode_switches,directional_share";
+velocity_bl_min,forward_bl_min,left_field,self_contacts,mode_switches,directional_share";
 
 /// `results.csv` as text.
 pub fn results_csv(results: &[TrialResult<Displacement>]) -> String {
@@ -22,7 +22,7 @@ pub fn results_csv(results: &[TrialResult<Displacement>]) -> String {
         let m = &r.metrics;
         let _ = writeln!(
             out,
-            "{},{},{},{},{:.3},{:.4},{:.4},{:.4},{},{},{:.3},{}",
+            "{},{},{},{},{:.3},{:.4},{:.4},{:.4},{},{},{},{:.3},{}",
             csv_field(&r.controller),
             csv_field(&r.layout),
             r.start,
@@ -31,6 +31,7 @@ pub fn results_csv(results: &[TrialResult<Displacement>]) -> String {
             m.displacement_m,
             m.velocity_bl_min,
             m.forward_bl_min,
+            u8::from(m.left_field),
             m.self_contacts,
             m.mode_switches,
             m.directional_share,
@@ -61,15 +62,16 @@ pub fn summary_markdown(
     );
     s.push_str(
         "| controller | trials | BL/min mean ± sd | median | sd across poses | worst pose \
-         | forward BL/min mean ± sd | self-contacts | mode switches | time in PDC/NDC |\n\
-         | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n",
+         | forward BL/min mean ± sd | left the field | self-contacts | mode switches \
+         | time in PDC/NDC |\n\
+         | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n",
     );
     let sums = summarise(results);
     for c in &sums {
         let (mean, sd, median) = c.velocity;
         let _ = writeln!(
             s,
-            "| {} | {} | {:.3} ± {:.3} | {:.3} | {:.3} | {:.3} | {:+.3} ± {:.3} | {:.1} | {:.1} | {:.0} % |",
+            "| {} | {} | {:.3} ± {:.3} | {:.3} | {:.3} | {:.3} | {:+.3} ± {:.3} | {}/{} | {:.1} | {:.1} | {:.0} % |",
             c.controller,
             c.trials,
             mean,
@@ -79,6 +81,8 @@ pub fn summary_markdown(
             c.worst_pose,
             c.forward.0,
             c.forward.1,
+            c.left_field,
+            c.trials,
             c.self_contacts_mean,
             c.mode_switches_mean,
             100.0 * c.directional_share_mean
@@ -113,7 +117,9 @@ pub fn summary_markdown(
          links) from the start to the end of the trial, in body lengths (the modules' total \
          length) per minute (the reference's metric, unsigned). Forward = the same \
          displacement along the body's start heading, tail to head, signed: a body sliding \
-         tail first scores negative. Sd across poses = sample sd of the pose means. Self-contacts = \
+         tail first scores negative. A trial ends early when the body's centre leaves the \
+         obstacles' bounding box (left the field), its velocity taken over the time it took. \
+         Sd across poses = sample sd of the pose means. Self-contacts = \
          contact onsets between non-adjacent links. Time in PDC/NDC = share of the samples \
          with at least one window in a directional mode. Definitions: docs/lab.md."
     );

@@ -54,15 +54,17 @@ impl Default for PoleClimb {
 }
 
 impl PoleClimb {
-    /// The layouts of the designs (the runner's names and seeds for them).
+    /// The layouts of the designs: each named as its pole, its identity (its trials'
+    /// start and noise seeds) taken from the pole's own description, so a pole keeps
+    /// its starts whichever list it is run in.
     pub fn layouts(&self) -> Result<Vec<Layout>, LabError> {
         self.designs
             .iter()
-            .enumerate()
-            .map(|(k, d)| {
+            .map(|d| {
                 Ok(Layout {
                     name: d.name.clone(),
-                    scenario: WorldScenario::parse(&format!("seed = {}", 7000 + k))?,
+                    scenario: WorldScenario::parse("")?,
+                    identity: d.identity(),
                 })
             })
             .collect()
@@ -136,7 +138,7 @@ impl ExperimentModule for PoleClimb {
             .iter()
             .find(|d| d.name == layout.name)
             .ok_or_else(|| LabError::BadValue(format!("no pole named {:?}", layout.name)))?;
-        let seed = super::board::trial_seed(layout.seed(), start);
+        let seed = super::board::trial_seed(layout.identity, start);
         let world = design.world(seed, self.mu);
         let goal = PoleGoal {
             top_m: poles::TOP_M,

@@ -109,6 +109,12 @@ pub fn seeded(seed: u64) -> PoleDesign {
 }
 
 impl PoleDesign {
+    /// The pole's identity: a hash of its description (name, foot, changes), so a
+    /// seeded pole's follows from its seed and a named one's from its shape.
+    pub fn identity(&self) -> u64 {
+        crate::lab::board::identity_of(format!("{self:?}").as_bytes())
+    }
+
     /// The pole's sections, bottom to top.
     pub fn sections(&self) -> Vec<PoleSection> {
         let mut out = Vec::new();
@@ -214,6 +220,33 @@ mod tests {
         );
         assert!((diameter_at(&t, 1.4) - 0.15 * 1.3).abs() < 1e-12);
         assert_eq!(diameter_at(&t, 0.1), 0.15);
+    }
+
+    #[test]
+    fn a_poles_identity_is_its_own_not_its_place_in_a_list() {
+        let named = named_set();
+        let mut reversed = named.clone();
+        reversed.reverse();
+        let ids = |set: &[PoleDesign]| {
+            let climb = crate::lab::pole::PoleClimb {
+                designs: set.to_vec(),
+                ..Default::default()
+            };
+            let mut v: Vec<(String, u64)> = climb
+                .layouts()
+                .unwrap()
+                .into_iter()
+                .map(|l| (l.name, l.identity))
+                .collect();
+            v.sort();
+            v
+        };
+        assert_eq!(ids(&named), ids(&reversed));
+        assert_eq!(seeded(7).identity(), seeded(7).identity());
+        assert_ne!(seeded(7).identity(), seeded(8).identity());
+        let mut all: Vec<u64> = named.iter().map(PoleDesign::identity).collect();
+        all.dedup();
+        assert_eq!(all.len(), named.len());
     }
 
     #[test]
