@@ -15,11 +15,11 @@ use std::io::Write;
 
 use snaked::emu::world::scenario::{MODULE_LENGTH_M, WorldScenario};
 use snaked::gait::GaitKind;
-use snaked::lab::board::Layout;
 use snaked::lab::calibration::calibrate;
 use snaked::lab::controllers::LabController;
 use snaked::lab::displacement::FieldEdge;
-use snaked::lab::runner::noise_seed;
+use snaked::lab::layout::Layout;
+use snaked::lab::layout::noise_seed;
 use snaked::lab::trial::{TrialConfig, TrialRecord, nominal_gaits, run_trial};
 
 const SECTIONS: [&str; 3] = ["head", "mid", "tail"];

@@ -132,7 +132,7 @@ fn run(world: &WorldSpec, kind: GaitKind, cycles: f64) -> Errors {
 
 #[test]
 fn the_virtual_chassis_follows_the_true_body_on_flat_ground_and_among_pegs() {
-    let board = WorldScenario::parse(crate::lab::board::PEG_BOARD_TOML)
+    let board = WorldScenario::parse(crate::lab::pegboard::board::PEG_BOARD_TOML)
         .unwrap()
         .generate(N)
         .unwrap();

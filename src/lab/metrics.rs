@@ -1,11 +1,8 @@
-//! The experiment's figures from a recorded trial: pure functions of the body centre's
-//! path (sampled at a fixed rate), tested on synthetic paths. Definitions: `docs/lab.md`.
+//! Figures every experiment may take from a recorded trial: pure functions of the body
+//! centre's path (sampled at a fixed rate: smoothing, length, time stuck) and the
+//! statistics of a set of trials, tested on synthetic paths. Definitions: `docs/lab.md`.
 
 use std::f64::consts::TAU;
-
-/// Smoothed paths shorter than this count as this long, m: a trial that made no
-/// progress gets a large (bad) but finite cycles-per-metre figure.
-pub const MIN_PATH_M: f64 = 0.01;
 
 /// How the figures are computed.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -29,67 +26,6 @@ impl MetricsConfig {
             stuck_window_s: 2.0,
             stuck_move_m: 0.02,
         }
-    }
-}
-
-/// One trial's figures.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct TrialMetrics {
-    /// The front half crossed the board, leaving it by the far edge, before the limit.
-    pub success: bool,
-    /// The front half left the board by a side edge (the trial ended; not a success).
-    pub side_exit: bool,
-    /// The centre's signed displacement across the board (towards its far edge), first
-    /// to last position, m: negative when the body drifted back.
-    pub progress_m: f64,
-    /// Trial length: until success, or the limit, s.
-    pub seconds: f64,
-    /// Nominal body-wave cycles in that time, `ωT·t / 2π`.
-    pub cycles: f64,
-    /// Length of the smoothed centre path, m.
-    pub path_m: f64,
-    /// Straight distance between the centre's first and last positions, m.
-    pub distance_m: f64,
-    /// Time to traverse: `cycles / max(path_m, MIN_PATH_M)`, cycles per metre.
-    pub cycles_per_m: f64,
-    /// Time in stuck windows, s.
-    pub stuck_s: f64,
-    /// Contact onsets between non-adjacent links (set from the trial's record).
-    pub self_contacts: u64,
-}
-
-/// The figures of a centre path sampled every `sample_dt_s` (sample 0 at t = 0).
-pub fn trial_metrics(
-    centre_m: &[[f64; 2]],
-    sample_dt_s: f64,
-    seconds: f64,
-    success: bool,
-    temporal_freq_rad_s: f64,
-    config: &MetricsConfig,
-) -> TrialMetrics {
-    let half = (config.smooth_s / sample_dt_s / 2.0).round() as usize;
-    let smooth = moving_average(centre_m, half);
-    let path_m = polyline_length_m(&smooth);
-    let cycles = temporal_freq_rad_s.abs() * seconds / TAU;
-    TrialMetrics {
-        success,
-        seconds,
-        cycles,
-        path_m,
-        distance_m: match (centre_m.first(), centre_m.last()) {
-            (Some(a), Some(b)) => dist(*a, *b),
-            _ => 0.0,
-        },
-        cycles_per_m: cycles / path_m.max(MIN_PATH_M),
-        stuck_s: stuck_s(
-            &smooth,
-            sample_dt_s,
-            config.stuck_window_s,
-            config.stuck_move_m,
-        ),
-        self_contacts: 0,
-        side_exit: false,
-        progress_m: 0.0,
     }
 }
 
@@ -134,7 +70,8 @@ pub fn stuck_s(points: &[[f64; 2]], sample_dt_s: f64, window_s: f64, move_m: f64
     stuck as f64 * w as f64 * sample_dt_s
 }
 
-fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {
+/// Distance between two ground-plane points, m.
+pub fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {
     (b[0] - a[0]).hypot(b[1] - a[1])
 }
 
@@ -161,13 +98,13 @@ pub fn mean_sd_median(values: &[f64]) -> Option<(f64, f64, f64)> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
-    const DT: f64 = 0.05;
+    pub(crate) const DT: f64 = 0.05;
 
     /// Forward at `v` m/s along x with a lateral sway of `amp` m at `omega` rad/s.
-    fn swaying(v: f64, amp: f64, omega: f64, seconds: f64) -> Vec<[f64; 2]> {
+    pub(crate) fn swaying(v: f64, amp: f64, omega: f64, seconds: f64) -> Vec<[f64; 2]> {
         let n = (seconds / DT).round() as usize;
         (0..=n)
             .map(|k| {
@@ -183,23 +120,6 @@ mod tests {
         assert!((polyline_length_m(&p) - 1.0).abs() < 1e-9);
         let s = moving_average(&p, 20);
         assert!((polyline_length_m(&s) - 1.0).abs() < 1e-9, "endpoints kept");
-    }
-
-    #[test]
-    fn smoothing_over_one_period_removes_the_sway() {
-        // 5 cm of sway at 1 rad/s on 5 cm/s: the raw path is much longer than 3 m.
-        let omega = 1.0;
-        let p = swaying(0.05, 0.05, omega, 60.0);
-        let raw = polyline_length_m(&p);
-        let m = trial_metrics(&p, DT, 60.0, false, omega, &MetricsConfig::for_wave(omega));
-        assert!(raw > 3.5, "raw {raw}");
-        // What is left is the sway near the ends, where the window shrinks.
-        assert!((m.path_m - 3.0).abs() < 0.05, "smoothed {}", m.path_m);
-        assert!((m.distance_m - 3.0).abs() < 0.03);
-        // 60 s at 1 rad/s = 9.55 cycles over 3 m.
-        assert!((m.cycles - 60.0 / TAU).abs() < 1e-9);
-        assert!((m.cycles_per_m - m.cycles / m.path_m).abs() < 1e-12);
-        assert_eq!(m.stuck_s, 0.0);
     }
 
     #[test]
@@ -236,15 +156,6 @@ mod tests {
         // Slow progress (5 mm/s: 1 cm per window) counts as stuck, too.
         let slow = swaying(0.005, 0.0, 1.0, 20.0);
         assert!((stuck_s(&slow, DT, 2.0, 0.02) - 20.0).abs() < 1e-9);
-    }
-
-    #[test]
-    fn no_progress_counts_with_the_minimum_path() {
-        let p = vec![[0.3, 0.1]; 41];
-        let m = trial_metrics(&p, DT, 2.0, false, 1.0, &MetricsConfig::for_wave(1.0));
-        assert!(m.path_m < 1e-12);
-        assert!((m.cycles_per_m - (2.0 / TAU) / MIN_PATH_M).abs() < 1e-9);
-        assert!(m.cycles_per_m.is_finite());
     }
 
     #[test]

@@ -1,40 +1,43 @@
-//! `snake-lab`: controller comparisons in simulation, in-process and in lockstep.
+//! `snake-lab`: controller comparisons in simulation, in-process and in lockstep, each
+//! trial through the daemon's own loop.
 //!
-//! The peg-board experiment of SPEC §5 (thesis §4.1, Fig. 4.6): slithering controllers
-//! from the registry ([`crate::controllers::REGISTRY`]) on seeded random peg boards and on
-//! explicit layouts, several starts each. One concern per file:
-//! - [`experiment`]: what an experiment module names (gait, controllers, the goal
-//!   that ends a trial); [`pegboard`] is the peg-board experiment's.
-//! - [`board`]: the layouts (seeded boards, explicit scenario files), the board's region,
-//!   when a trial has crossed it.
-//! - [`controllers`]: the compared controllers, named ones and `--variant`s.
+//! An experiment is a folder implementing [`experiment::Experiment`] and one line in
+//! [`registry::EXPERIMENTS`]: [`pegboard`] (SPEC §5), [`displacement`] (the peg array
+//! and the rock pile, SPEC §8), [`sidewinding`] (SPEC §7), [`pole`] (SPEC §6).
+//!
+//! What they share:
+//! - [`layout`]: a world scenario per layout, the seeds its trials derive from it;
+//! - [`controllers`]: the compared controllers, named ones and `--variant`s;
+//! - [`calibration`]: a controller's friction offsets, measured on open ground;
 //! - [`trial`]: one trial through the daemon's `ControlLoop` over a `SimBus`, in
-//!   lockstep at 1 ms, recorded at 20 Hz.
-//! - [`metrics`]: pure functions from a recorded path to the experiment's figures.
-//! - [`runner`]: the trial plan and its execution across threads, with a progress bar.
-//! - [`report`]: `results.csv` and `summary.md`.
-//! - [`plots`]: PNG figures.
+//!   lockstep at 1 ms, recorded at 20 Hz; [`strain`]: what it asked of the actuators;
+//! - [`runner`]: the trial plan and its execution across threads, with progress;
+//! - [`shard`]: a share of the plan for a cluster's scheduler, and the merge;
+//! - [`report`]: `results.csv`, `summary.md` and the plots; [`plots`] and [`metrics`]:
+//!   the plot primitives and the path and statistics helpers;
+//! - [`cli`]: the options every experiment has, an experiment as a subcommand.
 //!
 //! Definitions and the command line are in `docs/lab.md`.
 
-pub mod board;
 pub mod calibration;
+pub mod cli;
 pub mod controllers;
 pub mod displacement;
 pub mod experiment;
+pub mod layout;
 pub mod metrics;
 pub mod pegboard;
 pub mod plots;
 pub mod pole;
+pub mod registry;
 pub mod report;
 pub mod runner;
+pub mod shard;
 pub mod sidewinding;
 pub mod strain;
 pub mod trial;
 
-pub use pegboard::CONTROLLERS as PEGBOARD_CONTROLLERS;
-
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use crate::emu::world::physics::PhysicsError;
 use crate::emu::world::scenario::ScenarioError;
@@ -77,6 +80,8 @@ pub enum LabError {
     },
     #[error("plot {}: {msg}", path.display())]
     Plot { path: PathBuf, msg: String },
+    #[error("shard file {}: {msg}", path.display())]
+    Shard { path: PathBuf, msg: String },
 }
 
 impl LabError {
@@ -93,49 +98,6 @@ impl LabError {
                 | Self::Scenario(_)
         )
     }
-}
-
-/// Writes `results.csv`, the plots and `summary.md` into `dir` (created if missing) and
-/// returns the files written. Plots: `path-<controller>.png` and
-/// `signals-<controller>.png` for each controller's first trial, `cycles_per_m.png`.
-pub fn write_report(
-    dir: &Path,
-    results: &[runner::TrialResult],
-    ctx: &report::SummaryContext,
-) -> Result<Vec<PathBuf>, LabError> {
-    std::fs::create_dir_all(dir).map_err(|source| LabError::Io {
-        path: dir.to_owned(),
-        source,
-    })?;
-    let mut written = Vec::new();
-    let csv = dir.join("results.csv");
-    report::write_text(&csv, &report::results_csv(results))?;
-    written.push(csv);
-    let mut ctx = ctx.clone();
-    for r in results {
-        let Some((world, board, rec)) = &r.plotted else {
-            continue;
-        };
-        let stem = file_stem(&r.controller);
-        let title = format!("{}: layout {}, start {}", r.controller, r.layout, r.start);
-        let p = dir.join(format!("path-{stem}.png"));
-        plots::path_plot(&p, &title, world, Some(&board.region), rec)?;
-        written.push(p);
-        let p = dir.join(format!("signals-{stem}.png"));
-        plots::signals_plot(&p, &title, rec)?;
-        written.push(p);
-    }
-    let p = dir.join("cycles_per_m.png");
-    plots::results_plot(&p, results)?;
-    written.push(p);
-    ctx.plots = written[1..]
-        .iter()
-        .filter_map(|p| p.file_name().map(|n| n.to_string_lossy().into_owned()))
-        .collect();
-    let md = dir.join("summary.md");
-    report::write_text(&md, &report::summary_markdown(results, &ctx))?;
-    written.push(md);
-    Ok(written)
 }
 
 /// `name` with anything but ASCII letters, digits, `-` and `_` replaced by `_`.

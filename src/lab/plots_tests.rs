@@ -3,12 +3,11 @@
 use super::*;
 use crate::emu::world::Peg;
 use crate::emu::world::scenario::Region;
-use crate::lab::board::Board;
-use crate::lab::metrics::TrialMetrics;
+use crate::lab::pegboard::board::Board;
 
 const PNG_SIGNATURE: [u8; 8] = [0x89, b'P', b'N', b'G', 0x0d, 0x0a, 0x1a, 0x0a];
 
-fn is_png(path: &Path) -> bool {
+pub(crate) fn is_png(path: &Path) -> bool {
     std::fs::read(path).is_ok_and(|b| b.len() > 1000 && b.starts_with(&PNG_SIGNATURE))
 }
 
@@ -69,36 +68,6 @@ fn every_figure_is_a_png() {
         signals_plot(&p, "signals", &record(n)).unwrap();
         assert!(is_png(&p), "{n} signals");
     }
-    let results: Vec<TrialResult> = (0..5)
-        .map(|k| TrialResult {
-            controller: if k < 3 { "a" } else { "b" }.into(),
-            layout: "seed1".into(),
-            start: k,
-            repeat: 0,
-            metrics: TrialMetrics {
-                success: k % 2 == 0,
-                seconds: 50.0,
-                cycles: 8.0,
-                path_m: 1.0,
-                distance_m: 1.0,
-                cycles_per_m: 5.0 + k as f64,
-                stuck_s: 0.0,
-                self_contacts: 0,
-                side_exit: false,
-                progress_m: 1.0,
-            },
-            strain: Default::default(),
-            plotted: None,
-        })
-        .collect();
-    let p = dir.path().join("results.png");
-    results_plot(&p, &results).unwrap();
-    assert!(is_png(&p));
-    let bad = dir.path().join("no/such/dir/x.png");
-    assert!(matches!(
-        results_plot(&bad, &results),
-        Err(LabError::Plot { .. })
-    ));
 }
 
 #[test]

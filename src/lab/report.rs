@@ -1,46 +1,15 @@
-//! `results.csv` (one row per trial) and `summary.md` (one row per controller).
+//! The report of any experiment: `results.csv` (one row per trial, the experiment's
+//! columns then the strain's), `summary.md` (how the run was made, the experiment's
+//! tables, the calibrations, the strain, the plots) and the plots, written by
+//! [`write_report`] from the experiment's pieces ([`Experiment`]).
 
 use std::fmt::Write as _;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use super::LabError;
-use super::experiment::ExperimentModule;
-use super::metrics::{MIN_PATH_M, mean_sd_median};
+use super::experiment::Experiment;
 use super::runner::{TrialResult, controller_names};
 use super::strain::{Strain, StrainSummary};
-
-/// The CSV header; one row per trial follows in plan order.
-pub const CSV_HEADER: &str = "controller,layout,start,success,seconds,cycles,path_m,distance_m,cycles_per_m,stuck_s,\
-self_contacts,side_exit,progress_m";
-
-/// `results.csv` as text.
-pub fn results_csv(results: &[TrialResult]) -> String {
-    let mut out = String::with_capacity(64 * (results.len() + 1));
-    out.push_str(&with_strain_header(CSV_HEADER));
-    out.push('\n');
-    for r in results {
-        let m = &r.metrics;
-        let _ = writeln!(
-            out,
-            "{},{},{},{},{:.3},{:.4},{:.4},{:.4},{:.4},{:.2},{},{},{:.4},{}",
-            csv_field(&r.controller),
-            csv_field(&r.layout),
-            r.start,
-            m.success,
-            m.seconds,
-            m.cycles,
-            m.path_m,
-            m.distance_m,
-            m.cycles_per_m,
-            m.stuck_s,
-            m.self_contacts,
-            m.side_exit,
-            m.progress_m,
-            r.strain.csv_row()
-        );
-    }
-    out
-}
 
 /// An experiment's CSV header with the strain columns every experiment appends.
 pub fn with_strain_header(own: &str) -> String {
@@ -49,7 +18,7 @@ pub fn with_strain_header(own: &str) -> String {
 
 /// The summary's section on what the controllers asked of the actuators (any
 /// experiment): per controller, medians and worst trials of [`Strain`].
-pub fn strain_markdown<E: ExperimentModule>(results: &[TrialResult<E>]) -> String {
+pub fn strain_markdown<E: Experiment>(results: &[TrialResult<E>]) -> String {
     let mut s = String::from(
         "\nWhat each controller asked of the actuators (every cycle of every trial):\n\n",
     );
@@ -83,7 +52,7 @@ pub(crate) fn csv_field(s: &str) -> String {
 }
 
 /// What the summary says about how the results were made.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone, Default, serde::Serialize, serde::Deserialize)]
 pub struct SummaryContext {
     /// The exact command line.
     pub command: String,
@@ -115,104 +84,61 @@ pub fn calibrations_markdown(ctx: &SummaryContext) -> String {
     s
 }
 
-/// One controller's figures over its trials.
-#[derive(Debug, Clone, PartialEq)]
-pub struct ControllerSummary {
-    pub controller: String,
-    pub trials: usize,
-    pub successes: usize,
-    pub side_exits: usize,
-    /// Cycles per metre over all trials: mean, sample sd, median.
-    pub cycles_per_m: (f64, f64, f64),
-    pub mean_stuck_s: f64,
-    pub mean_seconds: f64,
-    pub mean_path_m: f64,
-    pub mean_progress_m: f64,
+/// Writes `text` to `path`.
+pub fn write_text(path: &Path, text: &str) -> Result<(), LabError> {
+    std::fs::write(path, text).map_err(|source| LabError::Io {
+        path: path.to_owned(),
+        source,
+    })
 }
 
-/// Per-controller figures, controllers in the order they first appear in `results`.
-pub fn summarise(results: &[TrialResult]) -> Vec<ControllerSummary> {
-    super::runner::controller_names(results)
-        .into_iter()
-        .map(|name| {
-            let mine: Vec<_> = results
-                .iter()
-                .filter(|r| r.controller == name)
-                .map(|r| r.metrics)
-                .collect();
-            let mean = |f: &dyn Fn(&super::metrics::TrialMetrics) -> f64| {
-                mine.iter().map(f).sum::<f64>() / mine.len() as f64
-            };
-            let cpm: Vec<f64> = mine.iter().map(|m| m.cycles_per_m).collect();
-            ControllerSummary {
-                controller: name.to_owned(),
-                trials: mine.len(),
-                successes: mine.iter().filter(|m| m.success).count(),
-                side_exits: mine.iter().filter(|m| m.side_exit).count(),
-                cycles_per_m: mean_sd_median(&cpm).expect("a named controller has trials"),
-                mean_stuck_s: mean(&|m| m.stuck_s),
-                mean_seconds: mean(&|m| m.seconds),
-                mean_path_m: mean(&|m| m.path_m),
-                mean_progress_m: mean(&|m| m.progress_m),
-            }
-        })
-        .collect()
+/// `results.csv` as text: per trial its keys (controller, layout, start, repeat), the
+/// experiment's columns and the strain's.
+pub fn results_csv<E: Experiment>(module: &E, results: &[TrialResult<E>]) -> String {
+    let mut out = String::with_capacity(120 * (results.len() + 1));
+    let keys = module.csv_keys().join(",");
+    out.push_str(&with_strain_header(&format!(
+        "{keys},{}",
+        module.csv_header()
+    )));
+    out.push('\n');
+    for r in results {
+        let _ = writeln!(
+            out,
+            "{},{},{},{},{},{}",
+            csv_field(&r.controller),
+            csv_field(&r.layout),
+            r.start,
+            r.repeat,
+            module.csv_row(r),
+            r.strain.csv_row()
+        );
+    }
+    out
 }
 
 /// `summary.md` as text.
-pub fn summary_markdown(results: &[TrialResult], ctx: &SummaryContext) -> String {
+pub fn summary_markdown<E: Experiment>(
+    module: &E,
+    results: &[TrialResult<E>],
+    ctx: &SummaryContext,
+) -> String {
     let mut s = String::new();
-    let _ = writeln!(s, "# Peg-board experiment (SPEC §5)\n");
+    let _ = writeln!(s, "# {}\n", module.title());
     let _ = writeln!(s, "Command:\n\n```sh\n{}\n```\n", ctx.command);
     let _ = writeln!(
         s,
-        "{} layouts ({}), {} start(s) each, time limit {} s.\n",
+        "{} layout(s) ({}), {} start(s) each, {} trial(s) per start (sensor-noise seeds), \
+         at most {} s per trial.\n",
         ctx.layouts.len(),
         ctx.layouts.join(", "),
         ctx.starts,
+        ctx.repeats,
         ctx.limit_s
     );
-    s.push_str(
-        "| controller | trials | success | side exits | cycles/m mean ± sd | cycles/m median \
-         | stuck s (mean) | trial s (mean) | path m (mean) | progress m (mean) |\n\
-         | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n",
-    );
-    for c in summarise(results) {
-        let (mean, sd, median) = c.cycles_per_m;
-        let _ = writeln!(
-            s,
-            "| {} | {} | {}/{} ({:.0} %) | {} | {:.2} ± {:.2} | {:.2} | {:.1} | {:.1} | {:.2} | {:+.2} |",
-            c.controller,
-            c.trials,
-            c.successes,
-            c.trials,
-            100.0 * c.successes as f64 / c.trials as f64,
-            c.side_exits,
-            mean,
-            sd,
-            median,
-            c.mean_stuck_s,
-            c.mean_seconds,
-            c.mean_path_m,
-            c.mean_progress_m
-        );
-    }
-    let _ = writeln!(
-        s,
-        "\nTime to traverse = nominal body-wave cycles (ωT·t/2π at the end of the trial) per \
-         metre of the body centre's smoothed path; lower is better. Every trial counts, failed \
-         ones with the cycles and path they had at the time limit; a smoothed path under \
-         {:.0} cm counts as {:.0} cm. A trial ends when the front half of the body leaves \
-         the board by any edge but the one it entered (as the thesis's did); success = it left \
-         by the far edge, across the board; side exits are counted apart. Progress = the \
-         centre's signed displacement towards the far edge, first to last position (negative: \
-         it drifted back). Stuck = time in 2 s windows in which \
-         the smoothed centre moved under 2 cm. Definitions: docs/lab.md.",
-        MIN_PATH_M * 100.0,
-        MIN_PATH_M * 100.0
-    );
+    s.push_str(&module.summary_tables(results, ctx));
     s.push_str(&calibrations_markdown(ctx));
-    s.push_str(&crate::lab::report::strain_markdown(results));
+    s.push_str(&strain_markdown(results));
     let _ = writeln!(s, "\nPer trial: `results.csv`.");
     if !ctx.plots.is_empty() {
         s.push_str("\nPlots:\n\n");
@@ -223,99 +149,36 @@ pub fn summary_markdown(results: &[TrialResult], ctx: &SummaryContext) -> String
     s
 }
 
-/// Writes `text` to `path`.
-pub fn write_text(path: &Path, text: &str) -> Result<(), LabError> {
-    std::fs::write(path, text).map_err(|source| LabError::Io {
-        path: path.to_owned(),
+/// Writes `results.csv`, the experiment's plots (over every trial, then each
+/// controller's plotted trial) and `summary.md` into `dir` (created if missing);
+/// returns the files written.
+pub fn write_report<E: Experiment>(
+    module: &E,
+    dir: &Path,
+    results: &[TrialResult<E>],
+    ctx: &SummaryContext,
+) -> Result<Vec<PathBuf>, LabError> {
+    std::fs::create_dir_all(dir).map_err(|source| LabError::Io {
+        path: dir.to_owned(),
         source,
-    })
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::lab::metrics::TrialMetrics;
-
-    fn result(controller: &str, start: usize, cpm: f64, success: bool) -> TrialResult {
-        TrialResult {
-            controller: controller.into(),
-            layout: "seed1000".into(),
-            start,
-            repeat: 0,
-            metrics: TrialMetrics {
-                success,
-                seconds: 10.0,
-                cycles: 1.5,
-                path_m: 1.5 / cpm,
-                distance_m: 0.1,
-                cycles_per_m: cpm,
-                stuck_s: 2.0,
-                self_contacts: 3,
-                side_exit: !success && start == 2,
-                progress_m: if success { 2.0 } else { -0.05 },
-            },
-            strain: Default::default(),
-            plotted: None,
+    })?;
+    let mut written = Vec::new();
+    let csv = dir.join("results.csv");
+    write_text(&csv, &results_csv(module, results))?;
+    written.push(csv);
+    written.extend(module.run_plots(dir, results)?);
+    for r in results {
+        if let Some((world, goal, rec)) = &r.plotted {
+            written.extend(module.trial_plots(dir, r, (world, goal, rec))?);
         }
     }
-
-    #[test]
-    fn csv_has_a_row_per_trial_with_every_column() {
-        let rs = [result("a", 0, 10.0, true), result("b", 1, 20.0, false)];
-        let csv = results_csv(&rs);
-        let lines: Vec<_> = csv.lines().collect();
-        assert_eq!(lines.len(), 3);
-        assert_eq!(lines[0], with_strain_header(CSV_HEADER));
-        assert!(
-            lines[1].starts_with(
-                "a,seed1000,0,true,10.000,1.5000,0.1500,0.1000,10.0000,2.00,3,false,2.0000,"
-            ),
-            "{}",
-            lines[1]
-        );
-        assert!(lines[2].contains(",false,-0.0500,"), "{}", lines[2]);
-        assert!(lines.iter().all(|l| l.split(',').count() == 18));
-        assert_eq!(csv_field("a,b"), "\"a,b\"");
-    }
-
-    #[test]
-    fn summary_counts_every_trial_per_controller() {
-        let rs = [
-            result("b", 0, 10.0, true),
-            result("b", 1, 20.0, false),
-            result("b", 2, 60.0, false),
-            result("a", 0, 5.0, true),
-        ];
-        let sum = summarise(&rs);
-        assert_eq!(sum.len(), 2);
-        assert_eq!(sum[0].controller, "b", "order of appearance");
-        assert_eq!((sum[0].trials, sum[0].successes), (3, 1));
-        assert_eq!(sum[0].side_exits, 1, "start 2 left by a side");
-        assert!((sum[0].mean_progress_m - (2.0 - 0.1) / 3.0).abs() < 1e-12);
-        assert_eq!(sum[0].cycles_per_m.0, 30.0);
-        assert_eq!(sum[0].cycles_per_m.2, 20.0);
-        let md = summary_markdown(
-            &rs,
-            &SummaryContext {
-                command: "snake-lab pegboard --layouts 1".into(),
-                layouts: vec!["seed1000".into()],
-                starts: 3,
-                repeats: 1,
-                limit_s: 120.0,
-                plots: vec!["cycles_per_m.png".into()],
-                calibrations: vec![("dc_switching".into(), "{\"lateral_rad\":[0.1]}".into())],
-            },
-        );
-        assert!(md.contains("snake-lab pegboard --layouts 1"));
-        assert!(
-            md.contains("- dc_switching: `{\"lateral_rad\":[0.1]}`"),
-            "{md}"
-        );
-        assert!(
-            md.contains("| b | 3 | 1/3 (33 %) | 1 | 30.00 ± 26.46 | 20.00 |"),
-            "{md}"
-        );
-        assert!(md.contains("| a | 1 | 1/1 (100 %) | 0 | 5.00 ± 0.00 | 5.00 |"));
-        assert!(md.contains("`cycles_per_m.png`"));
-    }
+    let mut ctx = ctx.clone();
+    ctx.plots = written[1..]
+        .iter()
+        .filter_map(|p| p.file_name().map(|n| n.to_string_lossy().into_owned()))
+        .collect();
+    let md = dir.join("summary.md");
+    write_text(&md, &summary_markdown(module, results, &ctx))?;
+    written.push(md);
+    Ok(written)
 }

@@ -1,6 +1,7 @@
-//! The trial plan (controllers × layouts × starts) and its execution: worker threads
-//! take the next trial from an atomic index; results come back in plan order
-//! (controller, layout, start) whatever the thread count, so the output is identical.
+//! The trial plan (controllers × layouts × starts × repeats) and its execution: worker
+//! threads take the next trial from an atomic index; results come back in plan order
+//! (controller, layout, start, repeat) whatever the thread count, so the output is
+//! identical. A shard (`lab::shard`) runs every N-th trial of the same plan.
 
 use std::io::IsTerminal;
 use std::sync::Arc;
@@ -9,20 +10,20 @@ use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use super::LabError;
-use super::board::{Layout, trial_seed};
 use super::controllers::LabController;
-use super::experiment::ExperimentModule;
+use super::experiment::Experiment;
 use super::file_stem;
-use super::pegboard::Pegboard;
+use super::layout::{Layout, noise_seed};
+use super::shard::Shard;
 use super::strain::Strain;
 use super::trial::{TrialConfig, TrialRecord, TrialRecording, run_trial};
 use crate::emu::world::WorldSpec;
 use crate::emu::world::scenario::MODULE_LENGTH_M;
 use crate::gait::{BodyLayout, Plane};
 
-/// What to run.
+/// What to run: the compared controllers on every layout, start and repeat.
 #[derive(Debug, Clone)]
-pub struct Experiment {
+pub struct Setup {
     /// The compared controllers, in report order.
     pub controllers: Vec<LabController>,
     pub layouts: Vec<Layout>,
@@ -49,9 +50,10 @@ pub struct PlannedWorld<G> {
     pub noise_seed: u64,
 }
 
-/// One finished trial of experiment `E` (the peg board's unless named).
-#[derive(Debug, Clone)]
-pub struct TrialResult<E: ExperimentModule = Pegboard> {
+/// One finished trial of experiment `E`.
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+#[serde(bound = "")]
+pub struct TrialResult<E: Experiment> {
     pub controller: String,
     pub layout: String,
     pub start: usize,
@@ -65,7 +67,7 @@ pub struct TrialResult<E: ExperimentModule = Pegboard> {
 }
 
 /// The controllers of `results`, in the order they first appear.
-pub fn controller_names<E: ExperimentModule>(results: &[TrialResult<E>]) -> Vec<&str> {
+pub fn controller_names<E: Experiment>(results: &[TrialResult<E>]) -> Vec<&str> {
     let mut names: Vec<&str> = Vec::new();
     for r in results {
         if !names.contains(&r.controller.as_str()) {
@@ -81,12 +83,14 @@ pub struct RunOptions {
     pub threads: usize,
     /// Show a progress bar (only drawn on a terminal).
     pub progress: bool,
+    /// Run only this share of the plan.
+    pub shard: Option<Shard>,
 }
 
 /// Checks the experiment and generates every world of it (fails before any trial runs).
-pub fn plan<E: ExperimentModule>(
+pub fn plan<E: Experiment>(
     module: &E,
-    exp: &Experiment,
+    exp: &Setup,
 ) -> Result<Vec<PlannedWorld<E::Goal>>, LabError> {
     if exp.controllers.is_empty() {
         return Err(LabError::NoControllers {
@@ -155,27 +159,62 @@ pub fn plan<E: ExperimentModule>(
     Ok(worlds)
 }
 
-/// The sensor-noise seed of a pose's repeat: repeat 0 keeps the seed a pose had before
-/// repeats existed, so one-repeat experiments reproduce.
-pub fn noise_seed(layout_seed: u64, start: usize, repeat: usize) -> u64 {
-    let seed = trial_seed(layout_seed, start as u64);
-    if repeat == 0 {
-        seed
-    } else {
-        trial_seed(seed, repeat as u64)
-    }
-}
-
-/// Runs every trial of `exp` and returns them sorted by (controller, layout, start).
-/// Stops at the first failing trial and returns its error.
-pub fn run<E: ExperimentModule>(
+/// Runs every trial of `exp` and returns them in plan order. Stops at the first
+/// failing trial and returns its error.
+pub fn run<E: Experiment>(
     module: &E,
-    exp: &Experiment,
+    exp: &Setup,
     opts: RunOptions,
 ) -> Result<Vec<TrialResult<E>>, LabError> {
+    let all = RunOptions {
+        shard: None,
+        ..opts
+    };
+    Ok(run_share(module, exp, all)?
+        .into_iter()
+        .map(|(_, r)| r)
+        .collect())
+}
+
+/// A hash of everything that decides `exp`'s trials and their figures: the
+/// experiment, the controllers as built (calibrations included), the layouts' names
+/// and identities, starts, repeats and the trial configuration. Shards of one run
+/// share it.
+pub fn plan_fingerprint<E: Experiment>(module: &E, exp: &Setup) -> u64 {
+    let layouts: Vec<(&str, u64)> = exp
+        .layouts
+        .iter()
+        .map(|l| (l.name.as_str(), l.identity))
+        .collect();
+    let text = format!(
+        "{}|{:?}|{layouts:?}|{}|{}|{:?}",
+        module.name(),
+        exp.controllers,
+        exp.starts,
+        exp.repeats,
+        exp.trial
+    );
+    super::layout::identity_of(text.as_bytes())
+}
+
+/// The trials of `opts.shard` (every trial without one), each with its index in the
+/// whole plan, in plan order; and the plan's size.
+pub fn run_share<E: Experiment>(
+    module: &E,
+    exp: &Setup,
+    opts: RunOptions,
+) -> Result<Vec<(usize, TrialResult<E>)>, LabError> {
     let worlds = plan(module, exp)?;
-    let total = exp.controllers.len() * worlds.len();
+    let plan_total = exp.controllers.len() * worlds.len();
+    let mine: Vec<usize> = (0..plan_total)
+        .filter(|&i| opts.shard.is_none_or(|s| s.owns(i)))
+        .collect();
+    let total = mine.len();
+    let who = opts
+        .shard
+        .map_or_else(String::new, |s| format!("shard {s}: "));
     let bar = progress_bar(total, opts.progress);
+    bar.set_prefix(who.clone());
     let next = AtomicUsize::new(0);
     let finished = AtomicUsize::new(0);
     // Not on a terminal (a log, CI): a plain line every 5 % instead of the bar.
@@ -239,25 +278,25 @@ pub fn run<E: ExperimentModule>(
         let workers: Vec<_> = (0..threads)
             .map(|_| {
                 s.spawn(|| {
-                    let mut mine = Vec::new();
+                    let mut ran = Vec::new();
                     while !failed.load(Ordering::Relaxed) {
-                        let i = next.fetch_add(1, Ordering::Relaxed);
-                        if i >= total {
+                        let j = next.fetch_add(1, Ordering::Relaxed);
+                        let Some(&i) = mine.get(j) else {
                             break;
-                        }
+                        };
                         let r = run_one(i);
                         failed.fetch_or(r.is_err(), Ordering::Relaxed);
                         bar.inc(1);
                         let n = finished.fetch_add(1, Ordering::Relaxed) + 1;
                         if plain && (n.is_multiple_of(every) || n == total) {
                             eprintln!(
-                                "snake-lab: {n}/{total} trials, {:.0} s",
+                                "snake-lab: {who}{n}/{total} trials, {:.0} s",
                                 started.elapsed().as_secs_f64()
                             );
                         }
-                        mine.push((i, r));
+                        ran.push((i, r));
                     }
-                    mine
+                    ran
                 })
             })
             .collect();
@@ -268,7 +307,7 @@ pub fn run<E: ExperimentModule>(
     });
     bar.finish_and_clear();
     done.sort_by_key(|(i, _)| *i);
-    done.into_iter().map(|(_, r)| r).collect()
+    done.into_iter().map(|(i, r)| r.map(|r| (i, r))).collect()
 }
 
 fn progress_bar(total: usize, show: bool) -> ProgressBar {
@@ -278,7 +317,7 @@ fn progress_bar(total: usize, show: bool) -> ProgressBar {
         ProgressDrawTarget::hidden()
     };
     let style = ProgressStyle::with_template(
-        "{elapsed_precise} [{bar:30}] {pos}/{len} trials, ETA {eta_precise}",
+        "{prefix}{elapsed_precise} [{bar:30}] {pos}/{len} trials, ETA {eta_precise}",
     )
     .unwrap_or_else(|_| ProgressStyle::default_bar())
     .progress_chars("=> ");
@@ -293,11 +332,12 @@ mod tests {
     use super::*;
     use crate::emu::world::scenario::WorldScenario;
     use crate::gait::GaitKind;
-    use crate::lab::board::PEG_BOARD_TOML;
+    use crate::lab::pegboard::Pegboard;
+    use crate::lab::pegboard::board::PEG_BOARD_TOML;
 
-    fn experiment(controllers: &[&str], layouts: usize) -> Experiment {
+    fn experiment(controllers: &[&str], layouts: usize) -> Setup {
         let base = WorldScenario::parse(PEG_BOARD_TOML).unwrap();
-        Experiment {
+        Setup {
             controllers: controllers
                 .iter()
                 .map(|s| LabController::named(GaitKind::Slithering, s).unwrap())
@@ -361,6 +401,7 @@ mod tests {
             RunOptions {
                 threads: 1,
                 progress: false,
+                shard: None,
             },
         )
         .unwrap();
@@ -370,6 +411,7 @@ mod tests {
             RunOptions {
                 threads: 2,
                 progress: false,
+                shard: None,
             },
         )
         .unwrap();

@@ -9,7 +9,7 @@
 //! allocation-free, then summarised per trial.
 
 /// Per-trial accumulator and result.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
 pub struct Strain {
     /// Cycles counted.
     pub cycles: u64,

@@ -102,7 +102,7 @@ impl TrialConfig {
 }
 
 /// What one trial recorded.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct TrialRecord {
     /// Time between samples, s; sample `k` is at `k · sample_dt_s`.
     pub sample_dt_s: f64,
@@ -481,7 +481,7 @@ pub fn front_half_of(links: impl ExactSizeIterator<Item = [f64; 2]>) -> [f64; 2]
 mod tests {
     use super::*;
     use crate::emu::world::scenario::Region;
-    use crate::lab::board::Board;
+    use crate::lab::pegboard::board::Board;
 
     #[test]
     fn nominal_patches_the_gait_as_the_daemon_checks_it() {

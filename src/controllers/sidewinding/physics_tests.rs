@@ -170,11 +170,12 @@ fn strain_of(world: &WorldSpec, seconds: f64) -> (crate::lab::strain::Strain, f6
 /// "Speed budget"): the guard never has to act on the set-points it produces.
 #[test]
 fn anti_compliant_sidewinding_does_not_outrun_the_motors() {
-    let board =
-        crate::emu::world::scenario::WorldScenario::parse(crate::lab::board::PEG_BOARD_EDGE_TOML)
-            .unwrap()
-            .generate_trial(18, 0)
-            .unwrap();
+    let board = crate::emu::world::scenario::WorldScenario::parse(
+        crate::lab::pegboard::board::PEG_BOARD_EDGE_TOML,
+    )
+    .unwrap()
+    .generate_trial(18, 0)
+    .unwrap();
     let cap = crate::controllers::sidewinding::SidewindingConfig::full()
         .spatial_freq
         .gains

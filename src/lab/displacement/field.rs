@@ -11,7 +11,7 @@ use crate::lab::experiment::Goal;
 /// The obstacles' bounding box in the ground plane; the trial ends when the body's
 /// centre (mean of the links, as the metric measures it) is outside it. No box (a
 /// world without pegs or rocks): the trial runs its whole time.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct FieldEdge {
     pub bounds_m: Option<([f64; 2], [f64; 2])>,
 }

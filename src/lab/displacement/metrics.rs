@@ -8,7 +8,7 @@ use crate::lab::trial::TrialRecord;
 use super::Displacement;
 
 /// One trial's figures.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct DisplacementMetrics {
     /// Simulated time of the trial, s.
     pub seconds: f64,
@@ -187,7 +187,7 @@ pub fn summarise(results: &[TrialResult<Displacement>]) -> Vec<ControllerSummary
 mod tests {
     use super::*;
     use crate::lab::displacement::Terrain;
-    use crate::lab::experiment::ExperimentModule;
+    use crate::lab::experiment::Experiment;
 
     fn record(centre: Vec<[f64; 2]>, seconds: f64) -> TrialRecord {
         TrialRecord {

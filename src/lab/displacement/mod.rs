@@ -10,13 +10,18 @@ pub mod metrics;
 pub mod plots;
 pub mod report;
 
-use super::LabError;
-use super::board::Layout;
-use super::experiment::ExperimentModule;
-use super::trial::TrialRecord;
+use std::path::{Path, PathBuf};
+
 use crate::emu::world::WorldSpec;
-use crate::emu::world::scenario::MODULE_LENGTH_M;
+use crate::emu::world::scenario::{MODULE_LENGTH_M, WorldScenario};
 use crate::gait::GaitKind;
+use crate::lab::LabError;
+use crate::lab::experiment::{Defaults, Experiment};
+use crate::lab::file_stem;
+use crate::lab::layout::Layout;
+use crate::lab::report::SummaryContext;
+use crate::lab::runner::TrialResult;
+use crate::lab::trial::{TrialConfig, TrialRecord};
 pub use field::FieldEdge;
 use metrics::{DisplacementMetrics, displacement_metrics};
 
@@ -29,7 +34,7 @@ pub const ROCK_PILE_TOML: &str = include_str!("../../../scenarios/rock-pile-3d.t
 pub const MODULES: usize = 16;
 
 /// Which of the paper's environments.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum Terrain {
     /// Planar: the lateral wave only, three windows (odd modules active).
     PegArray,
@@ -37,10 +42,29 @@ pub enum Terrain {
     RockPile,
 }
 
-/// The experiment module of one terrain.
-#[derive(Debug, Clone, Copy)]
+/// The experiment of one terrain.
+#[derive(Debug, Clone, Copy, serde::Serialize, serde::Deserialize)]
 pub struct Displacement {
     pub terrain: Terrain,
+}
+
+/// Their own options: which layouts, and the body. The defaults are the paper's
+/// protocol: one layout, 5 random poses, 4 trials per pose, 2 minutes each.
+#[derive(Debug, Clone, clap::Args)]
+pub struct DisplacementArgs {
+    /// Seeded layouts: the scenario with master seeds seed-base .. seed-base + N - 1.
+    #[arg(long, default_value_t = 1)]
+    pub layouts: usize,
+    /// Master seed of the first layout (default: the scenario's own).
+    #[arg(long)]
+    pub seed_base: Option<u64>,
+    /// World scenario the layouts come from (default: the built-in
+    /// scenarios/peg-array.toml or scenarios/rock-pile-3d.toml).
+    #[arg(long, value_name = "FILE")]
+    pub scenario: Option<PathBuf>,
+    /// Modules of the snake (the paper's robot has 16).
+    #[arg(long, default_value_t = MODULES)]
+    pub modules: usize,
 }
 
 /// The paper's four controllers on each terrain, in its order.
@@ -48,6 +72,13 @@ pub const PEG_ARRAY_CONTROLLERS: &[&str] = &["dc_nc", "dc_ndc", "dc_pdc", "dc_sw
 pub const ROCK_PILE_CONTROLLERS: &[&str] = &["dc3d_nc", "dc3d_ndc", "dc3d_pdc", "dc3d_switching"];
 
 impl Displacement {
+    pub const PEG_ARRAY: Displacement = Displacement {
+        terrain: Terrain::PegArray,
+    };
+    pub const ROCK_PILE: Displacement = Displacement {
+        terrain: Terrain::RockPile,
+    };
+
     /// The terrain's built-in scenario.
     pub fn scenario_toml(&self) -> &'static str {
         match self.terrain {
@@ -57,9 +88,10 @@ impl Displacement {
     }
 }
 
-impl ExperimentModule for Displacement {
+impl Experiment for Displacement {
     type Goal = FieldEdge;
     type Metrics = DisplacementMetrics;
+    type Args = DisplacementArgs;
 
     fn name(&self) -> &'static str {
         match self.terrain {
@@ -77,6 +109,12 @@ impl ExperimentModule for Displacement {
             }
         }
     }
+    fn title(&self) -> &'static str {
+        match self.terrain {
+            Terrain::PegArray => "Directional compliance on the peg array (SPEC §8, planar)",
+            Terrain::RockPile => "Directional compliance on the rock pile (SPEC §8, 3-D)",
+        }
+    }
     fn gait(&self) -> GaitKind {
         GaitKind::Slithering
     }
@@ -85,6 +123,42 @@ impl ExperimentModule for Displacement {
             Terrain::PegArray => PEG_ARRAY_CONTROLLERS,
             Terrain::RockPile => ROCK_PILE_CONTROLLERS,
         }
+    }
+    fn variant_base(&self) -> &'static str {
+        match self.terrain {
+            Terrain::PegArray => "dc_switching",
+            Terrain::RockPile => "dc3d_switching",
+        }
+    }
+    fn defaults(&self) -> Defaults {
+        Defaults {
+            starts: 5,
+            repeats: 4,
+            seconds: 120.0,
+        }
+    }
+
+    fn configure(
+        &self,
+        args: &DisplacementArgs,
+        trial: &mut TrialConfig,
+    ) -> Result<(Self, Vec<Layout>), LabError> {
+        if !(2..=64).contains(&args.modules) {
+            return Err(LabError::BadValue(format!(
+                "--modules must be 2 ..= 64, not {}",
+                args.modules
+            )));
+        }
+        trial.modules = args.modules;
+        let base = match &args.scenario {
+            Some(path) => WorldScenario::load(path)?,
+            None => WorldScenario::parse(self.scenario_toml())?,
+        };
+        let seed_base = args.seed_base.unwrap_or(base.seed);
+        let layouts = (0..args.layouts as u64)
+            .map(|k| Layout::seeded(&base, seed_base.wrapping_add(k)))
+            .collect();
+        Ok((*self, layouts))
     }
 
     fn world(
@@ -102,60 +176,47 @@ impl ExperimentModule for Displacement {
         let modules = rec.start_links_m.len().saturating_sub(1).max(1);
         displacement_metrics(rec, modules as f64 * MODULE_LENGTH_M)
     }
-}
 
-/// Writes `results.csv`, the plots and `summary.md` into `dir` (created if missing) and
-/// returns the files written: per controller its first trial's `path-*.png`,
-/// `signals-*.png` and `absitions-*.png`; `velocity.png` over all.
-pub fn write_report(
-    module: &Displacement,
-    dir: &std::path::Path,
-    results: &[super::runner::TrialResult<Displacement>],
-    ctx: &super::report::SummaryContext,
-) -> Result<Vec<std::path::PathBuf>, LabError> {
-    use super::{file_stem, plots as common};
-    std::fs::create_dir_all(dir).map_err(|source| LabError::Io {
-        path: dir.to_owned(),
-        source,
-    })?;
-    let mut written = Vec::new();
-    let csv = dir.join("results.csv");
-    super::report::write_text(&csv, &report::results_csv(results))?;
-    written.push(csv);
-    for r in results {
-        let Some((world, _, rec)) = &r.plotted else {
-            continue;
-        };
+    fn csv_keys(&self) -> [&'static str; 4] {
+        ["controller", "layout", "pose", "repeat"]
+    }
+    fn csv_header(&self) -> &'static str {
+        report::CSV_HEADER
+    }
+    fn csv_row(&self, result: &TrialResult<Self>) -> String {
+        report::csv_row(result)
+    }
+    fn summary_tables(&self, results: &[TrialResult<Self>], _ctx: &SummaryContext) -> String {
+        report::summary_tables(results)
+    }
+    fn trial_plots(
+        &self,
+        dir: &Path,
+        r: &TrialResult<Self>,
+        (world, _, rec): (&WorldSpec, &FieldEdge, &TrialRecord),
+    ) -> Result<Vec<PathBuf>, LabError> {
+        use crate::lab::plots::{path_plot, signals_plot};
         let stem = file_stem(&r.controller);
         let title = format!("{}: layout {}, pose {}", r.controller, r.layout, r.start);
-        let p = dir.join(format!("path-{stem}.png"));
-        common::path_plot(&p, &title, world, None, rec)?;
-        written.push(p);
-        let p = dir.join(format!("signals-{stem}.png"));
-        common::signals_plot(&p, &title, rec)?;
-        written.push(p);
-        let p = dir.join(format!("absitions-{stem}.png"));
-        plots::absition_plot(&p, &title, rec)?;
-        written.push(p);
+        let path = dir.join(format!("path-{stem}.png"));
+        path_plot(&path, &title, world, None, rec)?;
+        let signals = dir.join(format!("signals-{stem}.png"));
+        signals_plot(&signals, &title, rec)?;
+        let absitions = dir.join(format!("absitions-{stem}.png"));
+        plots::absition_plot(&absitions, &title, rec)?;
+        Ok(vec![path, signals, absitions])
     }
-    let p = dir.join("velocity.png");
-    let title = format!(
-        "{}: velocity per pose (black) and overall (red, ± sd)",
-        module.name()
-    );
-    plots::velocity_plot(&p, &title, results)?;
-    written.push(p);
-    let mut ctx = ctx.clone();
-    ctx.plots = written[1..]
-        .iter()
-        .filter_map(|p| p.file_name().map(|n| n.to_string_lossy().into_owned()))
-        .collect();
-    let md = dir.join("summary.md");
-    let title = match module.terrain {
-        Terrain::PegArray => "Directional compliance on the peg array (SPEC §8, planar)",
-        Terrain::RockPile => "Directional compliance on the rock pile (SPEC §8, 3-D)",
-    };
-    super::report::write_text(&md, &report::summary_markdown(title, results, &ctx))?;
-    written.push(md);
-    Ok(written)
+    fn run_plots(
+        &self,
+        dir: &Path,
+        results: &[TrialResult<Self>],
+    ) -> Result<Vec<PathBuf>, LabError> {
+        let p = dir.join("velocity.png");
+        let title = format!(
+            "{}: velocity per pose (black) and overall (red, ± sd)",
+            self.name()
+        );
+        plots::velocity_plot(&p, &title, results)?;
+        Ok(vec![p])
+    }
 }

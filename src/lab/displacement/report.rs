@@ -6,60 +6,31 @@ use std::fmt::Write as _;
 
 use super::Displacement;
 use super::metrics::summarise;
-use crate::lab::report::{SummaryContext, calibrations_markdown, csv_field, with_strain_header};
 use crate::lab::runner::TrialResult;
 
 /// The CSV header; one row per trial follows in plan order.
-pub const CSV_HEADER: &str = "controller,layout,pose,repeat,seconds,displacement_m,\
+pub const CSV_HEADER: &str = "seconds,displacement_m,\
 velocity_bl_min,forward_bl_min,left_field,self_contacts,mode_switches,directional_share";
 
-/// `results.csv` as text.
-pub fn results_csv(results: &[TrialResult<Displacement>]) -> String {
-    let mut out = String::with_capacity(80 * (results.len() + 1));
-    out.push_str(&with_strain_header(CSV_HEADER));
-    out.push('\n');
-    for r in results {
-        let m = &r.metrics;
-        let _ = writeln!(
-            out,
-            "{},{},{},{},{:.3},{:.4},{:.4},{:.4},{},{},{},{:.3},{}",
-            csv_field(&r.controller),
-            csv_field(&r.layout),
-            r.start,
-            r.repeat,
-            m.seconds,
-            m.displacement_m,
-            m.velocity_bl_min,
-            m.forward_bl_min,
-            u8::from(m.left_field),
-            m.self_contacts,
-            m.mode_switches,
-            m.directional_share,
-            r.strain.csv_row()
-        );
-    }
-    out
+/// One trial's row.
+pub fn csv_row(r: &TrialResult<Displacement>) -> String {
+    let m = &r.metrics;
+    format!(
+        "{:.3},{:.4},{:.4},{:.4},{},{},{},{:.3}",
+        m.seconds,
+        m.displacement_m,
+        m.velocity_bl_min,
+        m.forward_bl_min,
+        u8::from(m.left_field),
+        m.self_contacts,
+        m.mode_switches,
+        m.directional_share,
+    )
 }
 
-/// `summary.md` as text, titled `title`.
-pub fn summary_markdown(
-    title: &str,
-    results: &[TrialResult<Displacement>],
-    ctx: &SummaryContext,
-) -> String {
+/// The summary's tables (per controller, per pose) and their definitions.
+pub fn summary_tables(results: &[TrialResult<Displacement>]) -> String {
     let mut s = String::new();
-    let _ = writeln!(s, "# {title}\n");
-    let _ = writeln!(s, "Command:\n\n```sh\n{}\n```\n", ctx.command);
-    let _ = writeln!(
-        s,
-        "{} layout(s) ({}), {} pose(s) each, {} trial(s) per pose (sensor-noise seeds), {} s \
-         per trial.\n",
-        ctx.layouts.len(),
-        ctx.layouts.join(", "),
-        ctx.starts,
-        ctx.repeats,
-        ctx.limit_s
-    );
     s.push_str(
         "| controller | trials | BL/min mean ± sd | median | sd across poses | worst pose \
          | forward BL/min mean ± sd | left the field | self-contacts | mode switches \
@@ -123,14 +94,5 @@ pub fn summary_markdown(
          contact onsets between non-adjacent links. Time in PDC/NDC = share of the samples \
          with at least one window in a directional mode. Definitions: docs/lab.md."
     );
-    s.push_str(&calibrations_markdown(ctx));
-    s.push_str(&crate::lab::report::strain_markdown(results));
-    let _ = writeln!(s, "\nPer trial: `results.csv`.");
-    if !ctx.plots.is_empty() {
-        s.push_str("\nPlots:\n\n");
-        for p in &ctx.plots {
-            let _ = writeln!(s, "- `{p}`");
-        }
-    }
     s
 }

@@ -13,7 +13,7 @@ pub const SLIP_M: f64 = 0.03;
 pub const SLIP_WINDOW_S: f64 = 1.0;
 
 /// How a trial ended.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum Outcome {
     /// The centre reached the top.
     Top,
@@ -37,7 +37,7 @@ impl Outcome {
 }
 
 /// One trial's figures.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct PoleMetrics {
     pub outcome: Outcome,
     /// Simulated time at the end, s.

@@ -11,15 +11,20 @@ pub mod plots;
 pub mod poles;
 pub mod report;
 
-use super::LabError;
-use super::board::Layout;
-use super::experiment::{ExperimentModule, Goal};
-use super::trial::{TrialConfig, TrialRecord};
+use std::path::{Path, PathBuf};
+
 use crate::emu::Plant;
 use crate::emu::world::physics::build::MODULE_DIAMETER_M;
 use crate::emu::world::scenario::WorldScenario;
 use crate::emu::world::{PoleSection, WorldSpec};
 use crate::gait::{GaitKind, GaitParams};
+use crate::lab::LabError;
+use crate::lab::experiment::{Defaults, Experiment, Goal};
+use crate::lab::file_stem;
+use crate::lab::layout::Layout;
+use crate::lab::report::SummaryContext;
+use crate::lab::runner::TrialResult;
+use crate::lab::trial::{TrialConfig, TrialRecord};
 use metrics::{PoleMetrics, pole_metrics};
 use poles::PoleDesign;
 
@@ -29,7 +34,7 @@ use poles::PoleDesign;
 pub const CONTROLLERS: &[&str] = &["fixed", "central", "windowed", "windowed_adaptive"];
 
 /// How the experiment sets up its trials.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct PoleClimb {
     /// The poles, by layout name.
     pub designs: Vec<PoleDesign>,
@@ -46,14 +51,41 @@ impl Default for PoleClimb {
     fn default() -> Self {
         Self {
             designs: poles::named_set(),
-            mu: 0.6,
-            lead_in_s: 0.2,
-            grip_margin_m: 0.003,
+            ..Self::UNCONFIGURED
         }
     }
 }
 
+/// Its own options: which poles, the skin's grip and the lead-in.
+#[derive(Debug, Clone, clap::Args)]
+pub struct PoleArgs {
+    /// Named poles to climb, comma-separated (default: the whole named set; `none`
+    /// for seeded poles only).
+    #[arg(long, value_delimiter = ',')]
+    pub poles: Vec<String>,
+    /// Seeded random poles, after the named ones: seeds seed-base .. seed-base + N - 1.
+    #[arg(long, default_value_t = 0)]
+    pub seeded: usize,
+    /// Seed of the first seeded pole.
+    #[arg(long, default_value_t = 100)]
+    pub seed_base: u64,
+    /// Seconds of rolling on the ground before the helix is selected.
+    #[arg(long, default_value_t = 0.2)]
+    pub lead_in: f64,
+    /// Skin-pole friction coefficient.
+    #[arg(long, default_value_t = 0.6)]
+    pub mu: f64,
+}
+
 impl PoleClimb {
+    /// The experiment before its options name the poles.
+    pub const UNCONFIGURED: PoleClimb = PoleClimb {
+        designs: Vec::new(),
+        mu: 0.6,
+        lead_in_s: 0.2,
+        grip_margin_m: 0.003,
+    };
+
     /// The layouts of the designs: each named as its pole, its identity (its trials'
     /// start and noise seeds) taken from the pole's own description, so a pole keeps
     /// its starts whichever list it is run in.
@@ -89,7 +121,7 @@ impl PoleClimb {
 }
 
 /// A pole's goal: its top, and what the metrics need of it.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct PoleGoal {
     pub top_m: f64,
     pub foot_m: f64,
@@ -110,9 +142,10 @@ impl Goal for PoleGoal {
     }
 }
 
-impl ExperimentModule for PoleClimb {
+impl Experiment for PoleClimb {
     type Goal = PoleGoal;
     type Metrics = PoleMetrics;
+    type Args = PoleArgs;
 
     fn name(&self) -> &'static str {
         "pole"
@@ -120,11 +153,68 @@ impl ExperimentModule for PoleClimb {
     fn summary(&self) -> &'static str {
         "rolling helix with radius compliance up poles whose diameter changes (SPEC §6)"
     }
+    fn title(&self) -> &'static str {
+        "Pole climbing: rolling helix with radius compliance (SPEC §6, thesis §4.2)"
+    }
     fn gait(&self) -> GaitKind {
         GaitKind::RollingHelix
     }
     fn controllers(&self) -> &'static [&'static str] {
         CONTROLLERS
+    }
+    fn variant_base(&self) -> &'static str {
+        "windowed_adaptive"
+    }
+    fn defaults(&self) -> Defaults {
+        Defaults {
+            starts: 3,
+            repeats: 1,
+            seconds: 150.0,
+        }
+    }
+
+    fn configure(
+        &self,
+        args: &PoleArgs,
+        _trial: &mut TrialConfig,
+    ) -> Result<(Self, Vec<Layout>), LabError> {
+        let named = poles::named_set();
+        let mut designs = Vec::new();
+        if args.poles.is_empty() {
+            designs.extend(named.iter().cloned());
+        } else if args.poles != ["none"] {
+            for p in &args.poles {
+                let d = named.iter().find(|d| d.name == p.trim()).ok_or_else(|| {
+                    let known: Vec<_> = named.iter().map(|d| d.name.as_str()).collect();
+                    LabError::BadValue(format!(
+                        "no pole {p:?} in the named set; known: {}",
+                        known.join(", ")
+                    ))
+                })?;
+                designs.push(d.clone());
+            }
+        }
+        designs.extend((0..args.seeded as u64).map(|k| poles::seeded(args.seed_base + k)));
+        if !(args.mu.is_finite() && args.mu > 0.0 && args.mu <= 2.0) {
+            return Err(LabError::BadValue(format!(
+                "--mu must be in (0, 2], not {}",
+                args.mu
+            )));
+        }
+        if !(args.lead_in.is_finite() && (0.0..=60.0).contains(&args.lead_in)) {
+            return Err(LabError::BadValue(format!(
+                "--lead-in must be 0-60 s, not {}",
+                args.lead_in
+            )));
+        }
+        let module = PoleClimb {
+            designs,
+            mu: args.mu,
+            lead_in_s: args.lead_in,
+            ..self.clone()
+        };
+        let layouts = module.layouts()?;
+        Ok((module, layouts))
     }
 
     fn world(
@@ -138,7 +228,7 @@ impl ExperimentModule for PoleClimb {
             .iter()
             .find(|d| d.name == layout.name)
             .ok_or_else(|| LabError::BadValue(format!("no pole named {:?}", layout.name)))?;
-        let seed = super::board::trial_seed(layout.identity, start);
+        let seed = crate::lab::layout::trial_seed(layout.identity, start);
         let world = design.world(seed, self.mu);
         let goal = PoleGoal {
             top_m: poles::TOP_M,
@@ -161,51 +251,40 @@ impl ExperimentModule for PoleClimb {
     fn metrics(&self, goal: &PoleGoal, rec: &TrialRecord) -> PoleMetrics {
         pole_metrics(rec, &goal.changes_m, goal.top_m)
     }
-}
 
-/// Writes `results.csv`, `summary.md`, `climb.png` (every controller's climb on the
-/// first pole) and per controller `windows-*.png` (its half turns' radius and set
-/// point against the pole's diameter where they lie) into `dir`; returns the files.
-pub fn write_report(
-    dir: &std::path::Path,
-    module: &PoleClimb,
-    results: &[super::runner::TrialResult<PoleClimb>],
-    ctx: &super::report::SummaryContext,
-) -> Result<Vec<std::path::PathBuf>, LabError> {
-    use super::file_stem;
-    std::fs::create_dir_all(dir).map_err(|source| LabError::Io {
-        path: dir.to_owned(),
-        source,
-    })?;
-    let mut written = Vec::new();
-    let csv = dir.join("results.csv");
-    super::report::write_text(&csv, &report::results_csv(results))?;
-    written.push(csv);
-    let p = dir.join("climb.png");
-    plots::climb_plot(&p, results)?;
-    written.push(p);
-    for r in results {
-        let Some((_, goal, rec)) = &r.plotted else {
-            continue;
-        };
+    fn csv_keys(&self) -> [&'static str; 4] {
+        ["controller", "pole", "start", "repeat"]
+    }
+    fn csv_header(&self) -> &'static str {
+        report::CSV_HEADER
+    }
+    fn csv_row(&self, result: &TrialResult<Self>) -> String {
+        report::csv_row(result)
+    }
+    fn summary_tables(&self, results: &[TrialResult<Self>], _ctx: &SummaryContext) -> String {
+        report::summary_tables(results, &self.designs)
+    }
+    fn trial_plots(
+        &self,
+        dir: &Path,
+        r: &TrialResult<Self>,
+        (_, goal, rec): (&WorldSpec, &PoleGoal, &TrialRecord),
+    ) -> Result<Vec<PathBuf>, LabError> {
         if rec.windows.iter().all(|w| w.is_empty()) {
-            continue;
+            return Ok(Vec::new());
         }
         let p = dir.join(format!("windows-{}.png", file_stem(&r.controller)));
         let title = format!("{}: pole {}, start {}", r.controller, r.layout, r.start);
         plots::windows_plot(&p, &title, goal, rec)?;
-        written.push(p);
+        Ok(vec![p])
     }
-    let mut ctx = ctx.clone();
-    ctx.plots = written[1..]
-        .iter()
-        .filter_map(|p| p.file_name().map(|n| n.to_string_lossy().into_owned()))
-        .collect();
-    let md = dir.join("summary.md");
-    super::report::write_text(
-        &md,
-        &report::summary_markdown(results, &ctx, &module.designs),
-    )?;
-    written.push(md);
-    Ok(written)
+    fn run_plots(
+        &self,
+        dir: &Path,
+        results: &[TrialResult<Self>],
+    ) -> Result<Vec<PathBuf>, LabError> {
+        let p = dir.join("climb.png");
+        plots::climb_plot(&p, results)?;
+        Ok(vec![p])
+    }
 }

@@ -26,7 +26,7 @@ const FOOT_M: [f64; 2] = [0.15, 0.18];
 
 /// One change of diameter: from the previous diameter to `factor` × the foot's,
 /// starting at `at_m`, over `length_m` (0: a step).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Change {
     pub at_m: f64,
     pub length_m: f64,
@@ -34,7 +34,7 @@ pub struct Change {
 }
 
 /// A pole design: its name, foot diameter and changes (bottom to top).
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct PoleDesign {
     pub name: String,
     pub foot_m: f64,
@@ -112,7 +112,7 @@ impl PoleDesign {
     /// The pole's identity: a hash of its description (name, foot, changes), so a
     /// seeded pole's follows from its seed and a named one's from its shape.
     pub fn identity(&self) -> u64 {
-        crate::lab::board::identity_of(format!("{self:?}").as_bytes())
+        crate::lab::layout::identity_of(format!("{self:?}").as_bytes())
     }
 
     /// The pole's sections, bottom to top.

@@ -7,40 +7,27 @@ use std::fmt::Write as _;
 use super::PoleClimb;
 use super::metrics::Outcome;
 use crate::lab::metrics::mean_sd_median;
-use crate::lab::report::{SummaryContext, csv_field, with_strain_header};
 use crate::lab::runner::{TrialResult, controller_names};
 
 /// The CSV header; one row per trial follows in plan order.
-pub const CSV_HEADER: &str = "controller,pole,start,repeat,outcome,seconds,top_s,max_height_m,\
+pub const CSV_HEADER: &str = "outcome,seconds,top_s,max_height_m,\
 climb_per_cycle_m,slips,slid_m,grip_mean_nm,changes_passed";
 
-/// `results.csv` as text.
-pub fn results_csv(results: &[TrialResult<PoleClimb>]) -> String {
-    let mut out = String::with_capacity(100 * (results.len() + 1));
-    out.push_str(&with_strain_header(CSV_HEADER));
-    out.push('\n');
-    for r in results {
-        let m = &r.metrics;
-        let _ = writeln!(
-            out,
-            "{},{},{},{},{},{:.2},{},{:.3},{:.4},{},{:.3},{:.3},{},{}",
-            csv_field(&r.controller),
-            csv_field(&r.layout),
-            r.start,
-            r.repeat,
-            m.outcome.name(),
-            m.seconds,
-            m.top_s.map_or_else(String::new, |t| format!("{t:.2}")),
-            m.max_height_m,
-            m.climb_per_cycle_m,
-            m.slips,
-            m.slid_m,
-            m.grip_mean_nm,
-            m.changes_passed,
-            r.strain.csv_row()
-        );
-    }
-    out
+/// One trial's row.
+pub fn csv_row(r: &TrialResult<PoleClimb>) -> String {
+    let m = &r.metrics;
+    format!(
+        "{},{:.2},{},{:.3},{:.4},{},{:.3},{:.3},{}",
+        m.outcome.name(),
+        m.seconds,
+        m.top_s.map_or_else(String::new, |t| format!("{t:.2}")),
+        m.max_height_m,
+        m.climb_per_cycle_m,
+        m.slips,
+        m.slid_m,
+        m.grip_mean_nm,
+        m.changes_passed,
+    )
 }
 
 fn stat(v: &[f64], digits: usize) -> String {
@@ -78,27 +65,12 @@ fn poles_table(designs: &[super::poles::PoleDesign]) -> String {
     s
 }
 
-/// `summary.md` as text; `designs` the poles run.
-pub fn summary_markdown(
+/// The summary's tables and their definitions; `designs` the poles run.
+pub fn summary_tables(
     results: &[TrialResult<PoleClimb>],
-    ctx: &SummaryContext,
     designs: &[super::poles::PoleDesign],
 ) -> String {
     let mut s = String::new();
-    let _ = writeln!(
-        s,
-        "# Pole climbing: rolling helix with radius compliance (SPEC §6, thesis §4.2)\n"
-    );
-    let _ = writeln!(s, "Command:\n\n```sh\n{}\n```\n", ctx.command);
-    let _ = writeln!(
-        s,
-        "{} pole(s) ({}), {} start(s) each, {} trial(s) per start, at most {} s per trial.\n",
-        ctx.layouts.len(),
-        ctx.layouts.join(", "),
-        ctx.starts,
-        ctx.repeats,
-        ctx.limit_s
-    );
     s.push_str(
         "| controller | trials | top | fell | stalled | not on | median s to top | climb m/cycle \
          | slips / trial | slid m / trial | grip N·m |\n\
@@ -180,13 +152,5 @@ pub fn summary_markdown(
     }
     s.push_str("\nThe poles:\n\n");
     s.push_str(&poles_table(designs));
-    s.push_str(&crate::lab::report::strain_markdown(results));
-    let _ = writeln!(s, "\nPer trial: `results.csv`.");
-    if !ctx.plots.is_empty() {
-        s.push_str("\nPlots:\n\n");
-        for p in &ctx.plots {
-            let _ = writeln!(s, "- `{p}`");
-        }
-    }
     s
 }

@@ -14,7 +14,7 @@ pub const RETREAT_M: f64 = 1.0;
 
 /// One opening: the free gap between two neighbouring pegs, as arc length along the
 /// array's line, m.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Opening {
     pub from_m: f64,
     pub to_m: f64,
@@ -27,7 +27,7 @@ impl Opening {
 }
 
 /// The array's line and openings, and the side the trial must get to.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Fence {
     origin_m: [f64; 2],
     /// Unit vector along the line.

@@ -12,7 +12,7 @@ use crate::lab::runner::TrialResult;
 use crate::lab::trial::TrialRecord;
 
 /// How a trial ended.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum Outcome {
     /// Every link passed the array.
     Through,
@@ -33,7 +33,7 @@ impl Outcome {
 }
 
 /// One trial's figures.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct SidewindingMetrics {
     pub outcome: Outcome,
     /// Simulated time of the trial (until through, off the board or the limit), s.

@@ -11,12 +11,18 @@ pub mod metrics;
 pub mod plots;
 pub mod report;
 
-use super::LabError;
-use super::board::Layout;
-use super::experiment::ExperimentModule;
-use super::trial::TrialRecord;
+use std::path::{Path, PathBuf};
+
 use crate::emu::world::WorldSpec;
+use crate::emu::world::scenario::WorldScenario;
 use crate::gait::GaitKind;
+use crate::lab::LabError;
+use crate::lab::experiment::{Defaults, Experiment};
+use crate::lab::file_stem;
+use crate::lab::layout::Layout;
+use crate::lab::report::SummaryContext;
+use crate::lab::runner::TrialResult;
+use crate::lab::trial::{TrialConfig, TrialRecord};
 use fence::Fence;
 use metrics::{SidewindingMetrics, sidewinding_metrics};
 
@@ -26,13 +32,30 @@ pub const SIDEWINDING_PEGS_TOML: &str = include_str!("../../../scenarios/sidewin
 /// The thesis's four controllers, in its order: AC-SFC, AC, SFC, open loop.
 pub const CONTROLLERS: &[&str] = &["ac_sfc", "ac", "sfc", "sw_open_loop"];
 
-/// The experiment's entry.
-#[derive(Debug, Clone, Copy, Default)]
+/// The experiment.
+#[derive(Debug, Clone, Copy, Default, serde::Serialize, serde::Deserialize)]
 pub struct SidewindingPegs;
 
-impl ExperimentModule for SidewindingPegs {
+/// Its own options: which layouts. The defaults are the thesis's protocol: one array,
+/// 7 starts, 3 trials each, up to 300 s.
+#[derive(Debug, Clone, clap::Args)]
+pub struct SidewindingArgs {
+    /// Seeded layouts: the scenario with master seeds seed-base .. seed-base + N - 1.
+    #[arg(long, default_value_t = 1)]
+    pub layouts: usize,
+    /// Master seed of the first layout (default: the scenario's own).
+    #[arg(long)]
+    pub seed_base: Option<u64>,
+    /// World scenario the layouts come from; it needs a [[peg_fence]] (default: the
+    /// built-in scenarios/sidewinding-pegs.toml).
+    #[arg(long, value_name = "FILE")]
+    pub scenario: Option<PathBuf>,
+}
+
+impl Experiment for SidewindingPegs {
     type Goal = Fence;
     type Metrics = SidewindingMetrics;
+    type Args = SidewindingArgs;
 
     fn name(&self) -> &'static str {
         "sidewinding"
@@ -40,11 +63,45 @@ impl ExperimentModule for SidewindingPegs {
     fn summary(&self) -> &'static str {
         "anti-compliant sidewinding through an irregular peg array (SPEC §7)"
     }
+    fn title(&self) -> &'static str {
+        "Sidewinding through an irregular peg array (SPEC §7, thesis §4.3.7)"
+    }
     fn gait(&self) -> GaitKind {
         GaitKind::Sidewinding
     }
     fn controllers(&self) -> &'static [&'static str] {
         CONTROLLERS
+    }
+    fn variant_base(&self) -> &'static str {
+        "ac_sfc"
+    }
+    fn defaults(&self) -> Defaults {
+        Defaults {
+            starts: 7,
+            repeats: 3,
+            seconds: 300.0,
+        }
+    }
+
+    fn configure(
+        &self,
+        args: &SidewindingArgs,
+        _trial: &mut TrialConfig,
+    ) -> Result<(Self, Vec<Layout>), LabError> {
+        let base = match &args.scenario {
+            Some(path) => WorldScenario::load(path)?,
+            None => WorldScenario::parse(SIDEWINDING_PEGS_TOML)?,
+        };
+        if base.peg_fences.is_empty() {
+            return Err(LabError::BadValue(
+                "the scenario has no [[peg_fence]]: the experiment needs a peg array".into(),
+            ));
+        }
+        let seed_base = args.seed_base.unwrap_or(base.seed);
+        let layouts = (0..args.layouts as u64)
+            .map(|k| Layout::seeded(&base, seed_base.wrapping_add(k)))
+            .collect();
+        Ok((SidewindingPegs, layouts))
     }
 
     fn world(
@@ -67,49 +124,38 @@ impl ExperimentModule for SidewindingPegs {
         let tau = crate::controllers::sidewinding::SidewindingConfig::full().heading_filter_s;
         sidewinding_metrics(fence, rec, tau)
     }
-}
 
-/// Writes `results.csv`, `summary.md`, `metrics.png` and per controller its first
-/// trial's `trial-*.png` (path, headings, β) and `signals-*.png` into `dir` (created if
-/// missing); returns the files.
-pub fn write_report(
-    dir: &std::path::Path,
-    results: &[super::runner::TrialResult<SidewindingPegs>],
-    ctx: &super::report::SummaryContext,
-) -> Result<Vec<std::path::PathBuf>, LabError> {
-    use super::{file_stem, plots as common};
-    std::fs::create_dir_all(dir).map_err(|source| LabError::Io {
-        path: dir.to_owned(),
-        source,
-    })?;
-    let mut written = Vec::new();
-    let csv = dir.join("results.csv");
-    super::report::write_text(&csv, &report::results_csv(results))?;
-    written.push(csv);
-    let p = dir.join("metrics.png");
-    plots::metrics_plot(&p, results)?;
-    written.push(p);
-    let tau = crate::controllers::sidewinding::SidewindingConfig::full().heading_filter_s;
-    for r in results {
-        let Some((world, _, rec)) = &r.plotted else {
-            continue;
-        };
+    fn csv_header(&self) -> &'static str {
+        report::CSV_HEADER
+    }
+    fn csv_row(&self, result: &TrialResult<Self>) -> String {
+        report::csv_row(result)
+    }
+    fn summary_tables(&self, results: &[TrialResult<Self>], _ctx: &SummaryContext) -> String {
+        report::summary_tables(results)
+    }
+    fn trial_plots(
+        &self,
+        dir: &Path,
+        r: &TrialResult<Self>,
+        (world, _, rec): (&WorldSpec, &Fence, &TrialRecord),
+    ) -> Result<Vec<PathBuf>, LabError> {
+        let tau = crate::controllers::sidewinding::SidewindingConfig::full().heading_filter_s;
         let stem = file_stem(&r.controller);
         let title = format!("{}: layout {}, start {}", r.controller, r.layout, r.start);
-        let p = dir.join(format!("trial-{stem}.png"));
-        plots::trial_plot(&p, &title, world, rec, tau)?;
-        written.push(p);
-        let p = dir.join(format!("signals-{stem}.png"));
-        common::signals_plot(&p, &title, rec)?;
-        written.push(p);
+        let trial = dir.join(format!("trial-{stem}.png"));
+        plots::trial_plot(&trial, &title, world, rec, tau)?;
+        let signals = dir.join(format!("signals-{stem}.png"));
+        crate::lab::plots::signals_plot(&signals, &title, rec)?;
+        Ok(vec![trial, signals])
     }
-    let mut ctx = ctx.clone();
-    ctx.plots = written[1..]
-        .iter()
-        .filter_map(|p| p.file_name().map(|n| n.to_string_lossy().into_owned()))
-        .collect();
-    let md = dir.join("summary.md");
-    super::report::write_text(&md, &report::summary_markdown(results, &ctx))?;
-    written.push(md);
-    Ok(written)
+    fn run_plots(
+        &self,
+        dir: &Path,
+        results: &[TrialResult<Self>],
+    ) -> Result<Vec<PathBuf>, LabError> {
+        let p = dir.join("metrics.png");
+        plots::metrics_plot(&p, results)?;
+        Ok(vec![p])
+    }
 }

@@ -7,11 +7,10 @@ use std::fmt::Write as _;
 
 use super::SidewindingPegs;
 use super::metrics::summarise;
-use crate::lab::report::{SummaryContext, csv_field, with_strain_header};
 use crate::lab::runner::TrialResult;
 
 /// The CSV header; one row per trial follows in plan order.
-pub const CSV_HEADER: &str = "controller,layout,start,repeat,outcome,seconds,first_opening,\
+pub const CSV_HEADER: &str = "outcome,seconds,first_opening,\
 opening,openings_passed,opening_width_m,reversals,first_reversal_s,reverse_beyond_s,\
 heading_error_end_rad,estimate_error_mean_rad,estimate_error_max_rad,progress_m,self_contacts";
 
@@ -19,38 +18,26 @@ fn opt(v: Option<usize>) -> String {
     v.map_or_else(String::new, |v| v.to_string())
 }
 
-/// `results.csv` as text.
-pub fn results_csv(results: &[TrialResult<SidewindingPegs>]) -> String {
-    let mut out = String::with_capacity(120 * (results.len() + 1));
-    out.push_str(&with_strain_header(CSV_HEADER));
-    out.push('\n');
-    for r in results {
-        let m = &r.metrics;
-        let _ = writeln!(
-            out,
-            "{},{},{},{},{},{:.2},{},{},{},{:.3},{},{:.2},{:.2},{:.3},{:.3},{:.3},{:.3},{},{}",
-            csv_field(&r.controller),
-            csv_field(&r.layout),
-            r.start,
-            r.repeat,
-            m.outcome.name(),
-            m.seconds,
-            opt(m.first_opening),
-            opt(m.opening),
-            opt(m.openings_passed),
-            m.opening_width_m,
-            m.reversals,
-            m.first_reversal_s,
-            m.reverse_beyond_s,
-            m.heading_error_end_rad,
-            m.estimate_error_mean_rad,
-            m.estimate_error_max_rad,
-            m.progress_m,
-            m.self_contacts,
-            r.strain.csv_row()
-        );
-    }
-    out
+/// One trial's row.
+pub fn csv_row(r: &TrialResult<SidewindingPegs>) -> String {
+    let m = &r.metrics;
+    format!(
+        "{},{:.2},{},{},{},{:.3},{},{:.2},{:.2},{:.3},{:.3},{:.3},{:.3},{}",
+        m.outcome.name(),
+        m.seconds,
+        opt(m.first_opening),
+        opt(m.opening),
+        opt(m.openings_passed),
+        m.opening_width_m,
+        m.reversals,
+        m.first_reversal_s,
+        m.reverse_beyond_s,
+        m.heading_error_end_rad,
+        m.estimate_error_mean_rad,
+        m.estimate_error_max_rad,
+        m.progress_m,
+        m.self_contacts,
+    )
 }
 
 fn stat(s: Option<(f64, f64, f64)>, digits: usize) -> String {
@@ -60,24 +47,9 @@ fn stat(s: Option<(f64, f64, f64)>, digits: usize) -> String {
     )
 }
 
-/// `summary.md` as text.
-pub fn summary_markdown(results: &[TrialResult<SidewindingPegs>], ctx: &SummaryContext) -> String {
+/// The summary's table and its definitions.
+pub fn summary_tables(results: &[TrialResult<SidewindingPegs>]) -> String {
     let mut s = String::new();
-    let _ = writeln!(
-        s,
-        "# Sidewinding through an irregular peg array (SPEC §7, thesis §4.3.7)\n"
-    );
-    let _ = writeln!(s, "Command:\n\n```sh\n{}\n```\n", ctx.command);
-    let _ = writeln!(
-        s,
-        "{} layout(s) ({}), {} start(s) each, {} trial(s) per start (sensor-noise seeds), \
-         at most {} s per trial.\n",
-        ctx.layouts.len(),
-        ctx.layouts.join(", "),
-        ctx.starts,
-        ctx.repeats,
-        ctx.limit_s
-    );
     s.push_str(
         "| controller | trials | through | failed: off board | failed: time | openings passed \
          | reverse beyond s | β reversed | end heading error rad | estimate error rad (mean / max) \
@@ -117,13 +89,5 @@ pub fn summary_markdown(results: &[TrialResult<SidewindingPegs>], ctx: &SummaryC
          heading estimate against the true heading low-passed alike, aligned at the first \
          estimate. Mean ± sample sd. Definitions: docs/lab.md."
     );
-    s.push_str(&crate::lab::report::strain_markdown(results));
-    let _ = writeln!(s, "\nPer trial: `results.csv`.");
-    if !ctx.plots.is_empty() {
-        s.push_str("\nPlots:\n\n");
-        for p in &ctx.plots {
-            let _ = writeln!(s, "- `{p}`");
-        }
-    }
     s
 }

@@ -1,16 +1,11 @@
 //! `snake-lab` end to end with tiny settings: outputs, determinism, bad input.
 
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Output;
+
+use super::{lab, read};
 
 const PNG_SIGNATURE: [u8; 8] = [0x89, b'P', b'N', b'G', 0x0d, 0x0a, 0x1a, 0x0a];
-
-fn lab(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_snake-lab"))
-        .args(args)
-        .output()
-        .expect("snake-lab runs")
-}
 
 /// A tiny peg-board run (1 start, 2 s) into `out`; panics with stderr unless it succeeds.
 fn pegboard(out: &Path, extra: &[&str]) -> Output {
@@ -37,10 +32,6 @@ fn pegboard(out: &Path, extra: &[&str]) -> Output {
     o
 }
 
-fn read(path: &Path) -> String {
-    std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
-}
-
 #[test]
 fn pegboard_writes_csv_summary_and_plots() {
     let dir = tempfile::tempdir().unwrap();
@@ -53,6 +44,7 @@ fn pegboard_writes_csv_summary_and_plots() {
             "controller",
             "layout",
             "start",
+            "repeat",
             "success",
             "seconds",
             "cycles",
@@ -72,21 +64,21 @@ fn pegboard_writes_csv_summary_and_plots() {
     );
     assert_eq!(rows.len(), 3, "header + 2 layouts x 1 start:\n{csv}");
     for (row, layout) in rows[1..].iter().zip(["seed1000", "seed1001"]) {
-        assert_eq!(row.len(), 18);
+        assert_eq!(row.len(), 19);
         // 2 s of open loop from rest: the blend and the wave stay within the motors.
-        let guarded: f64 = row[13].parse().unwrap();
+        let guarded: f64 = row[14].parse().unwrap();
         assert_eq!(guarded, 0.0, "{row:?}");
-        let peak: f64 = row[14].parse().unwrap();
+        let peak: f64 = row[15].parse().unwrap();
         assert!(peak.is_finite() && peak > 0.0, "{row:?}");
-        assert_eq!(row[10], "0", "no self-contact in 2 s of open loop");
-        assert_eq!(row[11], "false", "no side exit in 2 s");
-        let progress_m: f64 = row[12].parse().unwrap();
-        let distance_m: f64 = row[7].parse().unwrap();
+        assert_eq!(row[11], "0", "no self-contact in 2 s of open loop");
+        assert_eq!(row[12], "false", "no side exit in 2 s");
+        let progress_m: f64 = row[13].parse().unwrap();
+        let distance_m: f64 = row[8].parse().unwrap();
         assert!(progress_m.abs() <= distance_m + 1e-4, "{row:?}");
-        assert_eq!(&row[..3], ["open_loop", layout, "0"]);
-        assert_eq!(row[3], "false", "2 s cannot cross a 2 m board");
-        assert_eq!(row[4], "2.000");
-        let cycles_per_m: f64 = row[8].parse().unwrap();
+        assert_eq!(&row[..4], ["open_loop", layout, "0", "0"]);
+        assert_eq!(row[4], "false", "2 s cannot cross a 2 m board");
+        assert_eq!(row[5], "2.000");
+        let cycles_per_m: f64 = row[9].parse().unwrap();
         assert!(cycles_per_m.is_finite() && cycles_per_m > 0.0);
     }
     let summary = read(&dir.path().join("summary.md"));
@@ -186,11 +178,21 @@ fn variants_run_beside_the_named_controllers() {
 }
 
 #[test]
-fn list_names_the_controllers() {
+fn list_names_every_experiment_and_its_controllers() {
     let o = lab(&["list"]);
     assert!(o.status.success());
     let names = String::from_utf8_lossy(&o.stdout);
-    assert!(names.lines().any(|l| l == "open_loop"), "{names}");
+    for line in ["open_loop", "dc3d_switching", "ac_sfc", "windowed_adaptive"] {
+        assert!(names.lines().any(|l| l == line), "{line}: {names}");
+    }
+    for experiment in ["pegboard", "peg-array", "rock-pile", "sidewinding", "pole"] {
+        assert!(
+            names
+                .lines()
+                .any(|l| l.starts_with(&format!("{experiment}: "))),
+            "{experiment}: {names}"
+        );
+    }
 }
 
 /// Runs `args` expecting exit code 2 and returns stderr.

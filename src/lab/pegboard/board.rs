@@ -1,102 +1,36 @@
-//! Layouts of the peg-board experiment and the board a trial has to cross.
+//! The board a peg-board trial has to cross.
 //!
-//! A layout is a world scenario: either the experiment's board with its master seed set
-//! to `seed_base + k` (a new random peg layout and new random starts for each `k`), or a
+//! A layout (`lab::layout`) is the experiment's board with its master seed set to
+//! `seed_base + k` (a new random peg layout and new random starts for each `k`), or a
 //! scenario file given as is. The board's region is the bounding box of the scenario's
 //! `[[peg_board]]` regions and of every peg centre (for explicit layouts: the pegs'
 //! bounding box).
 
-use std::path::Path;
-
-use super::LabError;
 use crate::emu::world::WorldSpec;
 use crate::emu::world::scenario::{Region, WorldScenario};
+use crate::lab::LabError;
+use crate::lab::layout::Layout;
 
 /// The experiment's default board (`scenarios/peg-board-40-inside.toml`: the thesis's
 /// protocol, starts among the pegs), built in so the binary runs from any directory.
-pub const PEG_BOARD_TOML: &str = include_str!("../../scenarios/peg-board-40-inside.toml");
+pub const PEG_BOARD_TOML: &str = include_str!("../../../scenarios/peg-board-40-inside.toml");
 
 /// The same board with starts at its edge, the body behind it off the board
 /// (`scenarios/peg-board-40.toml`).
-pub const PEG_BOARD_EDGE_TOML: &str = include_str!("../../scenarios/peg-board-40.toml");
+pub const PEG_BOARD_EDGE_TOML: &str = include_str!("../../../scenarios/peg-board-40.toml");
 
-/// One peg layout of the experiment.
-#[derive(Debug, Clone)]
-pub struct Layout {
-    /// Its name in the tables: `seed<N>` or the file's stem.
-    pub name: String,
-    pub scenario: WorldScenario,
-    /// The world's identity, from which its trials' seeds derive (with the start and
-    /// the repeat): never its place in a run's list, so the same world gets the same
-    /// starts and noise in any run.
-    pub identity: u64,
-}
-
-impl Layout {
-    /// The board of `base` with master seed `seed`.
-    pub fn seeded(base: &WorldScenario, seed: u64) -> Self {
-        let mut scenario = base.clone();
-        scenario.seed = seed;
-        Self {
-            name: format!("seed{seed}"),
-            scenario,
-            identity: seed,
-        }
-    }
-
-    /// An explicit layout from a scenario file.
-    pub fn from_file(path: &Path) -> Result<Self, LabError> {
-        let scenario = WorldScenario::load(path)?;
-        let name = path.file_stem().map_or_else(
-            || path.display().to_string(),
-            |s| s.to_string_lossy().into(),
-        );
-        let text = std::fs::read_to_string(path).map_err(|source| LabError::Io {
-            path: path.to_owned(),
-            source,
-        })?;
-        let identity = scenario_identity(&scenario, &text);
-        Ok(Self {
-            name,
-            scenario,
-            identity,
-        })
-    }
-
-    /// The world of start `start` for `modules` modules and the board to cross in it.
-    pub fn world(&self, modules: usize, start: u64) -> Result<(WorldSpec, Board), LabError> {
-        let world = self.scenario.generate_trial(modules, start)?;
-        let region = board_region(&self.scenario, &world).ok_or_else(|| LabError::NoBoard {
-            layout: self.name.clone(),
-        })?;
-        let board = Board::new(region, world.start.yaw_rad);
-        Ok((world, board))
-    }
-}
-
-/// A scenario file's identity: its own `seed` if `text` sets one, otherwise a hash of
-/// what it describes (not of its path, comments or layout), so two seedless files of
-/// different worlds get different noise and one world under two names the same.
-pub fn scenario_identity(scenario: &WorldScenario, text: &str) -> u64 {
-    let sets_seed = text
-        .parse::<toml::Table>()
-        .is_ok_and(|t| t.contains_key("seed"));
-    if sets_seed {
-        scenario.seed
-    } else {
-        identity_of(
-            serde_json::to_string(scenario)
-                .unwrap_or_default()
-                .as_bytes(),
-        )
-    }
-}
-
-/// A stable 64-bit identity of `bytes` (FNV-1a; the same on every machine and build).
-pub fn identity_of(bytes: &[u8]) -> u64 {
-    bytes.iter().fold(0xCBF2_9CE4_8422_2325, |h, &b| {
-        (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01B3)
-    })
+/// The world of start `start` for `modules` modules and the board to cross in it.
+pub fn board_world(
+    layout: &Layout,
+    modules: usize,
+    start: u64,
+) -> Result<(WorldSpec, Board), LabError> {
+    let world = layout.scenario.generate_trial(modules, start)?;
+    let region = board_region(&layout.scenario, &world).ok_or_else(|| LabError::NoBoard {
+        layout: layout.name.clone(),
+    })?;
+    let board = Board::new(region, world.start.yaw_rad);
+    Ok((world, board))
 }
 
 /// Bounding box of the scenario's peg-board regions and of the world's peg centres
@@ -123,7 +57,7 @@ pub fn board_region(scenario: &WorldScenario, world: &WorldSpec) -> Option<Regio
 }
 
 /// An edge of the board's rectangle.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum Edge {
     XMin,
     XMax,
@@ -154,7 +88,7 @@ impl Edge {
 }
 
 /// The board a trial crosses: its region and the edge the snake enters by.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Board {
     pub region: Region,
     /// The edge behind the start (the one whose outward normal is nearest the start's
@@ -223,18 +157,6 @@ pub enum Exit {
     Side,
 }
 
-/// A sensor-noise seed for start `start` of the layout seeded `layout_seed`: the same
-/// for every controller, so controllers meet the same noise (common random numbers).
-pub fn trial_seed(layout_seed: u64, start: u64) -> u64 {
-    // SplitMix64 finaliser of a combination: neighbouring inputs give unrelated seeds.
-    let mut z = layout_seed
-        .wrapping_mul(0x9E37_79B9_7F4A_7C15)
-        .wrapping_add(start.wrapping_mul(0xD1B5_4A32_D192_ED03));
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^ (z >> 31)
-}
-
 #[cfg(test)]
 mod tests {
     use std::f64::consts::PI;
@@ -298,7 +220,7 @@ mod tests {
     fn the_experiment_board_region_is_its_peg_board() {
         let s = WorldScenario::parse(PEG_BOARD_TOML).unwrap();
         let l = Layout::seeded(&s, 1000);
-        let (world, b) = l.world(18, 0).unwrap();
+        let (world, b) = board_world(&l, 18, 0).unwrap();
         assert_eq!(world.pegs.len(), 40);
         // The default starts among the pegs, the edge board at the edge; same pegs.
         assert!(
@@ -307,14 +229,14 @@ mod tests {
             world.start
         );
         let edge = WorldScenario::parse(PEG_BOARD_EDGE_TOML).unwrap();
-        let (edge_world, _) = Layout::seeded(&edge, 1000).world(18, 0).unwrap();
+        let (edge_world, _) = board_world(&Layout::seeded(&edge, 1000), 18, 0).unwrap();
         assert_eq!(edge_world.pegs, world.pegs);
         assert!(edge_world.start.head_m[0] < 0.5);
         assert_eq!(b.region.x_m, [0.0, 2.0]);
         assert_eq!(b.region.y_m, [-0.6, 0.6]);
         assert_eq!(b.entry, Edge::XMin);
         // Another seed, another layout.
-        let (other, _) = Layout::seeded(&s, 1001).world(18, 0).unwrap();
+        let (other, _) = board_world(&Layout::seeded(&s, 1001), 18, 0).unwrap();
         assert_ne!(world.pegs, other.pegs);
     }
 
@@ -335,37 +257,9 @@ mod tests {
             scenario: flat,
             identity: 0,
         };
-        assert!(matches!(l.world(18, 0), Err(LabError::NoBoard { .. })));
-    }
-
-    #[test]
-    fn a_files_identity_is_its_seed_or_what_it_describes() {
-        let dir = tempfile::tempdir().unwrap();
-        let write = |name: &str, text: &str| {
-            let p = dir.path().join(name);
-            std::fs::write(&p, text).unwrap();
-            Layout::from_file(&p).unwrap().identity
-        };
-        let peg = "[[peg]]\nx_m = 0.5\ny_m = 0.0\ndiameter_m = 0.04\n";
-        let other = "[[peg]]\nx_m = 0.7\ny_m = 0.0\ndiameter_m = 0.04\n";
-        // Seedless: the world decides, not the name or the comments.
-        let a = write("a.toml", peg);
-        assert_eq!(a, write("b.toml", &format!("# the same world\n{peg}")));
-        assert_ne!(a, write("c.toml", other));
-        // A file that sets its seed is that seed, 0 included.
-        assert_eq!(write("d.toml", &format!("seed = 0\n{peg}")), 0);
-        assert_eq!(write("e.toml", &format!("seed = 42\n{other}")), 42);
-        assert_eq!(
-            Layout::seeded(&WorldScenario::default(), 1003).identity,
-            1003
-        );
-    }
-
-    #[test]
-    fn trial_seeds_differ_by_layout_and_start() {
-        let a = trial_seed(1000, 0);
-        assert_eq!(a, trial_seed(1000, 0));
-        assert_ne!(a, trial_seed(1000, 1));
-        assert_ne!(a, trial_seed(1001, 0));
+        assert!(matches!(
+            board_world(&l, 18, 0),
+            Err(LabError::NoBoard { .. })
+        ));
     }
 }

@@ -1,0 +1,196 @@
+//! The peg-board experiment (SPEC §5, thesis Fig. 4.6): slithering controllers on
+//! seeded irregular peg boards, a trial ending when the front half of the body leaves
+//! the board (as the thesis's did); success = it left across, by the far edge (a side
+//! exit is counted apart); time to traverse in body-wave cycles per metre, and the
+//! centre's signed progress across the board.
+
+pub mod board;
+pub mod metrics;
+pub mod plots;
+pub mod report;
+
+use std::path::{Path, PathBuf};
+
+use board::{Board, Exit, PEG_BOARD_TOML, board_world};
+use metrics::{TrialMetrics, trial_metrics};
+
+use crate::emu::Plant;
+use crate::emu::world::WorldSpec;
+use crate::emu::world::scenario::WorldScenario;
+use crate::gait::GaitKind;
+use crate::lab::LabError;
+use crate::lab::experiment::{Defaults, Experiment, Goal};
+use crate::lab::file_stem;
+use crate::lab::layout::Layout;
+use crate::lab::metrics::MetricsConfig;
+use crate::lab::report::SummaryContext;
+use crate::lab::runner::TrialResult;
+use crate::lab::trial::{TrialConfig, TrialRecord, front_half_centre, front_half_of};
+
+/// The experiment.
+#[derive(Debug, Clone, Copy, serde::Serialize, serde::Deserialize)]
+pub struct Pegboard;
+
+/// Its own options: which boards.
+#[derive(Debug, Clone, clap::Args)]
+pub struct PegboardArgs {
+    /// Seeded random layouts of the board: seeds seed-base .. seed-base + N - 1.
+    #[arg(long, default_value_t = 20)]
+    pub layouts: usize,
+    /// Master seed of the first seeded layout.
+    #[arg(long, default_value_t = 1000)]
+    pub seed_base: u64,
+    /// World scenario the seeded layouts come from (default: the built-in
+    /// scenarios/peg-board-40-inside.toml, starts among the pegs as in the thesis;
+    /// scenarios/peg-board-40.toml starts at the board's edge).
+    #[arg(long, value_name = "FILE")]
+    pub board: Option<PathBuf>,
+    /// An explicit layout: a world scenario file, run as is (repeatable).
+    #[arg(long = "scenario", value_name = "FILE")]
+    pub scenarios: Vec<PathBuf>,
+}
+
+/// Its controllers, in report order: open loop, the ablations (each adds a compliant
+/// parameter), the centralisation variants of the full controller, the CPG baseline,
+/// and switching directional compliance (SPEC §8, calibrated on open ground first).
+pub const CONTROLLERS: &[&str] = &[
+    "open_loop",
+    "a",
+    "a_ws",
+    "a_ws_omega",
+    "a_ws_omega_central",
+    "a_ws_omega_per_joint",
+    "a_ws_omega_windowed_phase",
+    "cpg",
+    "dc_switching",
+];
+
+impl Experiment for Pegboard {
+    type Goal = Board;
+    type Metrics = TrialMetrics;
+    type Args = PegboardArgs;
+
+    fn name(&self) -> &'static str {
+        "pegboard"
+    }
+    fn summary(&self) -> &'static str {
+        "slithering through seeded peg boards (SPEC §5): cycles per metre, success, time stuck"
+    }
+    fn gait(&self) -> GaitKind {
+        GaitKind::Slithering
+    }
+    fn title(&self) -> &'static str {
+        "Peg-board experiment (SPEC §5)"
+    }
+    fn controllers(&self) -> &'static [&'static str] {
+        CONTROLLERS
+    }
+    fn variant_base(&self) -> &'static str {
+        crate::lab::controllers::VARIANT_BASE
+    }
+    fn defaults(&self) -> Defaults {
+        Defaults {
+            starts: 3,
+            repeats: 1,
+            seconds: 120.0,
+        }
+    }
+
+    fn configure(
+        &self,
+        args: &PegboardArgs,
+        _trial: &mut TrialConfig,
+    ) -> Result<(Self, Vec<Layout>), LabError> {
+        let base = match &args.board {
+            Some(path) => WorldScenario::load(path)?,
+            None => WorldScenario::parse(PEG_BOARD_TOML)?,
+        };
+        let mut layouts: Vec<Layout> = (0..args.layouts as u64)
+            .map(|k| Layout::seeded(&base, args.seed_base.wrapping_add(k)))
+            .collect();
+        for path in &args.scenarios {
+            layouts.push(Layout::from_file(path)?);
+        }
+        Ok((Pegboard, layouts))
+    }
+
+    fn world(
+        &self,
+        layout: &Layout,
+        modules: usize,
+        start: u64,
+    ) -> Result<(WorldSpec, Board), LabError> {
+        board_world(layout, modules, start)
+    }
+
+    fn metrics(&self, board: &Board, rec: &TrialRecord) -> TrialMetrics {
+        // The trial ended at the sample it left the board: where the front half was then.
+        let exit = if rec.success {
+            board.exit(front_half_of(rec.end_links_m.iter().copied()))
+        } else {
+            None
+        };
+        let m = trial_metrics(
+            &rec.centre_m,
+            rec.sample_dt_s,
+            rec.seconds,
+            exit == Some(Exit::Far),
+            rec.temporal_freq_rad_s,
+            &MetricsConfig::for_wave(rec.temporal_freq_rad_s),
+        );
+        let progress_m = match (rec.centre_m.first(), rec.centre_m.last()) {
+            (Some(a), Some(b)) => {
+                let f = board.forward();
+                (b[0] - a[0]) * f[0] + (b[1] - a[1]) * f[1]
+            }
+            _ => 0.0,
+        };
+        TrialMetrics {
+            self_contacts: rec.self_contacts,
+            side_exit: exit == Some(Exit::Side),
+            progress_m,
+            ..m
+        }
+    }
+
+    fn csv_header(&self) -> &'static str {
+        report::CSV_HEADER
+    }
+    fn csv_row(&self, result: &TrialResult<Self>) -> String {
+        report::csv_row(result)
+    }
+    fn summary_tables(&self, results: &[TrialResult<Self>], _ctx: &SummaryContext) -> String {
+        report::summary_tables(results)
+    }
+    fn trial_plots(
+        &self,
+        dir: &Path,
+        r: &TrialResult<Self>,
+        (world, board, rec): (&WorldSpec, &Board, &TrialRecord),
+    ) -> Result<Vec<PathBuf>, LabError> {
+        use crate::lab::plots::{path_plot, signals_plot};
+        let stem = file_stem(&r.controller);
+        let title = format!("{}: layout {}, start {}", r.controller, r.layout, r.start);
+        let path = dir.join(format!("path-{stem}.png"));
+        path_plot(&path, &title, world, Some(&board.region), rec)?;
+        let signals = dir.join(format!("signals-{stem}.png"));
+        signals_plot(&signals, &title, rec)?;
+        Ok(vec![path, signals])
+    }
+    fn run_plots(
+        &self,
+        dir: &Path,
+        results: &[TrialResult<Self>],
+    ) -> Result<Vec<PathBuf>, LabError> {
+        let p = dir.join("cycles_per_m.png");
+        plots::results_plot(&p, results)?;
+        Ok(vec![p])
+    }
+}
+
+/// A trial is over when the front half of the body has crossed the board.
+impl Goal for Board {
+    fn reached(&self, plant: &dyn Plant) -> bool {
+        self.crossed(front_half_centre(plant))
+    }
+}
