@@ -123,10 +123,11 @@ impl<E: Experiment> Lab for Plugin<E> {
         let mut trial = TrialConfig {
             limit_s: common.seconds.unwrap_or(d.seconds),
             servo_loop: common.servo_loop,
-            gaits: nominal_gaits(self.0.gait(), common.nominal.as_deref())?,
             ..TrialConfig::default()
         };
         let (module, layouts) = self.0.configure(&own, &mut trial)?;
+        trial.gaits = nominal_gaits(module.gait(), common.nominal.as_deref())?;
+        let module = module.with_trial(&trial);
         let starts = common.starts.unwrap_or(d.starts);
         let repeats = common.repeats.unwrap_or(d.repeats);
         check_counts(&layouts, starts, repeats, trial.limit_s)?;

@@ -62,13 +62,20 @@ pub trait Experiment: Sync + Sized + Serialize + DeserializeOwned + 'static {
     /// Its defaults for the common options.
     fn defaults(&self) -> Defaults;
 
-    /// The experiment as its options configure it, and its layouts; may adjust the
-    /// trials' configuration (the body's module count).
+    /// The experiment as its options configure it (its gait included), and its
+    /// layouts; may adjust the trials' configuration (the body's module count). The
+    /// gaits' nominal parameters are set after, for the configured gait.
     fn configure(
         &self,
         args: &Self::Args,
         trial: &mut TrialConfig,
     ) -> Result<(Self, Vec<Layout>), LabError>;
+
+    /// The experiment once the trials' configuration is final (the gaits' nominal
+    /// parameters, the module count): for figures computed from them.
+    fn with_trial(self, _trial: &TrialConfig) -> Self {
+        self
+    }
 
     /// The world of start `start` of `layout` for a body of `modules`, and its goal.
     fn world(

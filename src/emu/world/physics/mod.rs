@@ -16,6 +16,7 @@
 pub mod build;
 pub mod hooks;
 pub mod kinematics;
+pub mod no_slip_bound;
 mod self_contact;
 pub mod sensors;
 mod step;
@@ -297,8 +298,6 @@ fn validate(c: &PhysicsConfig) -> Result<(), PhysicsError> {
 mod coulomb_model;
 #[cfg(test)]
 mod joint_speed_tests;
-#[cfg(test)]
-mod no_slip_bound;
 #[cfg(test)]
 mod pole_tests;
 #[cfg(test)]
