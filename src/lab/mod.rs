@@ -24,6 +24,7 @@ pub mod cli;
 pub mod controllers;
 pub mod displacement;
 pub mod experiment;
+pub mod flat_ground;
 pub mod layout;
 pub mod metrics;
 pub mod pegboard;

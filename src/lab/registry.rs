@@ -15,6 +15,7 @@ pub static EXPERIMENTS: &[&dyn Lab] = &[
     &Plugin(Displacement::ROCK_PILE),
     &Plugin(SidewindingPegs),
     &Plugin(PoleClimb::UNCONFIGURED),
+    &Plugin(super::flat_ground::FlatGround::UNCONFIGURED),
 ];
 
 /// The experiment named `name`.
