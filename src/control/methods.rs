@@ -271,3 +271,21 @@ fn take_flag(p: &mut Params, name: &str) -> Result<bool, RpcError> {
         ))),
     }
 }
+
+#[cfg(test)]
+mod docs_tests {
+    /// The README and the socket's reference name every method the socket answers.
+    #[test]
+    fn every_method_is_documented() {
+        let readme = include_str!("../../README.md");
+        let reference = include_str!("../../docs/control-socket.md");
+        for m in super::METHODS {
+            let quoted = format!("`{m}`");
+            assert!(readme.contains(&quoted), "README.md does not list {quoted}");
+            assert!(
+                reference.contains(&quoted),
+                "docs/control-socket.md does not name {quoted}"
+            );
+        }
+    }
+}
