@@ -26,8 +26,8 @@ use crate::rt::control_loop::{ControlLoop, LoopParts};
 use crate::rt::controller_slots::Installed;
 use crate::rt::pacer::{LockstepPacer, Pacer, RealTimePacer};
 use crate::rt::recording::LoopRecording;
+use crate::rt::sys;
 use crate::rt::telemetry::{self, Snapshot, TelemetryReader};
-use crate::rt::{messages, sys};
 use crate::safety::failsafe::{Failsafe, FailsafeConfig};
 use config::{Config, Pacing, StartMode};
 
@@ -193,14 +193,8 @@ pub fn run(cfg: Config, emulated: bool) -> Result<()> {
         )),
     };
 
-    let (req_tx, req_rx) =
-        crossbeam_channel::bounded::<messages::Envelope>(cfg.control.channel_capacity);
-    let (ack_tx, ack_rx) = crossbeam_channel::bounded::<messages::Ack>(
-        crate::rt::control_loop::ack_capacity(cfg.control.channel_capacity),
-    );
-    // Each request retires at most one controller and the server drains before it
-    // sends one: this never fills.
-    let (retired_tx, retired_rx) = crossbeam_channel::bounded(cfg.control.channel_capacity + 2);
+    let (control_ends, loop_ends) =
+        crate::rt::channels::loop_channels(cfg.control.channel_capacity);
     let (tel_writer, tel_reader) = telemetry::channel(Snapshot::new(
         n,
         cfg.gait.initial,
@@ -226,8 +220,8 @@ pub fn run(cfg: Config, emulated: bool) -> Result<()> {
     let server = control::start(
         server_cfg,
         LoopHandle {
-            requests: req_tx,
-            acks: ack_rx,
+            requests: control_ends.requests,
+            acks: control_ends.acks,
             telemetry: tel_reader.clone(),
             info: DaemonInfo {
                 version: env!("CARGO_PKG_VERSION").to_owned(),
@@ -241,7 +235,7 @@ pub fn run(cfg: Config, emulated: bool) -> Result<()> {
                 },
             },
             layout,
-            retired: retired_rx,
+            retired: control_ends.retired,
             catalog: catalog.clone(),
         },
     )
@@ -252,14 +246,14 @@ pub fn run(cfg: Config, emulated: bool) -> Result<()> {
         pacer,
         selector,
         failsafe,
-        requests: req_rx,
-        acks: ack_tx,
+        requests: loop_ends.requests,
+        acks: loop_ends.acks,
         telemetry: tel_writer,
         heartbeat: heartbeat.clone(),
         stop: stop.clone(),
         velocity_feedforward: cfg.loop_.velocity_feedforward,
         hold_at_start: cfg.gait.start == StartMode::Hold,
-        retired: retired_tx,
+        retired: loop_ends.retired,
         controllers,
         estimators,
         recording: recorder.as_ref().map(|(tx, _)| LoopRecording {

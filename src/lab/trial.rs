@@ -265,12 +265,11 @@ pub(crate) fn trial_loop(
     );
     // The lab's loop answers no socket: its channels only need to exist, and carry the
     // requests given (their answers are not read).
-    let (req_tx, req_rx) = crossbeam_channel::bounded(requests.len() + 1);
+    let (control_ends, loop_ends) = crate::rt::channels::loop_channels(requests.len() + 1);
+    let req_tx = control_ends.requests;
     for (ticket, r) in requests.iter().enumerate() {
         let _ = req_tx.try_send(crate::rt::messages::Envelope::new(ticket as u64, *r));
     }
-    let (ack_tx, _ack_rx) = crossbeam_channel::bounded(requests.len().max(1));
-    let (retired_tx, _retired_rx) = crossbeam_channel::bounded(1);
     let (writer, _reader) = telemetry::channel(Snapshot::new(n, gait, table, config.blend_time_s));
     let parts = LoopParts {
         bus: Box::new(bus),
@@ -283,14 +282,14 @@ pub(crate) fn trial_loop(
             SEA_MAX_JOINT_SPEED_RAD_S,
         ),
         failsafe: Failsafe::new(FailsafeConfig::default()),
-        requests: req_rx,
-        acks: ack_tx,
+        requests: loop_ends.requests,
+        acks: loop_ends.acks,
         telemetry: writer,
         heartbeat: Arc::new(AtomicU64::new(0)),
         stop: Arc::new(AtomicBool::new(false)),
         velocity_feedforward: true,
         hold_at_start: false,
-        retired: retired_tx,
+        retired: loop_ends.retired,
         controllers: vec![(
             gait,
             Installed {

@@ -102,9 +102,7 @@ pub fn echo_harness_sized(
     let faults = bus.faults();
     let layout = BodyLayout::alternating(n, Plane::Lateral, MODULE_LENGTH_M);
     let estimators = crate::estimation::standard_estimators(&layout);
-    let (req_tx, req_rx) = crossbeam_channel::bounded(capacity);
-    let (ack_tx, ack_rx) = crossbeam_channel::bounded(capacity);
-    let (retired_tx, retired_rx) = crossbeam_channel::bounded(18);
+    let (control_ends, loop_ends) = super::channels::loop_channels(capacity);
     let (writer, reader) = telemetry::channel(Snapshot::new(n, gait, table, 2.0));
     let stop = Arc::new(AtomicBool::new(false));
     let catalog = Catalog::default();
@@ -124,26 +122,26 @@ pub fn echo_harness_sized(
             crate::gait::SEA_MAX_JOINT_SPEED_RAD_S,
         ),
         failsafe: Failsafe::new(failsafe),
-        requests: req_rx,
-        acks: ack_tx,
+        requests: loop_ends.requests,
+        acks: loop_ends.acks,
         telemetry: writer,
         heartbeat: Arc::new(AtomicU64::new(0)),
         stop: stop.clone(),
         velocity_feedforward: true,
         hold_at_start,
-        retired: retired_tx,
+        retired: loop_ends.retired,
         controllers,
         estimators,
         recording: None,
     });
     Harness {
         control,
-        requests: req_tx,
-        acks: ack_rx,
+        requests: control_ends.requests,
+        acks: control_ends.acks,
         telemetry: reader,
         stop,
         faults,
-        retired: retired_rx,
+        retired: control_ends.retired,
         layout,
         catalog,
     }

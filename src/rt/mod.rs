@@ -1,6 +1,7 @@
 //! The real-time side: pacing, the 1 kHz loop, its statistics and the messages
 //! and telemetry that connect it to the rest of the daemon.
 
+pub mod channels;
 pub mod control_loop;
 pub mod controller_slots;
 pub mod harness;

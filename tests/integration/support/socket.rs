@@ -12,9 +12,10 @@ use snaked::control::client::{Client, Endpoint};
 use snaked::control::{BusKind, DaemonInfo, LoopHandle, Pacing, RunningServer, ServerConfig};
 use snaked::controller::catalog::Catalog;
 use snaked::gait::{BodyLayout, GaitKind, GaitParams, GaitTable, Plane};
+use snaked::rt::channels::loop_channels;
 use snaked::rt::control_loop::ControlLoop;
 use snaked::rt::harness::Harness as LoopHarness;
-use snaked::rt::messages::{Ack, Envelope, LoopRequest, Rejection};
+use snaked::rt::messages::{Ack, LoopRequest, Rejection};
 use snaked::rt::telemetry::{self, Snapshot};
 use snaked::safety::failsafe::{Mode, Reason};
 
@@ -128,11 +129,10 @@ fn apply(s: &mut Snapshot, r: &LoopRequest) {
 }
 
 pub fn fake_loop(spec: LoopSpec) -> (FakeLoop, LoopHandle) {
-    let (req_tx, req_rx) = crossbeam_channel::bounded::<Envelope>(spec.channel_capacity);
-    let (ack_tx, ack_rx) = crossbeam_channel::bounded::<Ack>(64);
+    let (control_ends, loop_ends) = loop_channels(spec.channel_capacity);
+    let (req_rx, ack_tx) = (loop_ends.requests, loop_ends.acks);
     let initial = Snapshot::new(spec.joints, GaitKind::Slithering, table(), 2.0);
     let (mut writer, reader) = telemetry::channel(initial.clone());
-    let (_retired_tx, retired_rx) = crossbeam_channel::bounded(4);
     let stop = Arc::new(AtomicBool::new(false));
     let seen = Arc::new(Mutex::new(Vec::new()));
     let controllers = Arc::new(Mutex::new(Vec::new()));
@@ -207,12 +207,12 @@ pub fn fake_loop(spec: LoopSpec) -> (FakeLoop, LoopHandle) {
         pacing: Pacing::Realtime,
     };
     let handle = LoopHandle {
-        requests: req_tx,
-        acks: ack_rx,
+        requests: control_ends.requests,
+        acks: control_ends.acks,
         telemetry: reader,
         info,
         layout: BodyLayout::alternating(spec.joints, Plane::Lateral, 0.064),
-        retired: retired_rx,
+        retired: control_ends.retired,
         catalog,
     };
     let fake = FakeLoop {
