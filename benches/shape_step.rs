@@ -1,6 +1,7 @@
 //! Cost of one step of the slithering controllers (torques in, set-points out) for
 //! N = 18 and how it grows up to N = 1024 modules.
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
+use snaked::controller::Tick;
 use snaked::controller::registry::{BuildContext, Selection, build};
 use snaked::controller::testing::{ObservationBuf, engage_at};
 use snaked::controllers::REGISTRY;
@@ -39,7 +40,8 @@ fn shape_step(c: &mut Criterion) {
             group.bench_function(BenchmarkId::new(name, n), |b| {
                 b.iter(|| {
                     t += 1e-3;
-                    ctl.step(t, &buf.observe(&pos, &tau), &mut out);
+                    let tick = Tick { t_s: t, dt_s: 1e-3 };
+                    ctl.step(tick, &buf.observe(&pos, &tau), &mut out);
                 })
             });
         }

@@ -129,7 +129,7 @@ pub(crate) async fn set(
     let (installed, info) = build(shared, gait, &params, &sel)?;
     let result = shared
         .router
-        .call_with(LoopRequest::SetController(gait), Some(installed))
+        .call_with(LoopRequest::SetController { gait }, Some(installed))
         .await;
     shared.free_retired();
     result?;
@@ -163,7 +163,10 @@ pub(crate) async fn calibrate(
     let (snap, gait, id, info) = installed_controller(shared, gait)?;
     let seconds = match what {
         Calibration::Clear => {
-            let cmd = LoopRequest::ControllerCommand(gait, ControllerCommand::ClearCalibration);
+            let cmd = LoopRequest::ControllerCommand {
+                gait,
+                command: ControllerCommand::ClearCalibration,
+            };
             shared.router.call(cmd).await?;
             return Ok(
                 json!({ "gait": gait, "controller": info.controller, "calibration": "none" }),
@@ -185,7 +188,7 @@ pub(crate) async fn calibrate(
     };
     shared
         .router
-        .call(LoopRequest::ControllerCommand(gait, cmd))
+        .call(LoopRequest::ControllerCommand { gait, command: cmd })
         .await?;
     let Some(at) = info
         .report
@@ -304,9 +307,9 @@ pub(crate) async fn set_compliance(
     };
     let (installed, info) = build(shared, gait, &params, &sel)?;
     let request = if patch == ParamPatch::default() {
-        LoopRequest::SetController(gait)
+        LoopRequest::SetController { gait }
     } else {
-        LoopRequest::SetParams(gait, patch)
+        LoopRequest::SetParams { gait, patch }
     };
     let result = shared.router.call_with(request, Some(installed)).await;
     shared.free_retired();
@@ -399,7 +402,7 @@ pub(crate) async fn set_heading(
     let cmd = ControllerCommand::SetHeading { heading_rad };
     shared
         .router
-        .call(LoopRequest::ControllerCommand(gait, cmd))
+        .call(LoopRequest::ControllerCommand { gait, command: cmd })
         .await?;
     Ok(json!({
         "gait": gait,

@@ -90,7 +90,7 @@ pub(crate) async fn dispatch(
         "gait.set" => {
             let gait = p.take_gait("gait")?.ok_or_else(|| missing("gait"))?;
             p.finish(&["gait"])?;
-            shared.router.call(LoopRequest::SetGait(gait)).await?;
+            shared.router.call(LoopRequest::SetGait { gait }).await?;
             Ok(json!({ "gait": gait }))
         }
         "params.get" => {
@@ -220,7 +220,10 @@ async fn params_set(shared: &Shared, mut p: Params) -> Result<Value, RpcError> {
                 "`blend_time_s` is set on its own: send gait params in a separate request",
             ));
         }
-        shared.router.call(LoopRequest::SetBlendTime(t)).await?;
+        shared
+            .router
+            .call(LoopRequest::SetBlendTime { blend_time_s: t })
+            .await?;
         return Ok(json!({ "blend_time_s": t }));
     }
     let gait = p
@@ -256,7 +259,7 @@ async fn params_set(shared: &Shared, mut p: Params) -> Result<Value, RpcError> {
         .map_err(|e| RpcError::invalid_params(format!("{}: {e}", gait.name())))?;
     shared
         .router
-        .call(LoopRequest::SetParams(gait, patch))
+        .call(LoopRequest::SetParams { gait, patch })
         .await?;
     Ok(json!({ "gait": gait, "params": new }))
 }

@@ -4,7 +4,8 @@
 //!   the loop takes new ones,
 //! - engaged from a [`Handover`]: the set-points and wave phase the selector's blend
 //!   reached, so nothing jumps, and the nominal parameters it is to follow,
-//! - stepped each cycle as a pure function of time and an [`Observation`],
+//! - stepped each cycle as a pure function of a [`Tick`] (the loop's time and the time
+//!   since its previous step) and an [`Observation`],
 //! - asked for its [`ControllerReport`] (signal values, window fields).
 
 use super::report::ControllerReport;
@@ -58,6 +59,36 @@ pub struct Observation<'a> {
     pub body: &'a BodyEstimate,
 }
 
+/// The time of one step, as ros2_control hands a controller `update(time, period)`:
+/// the loop's time and the time since this controller's previous step (0 at the first
+/// step after an engagement, never negative).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Tick {
+    pub t_s: f64,
+    pub dt_s: f64,
+}
+
+/// Makes the [`Tick`]s of one engaged controller: the loop's controller slot keeps
+/// one, restarted at every engagement; tests that step a controller by hand use one.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct TickClock {
+    last_t_s: Option<f64>,
+}
+
+impl TickClock {
+    /// The next step's tick is a first one (dt 0).
+    pub fn restart(&mut self) {
+        self.last_t_s = None;
+    }
+
+    /// The tick of a step at `t_s`.
+    pub fn tick(&mut self, t_s: f64) -> Tick {
+        let dt_s = self.last_t_s.map_or(0.0, |last| (t_s - last).max(0.0));
+        self.last_t_s = Some(t_s);
+        Tick { t_s, dt_s }
+    }
+}
+
 /// Where the selector's blend left the joints when a controller takes over.
 #[derive(Debug, Clone, Copy)]
 pub struct Handover<'a> {
@@ -97,8 +128,10 @@ fn range(min: f64, max: f64) -> String {
 }
 
 /// An operator's command to a running controller (`controller.calibrate` on the
-/// socket). `Copy`: it crosses the loop's channel without allocating.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// socket). `Copy`: it crosses the loop's channel without allocating. Recorded as
+/// `"command"` (the variant's name) beside its fields.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+#[serde(tag = "command", rename_all = "snake_case")]
 pub enum ControllerCommand {
     /// Measure what the controller calibrates (e.g. the ground's friction offset of
     /// directional compliance) over the next `duration_s` of its own steps. A
@@ -145,9 +178,11 @@ pub trait Controller: Send {
     /// Forgets everything learnt and starts from `handover` (called at every takeover;
     /// the parameters have passed [`Controller::accepts`]).
     fn engage(&mut self, handover: &Handover<'_>);
-    /// Joint set-points at `t_s` (non-decreasing between engagements) from `obs`.
-    /// Deterministic. Dorsal and lateral joints alike: write every entry.
-    fn step(&mut self, t_s: f64, obs: &Observation<'_>, set_points_rad: &mut [f64]);
+    /// Joint set-points at `tick.t_s` (non-decreasing between engagements) from `obs`;
+    /// `tick.dt_s` is the time since the previous step (0 at the first after
+    /// [`Controller::engage`]). Deterministic. Dorsal and lateral joints alike: write
+    /// every entry.
+    fn step(&mut self, tick: Tick, obs: &Observation<'_>, set_points_rad: &mut [f64]);
     /// The report after the last step, in the order of the controller's
     /// [`super::report::ReportSpec`].
     fn report(&self, out: &mut ControllerReport);

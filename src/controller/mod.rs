@@ -14,7 +14,7 @@ pub mod report;
 pub use config::ConfigError;
 pub use interface::{
     BodyEstimate, CommandRefused, Controller, ControllerCommand, Estimator, Handover, Imu,
-    NominalMismatch, Observation,
+    NominalMismatch, Observation, Tick, TickClock,
 };
 pub use registry::{BuildContext, Built, ControllerKind, Family, Selection};
 pub mod testing;

@@ -2,7 +2,7 @@
 //! allocation tests): observations of scripted torques, and engaging a controller as
 //! if the selector had run its gait from t = 0.
 
-use super::interface::{BodyEstimate, Controller, Handover, Imu, Observation};
+use super::interface::{BodyEstimate, Controller, Handover, Imu, Observation, TickClock};
 use crate::gait::{BodyLayout, GaitParams};
 
 /// Storage for the parts of an observation a test does not script.
@@ -51,8 +51,13 @@ pub fn run_with_torques<const N: usize>(
 ) -> Vec<f64> {
     let buf = ObservationBuf::new(N);
     let (pos, mut tau, mut out) = ([0.0; N], [0.0; N], vec![0.0; N]);
+    let mut clock = TickClock::default();
     for k in 0..(seconds * 1000.0) as usize {
-        c.step(k as f64 * 1e-3, &buf.observe(&pos, &tau), &mut out);
+        c.step(
+            clock.tick(k as f64 * 1e-3),
+            &buf.observe(&pos, &tau),
+            &mut out,
+        );
         tau = torque(&out);
     }
     out

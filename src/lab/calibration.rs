@@ -60,12 +60,12 @@ pub fn calibrate(
     })?;
     let omega = config.gaits.get(controller.gait).temporal_freq_rad_s.abs();
     let seconds = CALIBRATION_CYCLES * std::f64::consts::TAU / omega.max(1e-3);
-    let request = LoopRequest::ControllerCommand(
-        controller.gait,
-        ControllerCommand::Calibrate {
+    let request = LoopRequest::ControllerCommand {
+        gait: controller.gait,
+        command: ControllerCommand::Calibrate {
             duration_s: seconds,
         },
-    );
+    };
     let (mut lp, names, _, _) = trial_loop(controller, plant, config, None, &[request])?;
     let Some(state) = names.iter().position(|n| n == "calibration") else {
         return Ok(None);

@@ -354,7 +354,9 @@ pub fn run_trial(
     record(&lp, &mut rec);
     for k in 1..=steps {
         if Some(k) == switch_step {
-            let request = crate::rt::messages::LoopRequest::SetGait(controller.gait);
+            let request = crate::rt::messages::LoopRequest::SetGait {
+                gait: controller.gait,
+            };
             let _ = requests.try_send(crate::rt::messages::Envelope::new(1 << 32, request));
         }
         let guarded = lp.guard_counters().slew_limited_cycles;

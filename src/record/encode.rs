@@ -295,82 +295,6 @@ impl<'a> ControllerWindows<'a> {
     }
 }
 
-/// The request's name as the socket spells it.
-pub fn request_name(r: &LoopRequest) -> &'static str {
-    match r {
-        LoopRequest::SetGait(_) => "set_gait",
-        LoopRequest::SetParams(..) => "set_params",
-        LoopRequest::SetController(_) => "set_controller",
-        LoopRequest::ControllerCommand(_, c) => match c {
-            crate::controller::ControllerCommand::Calibrate { .. } => "controller_calibrate",
-            crate::controller::ControllerCommand::ClearCalibration => {
-                "controller_clear_calibration"
-            }
-            crate::controller::ControllerCommand::SetHeading { .. } => "controller_heading",
-        },
-        LoopRequest::SetBlendTime(_) => "set_blend_time",
-        LoopRequest::Hold => "hold",
-        LoopRequest::Limp => "limp",
-        LoopRequest::EStop => "estop",
-        LoopRequest::Arm => "arm",
-        LoopRequest::Shutdown => "shutdown",
-    }
-}
-
-/// A request's arguments.
-#[derive(Serialize)]
-#[serde(untagged)]
-enum RequestArgs<'a> {
-    None {},
-    Gait {
-        gait: crate::gait::GaitKind,
-    },
-    Params {
-        gait: crate::gait::GaitKind,
-        patch: &'a crate::gait::ParamPatch,
-    },
-    BlendTime {
-        blend_time_s: f64,
-    },
-    Calibrate {
-        gait: crate::gait::GaitKind,
-        seconds: f64,
-    },
-    Heading {
-        gait: crate::gait::GaitKind,
-        /// `null`: the heading at the time.
-        heading_rad: Option<f64>,
-    },
-}
-
-fn request_args(r: &LoopRequest) -> RequestArgs<'_> {
-    match r {
-        LoopRequest::SetGait(gait) | LoopRequest::SetController(gait) => {
-            RequestArgs::Gait { gait: *gait }
-        }
-        LoopRequest::SetParams(gait, patch) => RequestArgs::Params { gait: *gait, patch },
-        LoopRequest::SetBlendTime(s) => RequestArgs::BlendTime { blend_time_s: *s },
-        LoopRequest::ControllerCommand(gait, cmd) => match cmd {
-            crate::controller::ControllerCommand::Calibrate { duration_s } => {
-                RequestArgs::Calibrate {
-                    gait: *gait,
-                    seconds: *duration_s,
-                }
-            }
-            crate::controller::ControllerCommand::ClearCalibration => {
-                RequestArgs::Gait { gait: *gait }
-            }
-            crate::controller::ControllerCommand::SetHeading { heading_rad } => {
-                RequestArgs::Heading {
-                    gait: *gait,
-                    heading_rad: *heading_rad,
-                }
-            }
-        },
-        _ => RequestArgs::None {},
-    }
-}
-
 /// `/events`: one JSON object per event, `kind` says which.
 #[derive(Serialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
@@ -383,8 +307,8 @@ enum EventBody<'a> {
     Request {
         t_ns: u64,
         ticket: u64,
-        request: &'static str,
-        args: RequestArgs<'a>,
+        #[serde(flatten)]
+        request: &'a LoopRequest,
         applied: bool,
         /// Why it was refused.
         error: Option<String>,
@@ -429,8 +353,7 @@ pub fn write_event(
         } => EventBody::Request {
             t_ns,
             ticket: *ticket,
-            request: request_name(request),
-            args: request_args(request),
+            request,
             applied: result.is_ok(),
             error: result.err().map(|e| e.to_string()),
         },

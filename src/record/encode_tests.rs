@@ -92,7 +92,9 @@ fn events_say_their_kind() {
     let mut out = Vec::new();
     let e = RecordEvent::Request {
         ticket: 9,
-        request: LoopRequest::SetGait(GaitKind::Sidewinding),
+        request: LoopRequest::SetGait {
+            gait: GaitKind::Sidewinding,
+        },
         result: Err(Rejection::EStopLatched),
     };
     write_event(&mut out, 5, &e, |_| None).expect("encodes");
@@ -111,4 +113,59 @@ fn events_say_their_kind() {
     let v: Value = serde_json::from_slice(&out).expect("json");
     assert_eq!(v["kind"], "engaged");
     assert_eq!(v["controller"], "compliant");
+}
+
+/// A request is recorded as `LoopRequest` defines it: its name, and its fields as
+/// `args` (a controller command's name and fields beside the gait; none for a bare
+/// request).
+#[test]
+fn requests_are_recorded_as_defined() {
+    use crate::controller::ControllerCommand;
+    use crate::gait::ParamPatch;
+    let json = |request: LoopRequest| {
+        let mut out = Vec::new();
+        let e = RecordEvent::Request {
+            ticket: 1,
+            request,
+            result: Ok(()),
+        };
+        write_event(&mut out, 0, &e, |_| None).expect("encodes");
+        let mut v: Value = serde_json::from_slice(&out).expect("json");
+        assert_eq!(v["applied"], true);
+        let o = v.as_object_mut().expect("object");
+        json!({"request": o.remove("request"), "args": o.remove("args")})
+    };
+    let calibrate = LoopRequest::ControllerCommand {
+        gait: GaitKind::Slithering,
+        command: ControllerCommand::Calibrate { duration_s: 5.0 },
+    };
+    assert_eq!(
+        json(calibrate),
+        json!({"request": "controller_command",
+               "args": {"gait": "slithering", "command": "calibrate", "duration_s": 5.0}})
+    );
+    let heading = LoopRequest::ControllerCommand {
+        gait: GaitKind::Sidewinding,
+        command: ControllerCommand::SetHeading { heading_rad: None },
+    };
+    assert_eq!(
+        json(heading)["args"],
+        json!({"gait": "sidewinding", "command": "set_heading", "heading_rad": null})
+    );
+    let patch = ParamPatch {
+        taper: Some(0.5),
+        ..ParamPatch::default()
+    };
+    let params = json(LoopRequest::SetParams {
+        gait: GaitKind::Slithering,
+        patch,
+    });
+    assert_eq!(params["request"], "set_params");
+    assert_eq!(params["args"]["patch"]["taper"], 0.5);
+    let blend = json(LoopRequest::SetBlendTime { blend_time_s: 2.0 });
+    assert_eq!(blend["args"], json!({"blend_time_s": 2.0}));
+    assert_eq!(
+        json(LoopRequest::EStop),
+        json!({"request": "estop", "args": null})
+    );
 }

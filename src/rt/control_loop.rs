@@ -302,10 +302,10 @@ impl ControlLoop {
         _health: &Health,
     ) -> Result<(), Rejection> {
         match req {
-            LoopRequest::SetParams(kind, patch) => {
+            LoopRequest::SetParams { gait: kind, patch } => {
                 return self.set_params(kind, &patch, controller, t_s);
             }
-            LoopRequest::SetController(kind) => {
+            LoopRequest::SetController { gait: kind } => {
                 let c = controller.ok_or(Rejection::NoController)?;
                 let (selector, commanded) = (&mut self.p.selector, &self.positions);
                 self.slots.install(kind, c, selector, commanded, t_s);
@@ -319,7 +319,7 @@ impl ControlLoop {
         }
         let fs = &mut self.p.failsafe;
         match req {
-            LoopRequest::SetGait(kind) => {
+            LoopRequest::SetGait { gait: kind } => {
                 // Setting a gait also arms a held or limp robot, never an e-stopped one:
                 // only an explicit arm releases the e-stop.
                 match fs.mode() {
@@ -334,8 +334,11 @@ impl ControlLoop {
                 }
                 Ok(())
             }
-            LoopRequest::ControllerCommand(kind, command) => self.slots.command(kind, command),
-            LoopRequest::SetBlendTime(s) => self
+            LoopRequest::ControllerCommand {
+                gait: kind,
+                command,
+            } => self.slots.command(kind, command),
+            LoopRequest::SetBlendTime { blend_time_s: s } => self
                 .p
                 .selector
                 .set_blend_time(s)
@@ -348,7 +351,7 @@ impl ControlLoop {
                 self.stop_seen = true;
                 fs.request(now_s, Event::Shutdown)
             }
-            LoopRequest::SetParams(..) | LoopRequest::SetController(_) => {
+            LoopRequest::SetParams { .. } | LoopRequest::SetController { .. } => {
                 unreachable!("handled above")
             }
         }

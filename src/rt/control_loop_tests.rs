@@ -88,7 +88,13 @@ fn hold_at_start_holds_the_measured_pose_until_a_gait_is_set() {
             .all(|c| (c.position_rad - 0.2).abs() < 1e-6)
     );
     assert_eq!(
-        request(&mut h, 1, LoopRequest::SetGait(GaitKind::Rolling)),
+        request(
+            &mut h,
+            1,
+            LoopRequest::SetGait {
+                gait: GaitKind::Rolling
+            }
+        ),
         Ok(())
     );
     steps(&mut h, 10);
@@ -170,7 +176,13 @@ fn estop_latches_and_only_arm_releases_it() {
     assert_eq!(request(&mut h, 1, LoopRequest::EStop), Ok(()));
     assert!(h.control.commands().iter().all(|c| c.is_limp()));
     assert_eq!(
-        request(&mut h, 2, LoopRequest::SetGait(GaitKind::Sidewinding)),
+        request(
+            &mut h,
+            2,
+            LoopRequest::SetGait {
+                gait: GaitKind::Sidewinding
+            }
+        ),
         Err(Rejection::EStopLatched)
     );
     assert_eq!(
@@ -193,11 +205,18 @@ fn invalid_params_are_refused_by_the_loop_too() {
         ..Default::default()
     };
     assert_eq!(
-        request(&mut h, 1, LoopRequest::SetParams(GaitKind::Rolling, patch)),
+        request(
+            &mut h,
+            1,
+            LoopRequest::SetParams {
+                gait: GaitKind::Rolling,
+                patch
+            }
+        ),
         Err(Rejection::InvalidParams)
     );
     assert_eq!(
-        request(&mut h, 2, LoopRequest::SetBlendTime(1e9)),
+        request(&mut h, 2, LoopRequest::SetBlendTime { blend_time_s: 1e9 }),
         Err(Rejection::InvalidParams)
     );
 }

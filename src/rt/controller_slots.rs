@@ -18,7 +18,9 @@ use serde::Serialize;
 
 use crate::controller::catalog::NO_CONTROLLER;
 use crate::controller::report::ControllerReport;
-use crate::controller::{Controller, ControllerCommand, Handover, NominalMismatch, Observation};
+use crate::controller::{
+    Controller, ControllerCommand, Handover, NominalMismatch, Observation, TickClock,
+};
 use crate::gait::{GaitKind, GaitParams, GaitSelector};
 use crate::rt::messages::Rejection;
 
@@ -85,6 +87,8 @@ pub struct ControllerSlots {
     takeovers: [u64; KINDS],
     /// The gait whose controller drives, if one does.
     engaged: Option<GaitKind>,
+    /// The engaged controller's ticks (restarted at each engagement).
+    clock: TickClock,
     retired: Sender<Installed>,
     report: ControllerReport,
     freed_in_loop: u64,
@@ -97,6 +101,7 @@ impl ControllerSlots {
             slots: std::array::from_fn(|_| None),
             takeovers: [0; KINDS],
             engaged: None,
+            clock: TickClock::default(),
             retired,
             report: ControllerReport::EMPTY,
             freed_in_loop: 0,
@@ -205,12 +210,13 @@ impl ControllerSlots {
                 layout: selector.layout(),
             });
             self.engaged = Some(gait);
+            self.clock.restart();
             self.takeovers[gait.index()] += 1;
         }
         if self.engaged.is_none() {
             return false;
         }
-        slot.controller.step(t_s, obs, pos);
+        slot.controller.step(self.clock.tick(t_s), obs, pos);
         slot.controller.report(&mut self.report);
         true
     }

@@ -49,7 +49,9 @@ fn build(h: &Harness, name: &str) -> Installed {
     build_installed(&h.catalog, &h.layout, &table(), GaitKind::Slithering, &sel)
 }
 
-const SET: LoopRequest = LoopRequest::SetController(GaitKind::Slithering);
+const SET: LoopRequest = LoopRequest::SetController {
+    gait: GaitKind::Slithering,
+};
 
 /// Sends a request (with a controller) and runs the cycle that applies it.
 fn request(
@@ -118,7 +120,7 @@ fn every_gait_runs_its_open_loop_controller_exactly_as_the_selector() {
     let mut h = harness(None);
     run(&mut h, None, 100);
     for gait in GaitKind::ALL {
-        request(&mut h, LoopRequest::SetGait(gait), None).unwrap();
+        request(&mut h, LoopRequest::SetGait { gait }, None).unwrap();
         run(&mut h, None, 2100);
         let snap = h.telemetry.latest();
         assert_eq!(snap.controller.engagement, Engagement::Engaged, "{gait:?}");
@@ -209,7 +211,9 @@ fn another_gait_takes_the_joints_back_smoothly() {
     twin.control.step();
     let (_, diff) = run(&mut h, Some(&mut twin), 5000);
     assert!(diff > 0.05, "{diff}");
-    let side = LoopRequest::SetGait(GaitKind::Sidewinding);
+    let side = LoopRequest::SetGait {
+        gait: GaitKind::Sidewinding,
+    };
     request(&mut h, side, None).unwrap();
     request(&mut twin, side, None).unwrap();
     assert_eq!(
@@ -226,7 +230,14 @@ fn another_gait_takes_the_joints_back_smoothly() {
     let (_, diff) = run(&mut h, Some(&mut twin), 400);
     assert!(diff < 1.5e-3, "{diff}");
     // Back to slithering: the controller takes over again after the blend.
-    request(&mut h, LoopRequest::SetGait(GaitKind::Slithering), None).unwrap();
+    request(
+        &mut h,
+        LoopRequest::SetGait {
+            gait: GaitKind::Slithering,
+        },
+        None,
+    )
+    .unwrap();
     run(&mut h, None, 2100);
     let c = h.telemetry.latest().controller;
     assert_eq!((c.engagement, c.takeovers), (Engagement::Engaged, 2));
@@ -280,7 +291,10 @@ fn parameters_are_checked_against_the_gait_s_controller() {
         amplitude_lat_rad: Some(0.6),
         ..ParamPatch::default()
     };
-    let set = LoopRequest::SetParams(GaitKind::Slithering, patch);
+    let set = LoopRequest::SetParams {
+        gait: GaitKind::Slithering,
+        patch,
+    };
     assert_eq!(request(&mut h, set, None), Ok(()), "open loop follows any");
     assert_eq!(request(&mut h, SET, None), Err(Rejection::NoController));
     {
@@ -289,13 +303,13 @@ fn parameters_are_checked_against_the_gait_s_controller() {
     }
     .unwrap();
     // ωS beyond a_ws's compliance range: refused by the controller, table unchanged.
-    let wide = LoopRequest::SetParams(
-        GaitKind::Slithering,
-        ParamPatch {
+    let wide = LoopRequest::SetParams {
+        gait: GaitKind::Slithering,
+        patch: ParamPatch {
             spatial_freq_rad: Some(4.5 * std::f64::consts::PI),
             ..ParamPatch::default()
         },
-    );
+    };
     match request(&mut h, wide, None) {
         Err(Rejection::ControllerRefuses(m)) => assert_eq!(m.field, "spatial_freq_rad"),
         other => panic!("{other:?}"),
@@ -313,7 +327,10 @@ fn parameters_are_checked_against_the_gait_s_controller() {
         amplitude_lat_rad: Some(f64::NAN),
         ..ParamPatch::default()
     };
-    let bad = LoopRequest::SetParams(GaitKind::Slithering, bad);
+    let bad = LoopRequest::SetParams {
+        gait: GaitKind::Slithering,
+        patch: bad,
+    };
     assert_eq!(
         {
             let c = build(&h, "cpg");
@@ -356,8 +373,14 @@ impl crate::controller::Controller for Poisoned {
         self.t0 = h.t_s;
         self.inner.engage(h);
     }
-    fn step(&mut self, t: f64, obs: &crate::controller::Observation<'_>, out: &mut [f64]) {
-        self.inner.step(t, obs, out);
+    fn step(
+        &mut self,
+        tick: crate::controller::Tick,
+        obs: &crate::controller::Observation<'_>,
+        out: &mut [f64],
+    ) {
+        let t = tick.t_s;
+        self.inner.step(tick, obs, out);
         if t - self.t0 >= self.after_s {
             out[3] = f64::NAN;
         }
@@ -386,7 +409,7 @@ fn a_non_finite_set_point_from_any_registered_controller_holds_with_the_reason()
                 let built = family.build(preset, None, &ctx).unwrap();
                 let what = format!("{gait:?} {}/{preset}", family.name());
                 run(&mut h, None, 100);
-                request(&mut h, LoopRequest::SetGait(gait), None).unwrap();
+                request(&mut h, LoopRequest::SetGait { gait }, None).unwrap();
                 let poisoned = Installed {
                     id: 99,
                     controller: Box::new(Poisoned {
@@ -395,7 +418,7 @@ fn a_non_finite_set_point_from_any_registered_controller_holds_with_the_reason()
                         t0: 0.0,
                     }),
                 };
-                request(&mut h, LoopRequest::SetController(gait), Some(poisoned)).unwrap();
+                request(&mut h, LoopRequest::SetController { gait }, Some(poisoned)).unwrap();
                 run(&mut h, None, 2100);
                 assert_eq!(engagement(&h), Engagement::Engaged, "{what}");
                 let sent = setpoints(&h);
@@ -435,12 +458,15 @@ fn a_controller_that_makes_its_own_way_takes_over_at_the_switch() {
         let sel = Selection::named(preset);
         let c = build_installed(&h.catalog, &h.layout, &table(), helix, &sel);
         assert_eq!(
-            request(&mut h, LoopRequest::SetController(helix), Some(c)),
+            request(&mut h, LoopRequest::SetController { gait: helix }, Some(c)),
             Ok(())
         );
     }
     let before = setpoints(&h);
-    assert_eq!(request(&mut h, LoopRequest::SetGait(helix), None), Ok(()));
+    assert_eq!(
+        request(&mut h, LoopRequest::SetGait { gait: helix }, None),
+        Ok(())
+    );
     let (step, _) = run(&mut h, None, 1);
     assert!(max_diff(&setpoints(&h), &before) <= MAX_STEP_RAD, "no jump");
     assert!(step <= MAX_STEP_RAD);
@@ -449,7 +475,7 @@ fn a_controller_that_makes_its_own_way_takes_over_at_the_switch() {
     let sel = Selection::named("windowed_adaptive");
     let c = build_installed(&h.catalog, &h.layout, &table(), helix, &sel);
     assert_eq!(
-        request(&mut h, LoopRequest::SetController(helix), Some(c)),
+        request(&mut h, LoopRequest::SetController { gait: helix }, Some(c)),
         Ok(())
     );
     assert_eq!(engagement(&h), Engagement::Engaged, "engaged mid-blend");

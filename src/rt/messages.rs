@@ -2,30 +2,39 @@
 //! `Copy`; the only heap object is a controller attached to an envelope, built on the
 //! control side and moved (a pointer) through the bounded channel, so nothing
 //! allocates per message.
+use serde::Serialize;
+
 use crate::controller::{CommandRefused, ControllerCommand, NominalMismatch};
 use crate::gait::{GaitKind, ParamPatch};
 use crate::rt::controller_slots::Installed;
 
-/// An operator request, applied by the loop at a cycle boundary.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// An operator request, applied by the loop at a cycle boundary. Recorded as it is
+/// defined (`/events`: `"request"` the variant's name, `"args"` its fields).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[serde(tag = "request", content = "args", rename_all = "snake_case")]
 pub enum LoopRequest {
     /// Blend into this gait (arms the loop if it was held or limp and feedback is healthy).
-    SetGait(GaitKind),
+    SetGait { gait: GaitKind },
     /// Change a gait's parameters (validated again by the loop before use, also
     /// against the gait's controller). The envelope may carry a new controller for
     /// the gait, installed with them.
-    SetParams(GaitKind, ParamPatch),
+    SetParams { gait: GaitKind, patch: ParamPatch },
     /// Install the controller the envelope carries for this gait.
-    SetController(GaitKind),
+    SetController { gait: GaitKind },
     /// A command to this gait's installed controller (e.g. calibrate).
-    ControllerCommand(GaitKind, ControllerCommand),
+    ControllerCommand {
+        gait: GaitKind,
+        #[serde(flatten)]
+        command: ControllerCommand,
+    },
     /// Change the gait blend time, s.
-    SetBlendTime(f64),
+    SetBlendTime { blend_time_s: f64 },
     /// Freeze the set-points where they are.
     Hold,
     /// Stop driving the joints.
     Limp,
     /// Emergency stop: limp and latched until `Arm`.
+    #[serde(rename = "estop")]
     EStop,
     /// Leave hold / limp / e-stop: re-sync to the measured positions and blend into
     /// the active gait.

@@ -5,7 +5,7 @@
 use super::config::{Centralization, CompliantSlitheringConfig};
 use crate::controller::nominal::{Nominal, lateral_room, within};
 use crate::controller::report::{ControllerReport, MAX_WINDOWS as REPORT_WINDOWS, WindowField};
-use crate::controller::{Controller, Handover, NominalMismatch, Observation};
+use crate::controller::{Controller, Handover, NominalMismatch, Observation, Tick};
 use crate::gait::{BodyLayout, GaitParams, Plane};
 use crate::shape::ShapeFunction;
 use crate::shape::admittance::ParamState;
@@ -40,7 +40,6 @@ pub struct CompliantSlithering {
     tau_ext: Vec<f64>,
     sigma: Vec<f64>,
     forces: Vec<f64>,
-    last_t: Option<f64>,
     t: f64,
     last_events: WindowEvents,
 }
@@ -110,7 +109,6 @@ impl CompliantSlithering {
             tau_ext: vec![0.0; n],
             sigma: Vec::with_capacity(values),
             forces: Vec::with_capacity(values),
-            last_t: None,
             t: 0.0,
             last_events: WindowEvents::default(),
         };
@@ -266,7 +264,6 @@ impl CompliantSlithering {
         self.filter.reset();
         self.sigma.clear();
         self.forces.clear();
-        self.last_t = None;
         self.t = self.nominal.t0_s;
         self.last_events = WindowEvents::default();
         self.windows_born = 0;
@@ -275,9 +272,8 @@ impl CompliantSlithering {
     }
 
     /// One step of the shape (without the steering offsets).
-    fn step_shape(&mut self, t_s: f64, torque_nm: &[f64], set_points_rad: &mut [f64]) {
-        let dt = self.last_t.map_or(0.0, |last| (t_s - last).max(0.0));
-        self.last_t = Some(t_s);
+    fn step_shape(&mut self, tick: Tick, torque_nm: &[f64], set_points_rad: &mut [f64]) {
+        let Tick { t_s, dt_s: dt } = tick;
         self.t = t_s;
         for (r, &m) in self.reported.iter_mut().zip(torque_nm) {
             *r = m;
@@ -357,8 +353,8 @@ impl Controller for CompliantSlithering {
         self.reset();
     }
 
-    fn step(&mut self, t_s: f64, obs: &Observation<'_>, set_points_rad: &mut [f64]) {
-        self.step_shape(t_s, obs.torque_nm, set_points_rad);
+    fn step(&mut self, tick: Tick, obs: &Observation<'_>, set_points_rad: &mut [f64]) {
+        self.step_shape(tick, obs.torque_nm, set_points_rad);
         self.nominal.add_offsets(&self.layout, set_points_rad);
     }
 

@@ -1,3 +1,4 @@
+use crate::controller::TickClock;
 use std::f64::consts::PI;
 
 use super::*;
@@ -38,9 +39,10 @@ fn run_from(
     let pos = [0.0; N];
     let mut tau = [0.0; N];
     let buf = ObservationBuf::new(N);
+    let mut clock = TickClock::default();
     for k in 0..(seconds * 1000.0) as usize {
         let t = t0 + k as f64 * 1e-3;
-        c.step(t, &buf.observe(&pos, &tau), &mut out);
+        c.step(clock.tick(t), &buf.observe(&pos, &tau), &mut out);
         tau = torque(t, &out);
     }
     out

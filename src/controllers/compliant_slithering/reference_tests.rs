@@ -2,6 +2,7 @@
 //! evaluated at every joint from its definition, every field kept apart, the phase grid
 //! scanned whole. The controller's step is pinned to it over long runs.
 
+use crate::controller::TickClock;
 use std::f64::consts::PI;
 
 use super::*;
@@ -238,15 +239,17 @@ fn compare(
     let pos = vec![0.0; n];
     let mut report = ControllerReport::EMPTY;
     let (mut t, mut travelled) = (t0, (0, 0));
+    let mut clock = TickClock::default();
     for k in 0..steps {
         // Now and then a late cycle (skipped periods); late on, engaged afresh.
         t += if k % 997 == 0 { 3e-3 } else { 1e-3 };
         if k == steps * 4 / 5 {
             engage_at(&mut c, layout, params, t);
+            clock.restart();
             travelled = (travelled.0 + r.born, travelled.1 + r.dropped);
             r = Reference::new(layout, engaged(t), config);
         }
-        c.step(t, &buf.observe(&pos, &tau), &mut ours);
+        c.step(clock.tick(t), &buf.observe(&pos, &tau), &mut ours);
         r.step(t, &tau, &mut theirs);
         let at = |what: &str| format!("{preset} n {n} step {k} {what}");
         for (i, (a, b)) in ours.iter().zip(&theirs).enumerate() {

@@ -7,7 +7,7 @@
 use crate::controller::config::{ConfigError, check_range};
 use crate::controller::nominal::{Nominal, lateral_room, within};
 use crate::controller::report::ControllerReport;
-use crate::controller::{Controller, Handover, NominalMismatch, Observation};
+use crate::controller::{Controller, Handover, NominalMismatch, Observation, Tick};
 use crate::gait::{BodyLayout, GaitParams, JOINT_LIMIT_RAD, Plane};
 use crate::shape::torque::TorqueFilter;
 
@@ -91,7 +91,6 @@ pub struct Cpg {
     layout: BodyLayout,
     filter: TorqueFilter,
     tau_ext: Vec<f64>,
-    last_t: Option<f64>,
     t: f64,
 }
 
@@ -119,7 +118,6 @@ impl Cpg {
             layout: layout.clone(),
             filter: TorqueFilter::new(n, gains.torque_cutoff_hz, gains.torque_deadband_nm),
             tau_ext: vec![0.0; n],
-            last_t: None,
             t: 0.0,
         }
     }
@@ -131,7 +129,6 @@ impl Cpg {
         }
         self.rates.fill(0.0);
         self.filter.reset();
-        self.last_t = None;
         self.t = self.nominal.t0_s;
     }
 }
@@ -148,9 +145,8 @@ impl Controller for Cpg {
         self.reset();
     }
 
-    fn step(&mut self, t_s: f64, obs: &Observation<'_>, set_points_rad: &mut [f64]) {
-        let dt = self.last_t.map_or(0.0, |last| (t_s - last).max(0.0));
-        self.last_t = Some(t_s);
+    fn step(&mut self, tick: Tick, obs: &Observation<'_>, set_points_rad: &mut [f64]) {
+        let Tick { t_s, dt_s: dt } = tick;
         self.t = t_s;
         self.filter.update(dt, obs.torque_nm, &mut self.tau_ext);
         let g = self.gains;
@@ -208,6 +204,7 @@ impl Controller for Cpg {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::controller::TickClock;
     use crate::controller::testing::{ObservationBuf, engage_at};
     use crate::controllers::open_loop::OpenLoop;
     use crate::emu::servo::MODULE_LENGTH_M;
@@ -222,10 +219,11 @@ mod tests {
         let (mut a, mut b) = (vec![0.0; 18], vec![0.0; 18]);
         let zero = [0.0; 18];
         let buf = ObservationBuf::new(18);
+        let (mut clock, mut open_clock) = (TickClock::default(), TickClock::default());
         for k in 0..3000 {
             let t = k as f64 * 1e-3;
-            cpg.step(t, &buf.observe(&zero, &zero), &mut a);
-            open.step(t, &buf.observe(&zero, &zero), &mut b);
+            cpg.step(clock.tick(t), &buf.observe(&zero, &zero), &mut a);
+            open.step(open_clock.tick(t), &buf.observe(&zero, &zero), &mut b);
         }
         for (x, y) in a.iter().zip(&b) {
             assert!((x - y).abs() < 1e-9, "{a:?} vs {b:?}");
@@ -235,7 +233,7 @@ mod tests {
         for k in 3000..4000 {
             let t = k as f64 * 1e-3;
             tau[0] = -3.0 * a[0].signum();
-            cpg.step(t, &buf.observe(&zero, &tau), &mut a);
+            cpg.step(clock.tick(t), &buf.observe(&zero, &tau), &mut a);
         }
         assert!(
             cpg.osc[0].amplitude > params.amplitude_lat_rad + 0.05,
@@ -250,10 +248,12 @@ mod tests {
         engage_at(&mut cpg, &layout, &params, 10.0);
         let mut fresh = Cpg::new(&layout, &params, CpgGains::default());
         engage_at(&mut fresh, &layout, &params, 10.0);
+        let mut fresh_clock = TickClock::default();
+        clock.restart();
         for k in 0..500 {
             let t = 10.0 + k as f64 * 1e-3;
-            cpg.step(t, &buf.observe(&zero, &zero), &mut a);
-            fresh.step(t, &buf.observe(&zero, &zero), &mut b);
+            cpg.step(clock.tick(t), &buf.observe(&zero, &zero), &mut a);
+            fresh.step(fresh_clock.tick(t), &buf.observe(&zero, &zero), &mut b);
         }
         assert_eq!(a, b);
     }

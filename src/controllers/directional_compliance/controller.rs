@@ -11,7 +11,7 @@ use super::sections::Sections;
 use crate::controller::nominal::{Nominal, lateral_room, within};
 use crate::controller::report::{ControllerReport, MAX_WINDOWS as REPORT_WINDOWS, WindowField};
 use crate::controller::{
-    CommandRefused, Controller, ControllerCommand, Handover, NominalMismatch, Observation,
+    CommandRefused, Controller, ControllerCommand, Handover, NominalMismatch, Observation, Tick,
 };
 use crate::gait::{BodyLayout, GaitParams, JOINT_LIMIT_RAD, Plane};
 use crate::shape::admittance::{AdmittanceSign, ParamState};
@@ -53,7 +53,6 @@ pub struct DirectionalCompliance {
     switches: u64,
     /// Dorsal fade-in factor now (0..1).
     ramp: f64,
-    last_t: Option<f64>,
     t: f64,
     last_events: WindowEvents,
 }
@@ -85,7 +84,6 @@ impl DirectionalCompliance {
             section_deviation: [[0.0; MAX_SECTIONS]; 2],
             switches: 0,
             ramp: 0.0,
-            last_t: None,
             t: 0.0,
             last_events: WindowEvents::default(),
         };
@@ -131,7 +129,6 @@ impl DirectionalCompliance {
         self.phase_force = 0.0;
         self.switches = 0;
         self.ramp = 0.0;
-        self.last_t = None;
         self.t = self.nominal.t0_s;
         self.calibration.restart();
         self.sections = Sections::new(
@@ -443,9 +440,8 @@ impl Controller for DirectionalCompliance {
         self.reset();
     }
 
-    fn step(&mut self, t_s: f64, obs: &Observation<'_>, set_points_rad: &mut [f64]) {
-        let dt = self.last_t.map_or(0.0, |last| (t_s - last).max(0.0));
-        self.last_t = Some(t_s);
+    fn step(&mut self, tick: Tick, obs: &Observation<'_>, set_points_rad: &mut [f64]) {
+        let Tick { t_s, dt_s: dt } = tick;
         self.t = t_s;
         let d = &self.config.dorsal;
         let since = t_s - self.nominal.t0_s;

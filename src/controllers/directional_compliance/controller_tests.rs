@@ -1,5 +1,6 @@
 use super::*;
 use crate::controller::ControllerKind;
+use crate::controller::TickClock;
 use crate::controller::testing::{ObservationBuf, engage_at};
 use crate::controllers::directional_compliance::{
     DirectionalComplianceKind, FrictionOffset, SectionValues,
@@ -38,9 +39,10 @@ fn run(
 ) -> Vec<f64> {
     let buf = ObservationBuf::new(N);
     let (pos, mut tau, mut out) = ([0.0; N], [0.0; N], vec![0.0; N]);
+    let mut clock = TickClock::default();
     for k in 0..(seconds * 1000.0).round() as usize {
         let t = t0 + k as f64 * 1e-3;
-        c.step(t, &buf.observe(&pos, &tau), &mut out);
+        c.step(clock.tick(t), &buf.observe(&pos, &tau), &mut out);
         each(c);
         tau = torque(t, &out);
     }
@@ -72,10 +74,11 @@ fn without_torque_the_planar_controllers_are_open_loop_slithering() {
         let buf = ObservationBuf::new(N);
         let (pos, tau) = ([0.0; N], [0.0; N]);
         let (mut a, mut b) = (vec![0.0; N], vec![0.0; N]);
+        let (mut clock, mut open_clock) = (TickClock::default(), TickClock::default());
         for k in 0..5000 {
             let t = k as f64 * 1e-3;
-            open.step(t, &buf.observe(&pos, &tau), &mut a);
-            c.step(t, &buf.observe(&pos, &tau), &mut b);
+            open.step(open_clock.tick(t), &buf.observe(&pos, &tau), &mut a);
+            c.step(clock.tick(t), &buf.observe(&pos, &tau), &mut b);
             for (x, y) in a.iter().zip(&b) {
                 assert!((x - y).abs() < 1e-9, "{name} at {t}: {x} vs {y}");
             }
@@ -183,8 +186,13 @@ fn planar_keeps_the_dorsal_joints_straight_and_3d_fades_its_dorsal_wave_in() {
     let buf = ObservationBuf::new(N);
     let (pos, tau) = ([0.0; N], [0.0; N]);
     let mut out = vec![0.0; N];
+    let mut clock = TickClock::default();
     for k in 0..4000 {
-        c.step(k as f64 * 1e-3, &buf.observe(&pos, &tau), &mut out);
+        c.step(
+            clock.tick(k as f64 * 1e-3),
+            &buf.observe(&pos, &tau),
+            &mut out,
+        );
         let dorsal: Vec<f64> = out.iter().skip(1).step_by(2).copied().collect();
         first.get_or_insert(dorsal.clone());
         if k > 0 {

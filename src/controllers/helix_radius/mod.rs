@@ -14,7 +14,7 @@
 use crate::controller::config::ConfigError;
 use crate::controller::report::{ControllerReport, FieldSpec, ReportSpec, SignalSpec};
 use crate::controller::{
-    BuildContext, Controller, ControllerKind, Handover, NominalMismatch, Observation,
+    BuildContext, Controller, ControllerKind, Handover, NominalMismatch, Observation, Tick,
 };
 use crate::gait::{
     BodyLayout, GaitKind, GaitParams, JOINT_LIMIT_RAD, Plane, SEA_MAX_JOINT_SPEED_RAD_S, Serpenoid,
@@ -157,7 +157,6 @@ pub struct HelixRadius {
     phase0: f64,
     t0: f64,
     phase: f64,
-    last_t: Option<f64>,
     getting_on: GettingOn,
     /// Taken over at the switch: the getting on decides the phase.
     own_way: bool,
@@ -194,7 +193,6 @@ impl HelixRadius {
             phase0: 0.0,
             t0: 0.0,
             phase: 0.0,
-            last_t: None,
             getting_on: GettingOn::new(config.getting_on, layout),
             own_way: false,
             slip: SlipGuard::default(),
@@ -311,7 +309,6 @@ impl Controller for HelixRadius {
         self.phase0 = h.phase_rad;
         self.t0 = h.t_s;
         self.phase = h.phase_rad;
-        self.last_t = None;
         let stage = self.getting_on.engage(h.t_s, h.set_points_rad, h.params);
         self.own_way = stage != Stage::Off;
         self.slip = SlipGuard::default();
@@ -322,9 +319,8 @@ impl Controller for HelixRadius {
         self.config.getting_on.enabled
     }
 
-    fn step(&mut self, t_s: f64, obs: &Observation<'_>, set_points_rad: &mut [f64]) {
-        let dt = self.last_t.map_or(0.0, |last| (t_s - last).max(0.0));
-        self.last_t = Some(t_s);
+    fn step(&mut self, tick: Tick, obs: &Observation<'_>, set_points_rad: &mut [f64]) {
+        let Tick { t_s, dt_s: dt } = tick;
         self.filter.update(dt, obs.torque_nm, &mut self.tau_ext);
         let grip = self.tau_ext.iter().map(|t| t.abs()).sum::<f64>() / self.tau_ext.len() as f64;
         let mut rate = self.temporal_freq;

@@ -215,6 +215,7 @@ fn a_lost_grip_holds_the_roll_and_squeezes_until_it_is_back() {
     let (pos, vel, mut out) = ([0.0; N], [0.0; N], vec![0.0; N]);
     let mut report = ControllerReport::EMPTY;
     let mut t = 0.0;
+    let mut clock = crate::controller::TickClock::default();
     // Steps `seconds` with the pole pushing back by `push_nm` (0: no pole) and the
     // IMUs given; returns the phase advance and the report's slipping, slips, squeeze.
     let mut run = |c: &mut HelixRadius, seconds: f64, push_nm: f64, imu: &[Imu]| {
@@ -232,7 +233,7 @@ fn a_lost_grip_holds_the_roll_and_squeezes_until_it_is_back() {
                 imu,
                 body: &body,
             };
-            c.step(t, &obs, &mut out);
+            c.step(clock.tick(t), &obs, &mut out);
         }
         c.report(&mut report);
         let sig = |name: &str| {

@@ -6,6 +6,7 @@ use serde::{Deserialize, Serialize};
 use crate::controller::report::{ControllerReport, ReportSpec, SignalSpec};
 use crate::controller::{
     BuildContext, ConfigError, Controller, ControllerKind, Handover, NominalMismatch, Observation,
+    Tick,
 };
 use crate::gait::{BodyLayout, GaitKind, GaitParams, Serpenoid};
 
@@ -81,7 +82,8 @@ impl Controller for OpenLoop {
         self.phase = h.phase_rad;
     }
 
-    fn step(&mut self, t_s: f64, _obs: &Observation<'_>, set_points_rad: &mut [f64]) {
+    fn step(&mut self, tick: Tick, _obs: &Observation<'_>, set_points_rad: &mut [f64]) {
+        let t_s = tick.t_s;
         self.phase = self.phase0 + self.wave.temporal_freq_rad_s * (t_s - self.t0);
         self.wave.evaluate(&self.layout, self.phase, set_points_rad);
     }

@@ -11,7 +11,7 @@ use serde::{Deserialize, Serialize};
 use crate::controller::config::{ConfigError, check_range};
 use crate::controller::report::{ControllerReport, ReportSpec, SignalSpec};
 use crate::controller::{
-    BuildContext, Controller, ControllerKind, Handover, NominalMismatch, Observation,
+    BuildContext, Controller, ControllerKind, Handover, NominalMismatch, Observation, Tick,
 };
 use crate::gait::{
     BodyLayout, GaitKind, GaitParams, JOINT_LIMIT_RAD, Plane, SEA_MAX_JOINT_SPEED_RAD_S, Serpenoid,
@@ -168,7 +168,6 @@ pub struct SerpenoidAdmittance {
     phase0: f64,
     t0: f64,
     phase: f64,
-    last_t: Option<f64>,
 }
 
 fn index(p: Plane) -> usize {
@@ -198,7 +197,6 @@ impl SerpenoidAdmittance {
             phase0: 0.0,
             t0: 0.0,
             phase: 0.0,
-            last_t: None,
         }
     }
 
@@ -247,12 +245,10 @@ impl Controller for SerpenoidAdmittance {
         self.phase0 = h.phase_rad;
         self.t0 = h.t_s;
         self.phase = h.phase_rad;
-        self.last_t = None;
     }
 
-    fn step(&mut self, t_s: f64, obs: &Observation<'_>, set_points_rad: &mut [f64]) {
-        let dt = self.last_t.map_or(0.0, |last| (t_s - last).max(0.0));
-        self.last_t = Some(t_s);
+    fn step(&mut self, tick: Tick, obs: &Observation<'_>, set_points_rad: &mut [f64]) {
+        let Tick { t_s, dt_s: dt } = tick;
         self.phase = self.phase0 + self.wave.temporal_freq_rad_s * (t_s - self.t0);
         self.filter.update(dt, obs.torque_nm, &mut self.tau_ext);
         // The nominal wave: its joints' deviation from the plane's offset is ∂θ/∂k.

@@ -11,7 +11,7 @@ use super::reversal::{Reversal, wrap_pi};
 use crate::controller::nominal::{Nominal, lateral_room, within};
 use crate::controller::report::ControllerReport;
 use crate::controller::{
-    CommandRefused, Controller, ControllerCommand, Handover, NominalMismatch, Observation,
+    CommandRefused, Controller, ControllerCommand, Handover, NominalMismatch, Observation, Tick,
 };
 use crate::controllers::compliant_slithering::CompliantSlithering;
 use crate::gait::{BodyLayout, GaitParams, JOINT_LIMIT_RAD, Plane};
@@ -37,7 +37,6 @@ pub struct AntiCompliantSidewinding {
     nominal_heading: Option<f64>,
     /// The operator asked for the heading now to become the nominal one.
     heading_here: bool,
-    last_t: Option<f64>,
 }
 
 impl AntiCompliantSidewinding {
@@ -62,7 +61,6 @@ impl AntiCompliantSidewinding {
             heading: None,
             nominal_heading: None,
             heading_here: false,
-            last_t: None,
             config,
         }
     }
@@ -144,13 +142,11 @@ impl Controller for AntiCompliantSidewinding {
         self.reversal = Reversal::default();
         self.adjust = HeadingAdjust::new(TAU / self.nominal.params.temporal_freq_rad_s.abs());
         self.heading = None;
-        self.last_t = None;
     }
 
-    fn step(&mut self, t_s: f64, obs: &Observation<'_>, set_points_rad: &mut [f64]) {
-        let dt = self.last_t.map_or(0.0, |last| (t_s - last).max(0.0));
-        self.last_t = Some(t_s);
-        self.lateral.step(t_s, obs, set_points_rad);
+    fn step(&mut self, tick: Tick, obs: &Observation<'_>, set_points_rad: &mut [f64]) {
+        let dt = tick.dt_s;
+        self.lateral.step(tick, obs, set_points_rad);
         self.track_heading(dt, obs);
         let h = self.relative_heading();
         self.reversal.step(&self.config.reversal, dt, h);

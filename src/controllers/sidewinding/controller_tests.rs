@@ -1,3 +1,4 @@
+use crate::controller::TickClock;
 use std::f64::consts::PI;
 
 use super::*;
@@ -45,6 +46,7 @@ fn run(
     let (pos, vel, imu) = ([0.0; N], [0.0; N], [Imu::default(); N]);
     let mut out = vec![0.0; N];
     let mut all = Vec::new();
+    let mut clock = TickClock::default();
     for k in 0..(seconds * 1000.0) as usize {
         let t = t0 + k as f64 * 1e-3;
         let (b, tau) = (body(heading(t)), torque(t));
@@ -55,7 +57,7 @@ fn run(
             imu: &imu,
             body: &b,
         };
-        c.step(t, &obs, &mut out);
+        c.step(clock.tick(t), &obs, &mut out);
         all.push(out.clone());
     }
     all
@@ -234,6 +236,7 @@ fn without_a_valid_estimate_it_sidewinds_straight_and_holds_beta() {
     let (pos, vel, imu, tau) = ([0.0; N], [0.0; N], [Imu::default(); N], [0.0; N]);
     let invalid = BodyEstimate::default();
     let mut out = [0.0; N];
+    let mut clock = TickClock::default();
     for k in 0..3000 {
         let obs = Observation {
             position_rad: &pos,
@@ -242,7 +245,7 @@ fn without_a_valid_estimate_it_sidewinds_straight_and_holds_beta() {
             imu: &imu,
             body: &invalid,
         };
-        c.step(k as f64 * 1e-3, &obs, &mut out);
+        c.step(clock.tick(k as f64 * 1e-3), &obs, &mut out);
     }
     assert_eq!((c.beta_rad(), c.taper()), (0.0, 0.0));
     assert!(c.heading_rad().is_none());

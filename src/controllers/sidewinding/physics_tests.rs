@@ -47,12 +47,12 @@ fn run(gait: GaitKind, name: &str, seconds: f64, requests: &[LoopRequest]) -> Ve
 }
 
 fn heading(gait_h: f64) -> LoopRequest {
-    LoopRequest::ControllerCommand(
-        GaitKind::Sidewinding,
-        ControllerCommand::SetHeading {
+    LoopRequest::ControllerCommand {
+        gait: GaitKind::Sidewinding,
+        command: ControllerCommand::SetHeading {
             heading_rad: Some(gait_h),
         },
-    )
+    }
 }
 
 /// The mean heading of `poses` (the heading sways within a gait cycle: average whole

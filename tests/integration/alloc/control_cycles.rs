@@ -36,17 +36,21 @@ fn control_cycles_allocate_nothing() {
         "the counter counts"
     );
     let reqs = [
-        LoopRequest::SetGait(GaitKind::Slithering),
-        LoopRequest::SetParams(
-            GaitKind::Slithering,
-            ParamPatch {
+        LoopRequest::SetGait {
+            gait: GaitKind::Slithering,
+        },
+        LoopRequest::SetParams {
+            gait: GaitKind::Slithering,
+            patch: ParamPatch {
                 temporal_freq_rad_s: Some(1.0),
                 ..Default::default()
             },
-        ),
+        },
         LoopRequest::Hold,
         LoopRequest::Arm,
-        LoopRequest::SetGait(GaitKind::RollingHelix),
+        LoopRequest::SetGait {
+            gait: GaitKind::RollingHelix,
+        },
     ];
     let n = allocator_calls(|| {
         for (k, r) in reqs.iter().enumerate() {
@@ -110,7 +114,7 @@ fn every_registered_controller_in_the_loop_allocates_nothing() {
             params: table.get(gait),
         };
         calls += allocator_calls(|| {
-            send(&mut h, LoopRequest::SetGait(gait), None);
+            send(&mut h, LoopRequest::SetGait { gait }, None);
             steps(&mut h, 2100);
         });
         for family in for_gait(REGISTRY, gait) {
@@ -123,12 +127,18 @@ fn every_registered_controller_in_the_loop_allocates_nothing() {
                 };
                 let compliant = family.name() == "compliant_slithering";
                 calls += allocator_calls(|| {
-                    send(&mut h, LoopRequest::SetController(gait), Some(c));
+                    send(&mut h, LoopRequest::SetController { gait }, Some(c));
                     steps(&mut h, 4500);
                     if compliant && *preset == "a_ws_omega" {
-                        send(&mut h, LoopRequest::SetGait(GaitKind::Rolling), None);
+                        send(
+                            &mut h,
+                            LoopRequest::SetGait {
+                                gait: GaitKind::Rolling,
+                            },
+                            None,
+                        );
                         steps(&mut h, 700);
-                        send(&mut h, LoopRequest::SetGait(gait), None);
+                        send(&mut h, LoopRequest::SetGait { gait }, None);
                         steps(&mut h, 2500);
                         send(&mut h, LoopRequest::Hold, None);
                         steps(&mut h, 100);

@@ -3,6 +3,7 @@
 //! ones) windows being born at the head and dropped at the tail: proved with a
 //! counting global allocator (this test binary only).
 
+use snaked::controller::TickClock;
 use snaked::controller::registry::{BuildContext, for_gait};
 use snaked::controller::report::ControllerReport;
 use snaked::controller::testing::{ObservationBuf, engage_at};
@@ -39,10 +40,11 @@ fn no_registered_controller_allocates_per_step() {
                 let before = allocations();
                 engage_at(c, &layout, params, 0.0);
                 assert!(c.accepts(params).is_ok());
+                let mut clock = TickClock::default();
                 // 8 s: more than a wave period, so windows are born and dropped.
                 for k in 0..8000 {
                     let t = k as f64 * 1e-3;
-                    c.step(t, &buf.observe(&pos, &tau), &mut out);
+                    c.step(clock.tick(t), &buf.observe(&pos, &tau), &mut out);
                     for (i, x) in tau.iter_mut().enumerate() {
                         let on = (k / 500 + i) % 3 == 0;
                         *x = if on { -3.0 * out[i].signum() } else { 0.0 };

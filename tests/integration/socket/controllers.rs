@@ -106,8 +106,12 @@ fn controller_set_is_validated_built_off_the_loop_and_sent() {
     assert_eq!(
         h.fake.seen(),
         [
-            LoopRequest::SetController(GaitKind::Slithering),
-            LoopRequest::SetController(GaitKind::Rolling)
+            LoopRequest::SetController {
+                gait: GaitKind::Slithering
+            },
+            LoopRequest::SetController {
+                gait: GaitKind::Rolling
+            }
         ]
     );
     assert_eq!(

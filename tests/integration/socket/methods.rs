@@ -80,9 +80,14 @@ fn every_method_answers() {
     assert_eq!(
         h.fake.seen(),
         vec![
-            LoopRequest::SetGait(GaitKind::Rolling),
-            LoopRequest::SetParams(GaitKind::Slithering, patch),
-            LoopRequest::SetBlendTime(3.5),
+            LoopRequest::SetGait {
+                gait: GaitKind::Rolling
+            },
+            LoopRequest::SetParams {
+                gait: GaitKind::Slithering,
+                patch
+            },
+            LoopRequest::SetBlendTime { blend_time_s: 3.5 },
             LoopRequest::Hold,
             LoopRequest::Limp,
             LoopRequest::EStop,
@@ -124,7 +129,7 @@ fn refused_requests_carry_the_loops_reason() {
         policy: Arc::new(|r| {
             Some(match r {
                 LoopRequest::Arm => Err(Rejection::FeedbackUnhealthy),
-                LoopRequest::SetGait(_) => Err(Rejection::EStopLatched),
+                LoopRequest::SetGait { .. } => Err(Rejection::EStopLatched),
                 _ => Ok(()),
             })
         }),

@@ -73,11 +73,16 @@ fn human_and_json_output() {
     assert_eq!(raw["pong"], true);
 
     let seen = h.fake.seen();
-    assert_eq!(seen[0], LoopRequest::SetGait(GaitKind::Rolling));
-    assert!(
-        matches!(seen[1], LoopRequest::SetParams(GaitKind::Rolling, p) if p.temporal_freq_rad_s == Some(-0.5))
+    assert_eq!(
+        seen[0],
+        LoopRequest::SetGait {
+            gait: GaitKind::Rolling
+        }
     );
-    assert_eq!(seen[2], LoopRequest::SetBlendTime(4.0));
+    assert!(
+        matches!(seen[1], LoopRequest::SetParams { gait: GaitKind::Rolling, patch: p } if p.temporal_freq_rad_s == Some(-0.5))
+    );
+    assert_eq!(seen[2], LoopRequest::SetBlendTime { blend_time_s: 4.0 });
     assert_eq!(seen.len(), 7);
 }
 

@@ -114,7 +114,7 @@ pub fn events_at(k: u64, controller_id: u64) -> Vec<RecordItem> {
             k,
             RecordEvent::Request {
                 ticket: 1,
-                request: LoopRequest::SetGait(gait),
+                request: LoopRequest::SetGait { gait },
                 result: Ok(()),
             },
         )],

@@ -108,22 +108,22 @@ impl Drop for FakeLoop {
 
 fn apply(s: &mut Snapshot, r: &LoopRequest) {
     match *r {
-        LoopRequest::SetGait(g) => {
+        LoopRequest::SetGait { gait: g } => {
             s.gait = g;
             s.blend_progress = 0.0;
             s.mode = Mode::Running;
         }
-        LoopRequest::SetParams(g, patch) => {
+        LoopRequest::SetParams { gait: g, patch } => {
             if let Ok(p) = s.params.get(g).patched(g, &patch) {
                 *s.params.get_mut(g) = p;
             }
         }
-        LoopRequest::SetBlendTime(t) => s.blend_time_s = t,
+        LoopRequest::SetBlendTime { blend_time_s: t } => s.blend_time_s = t,
         LoopRequest::Hold => s.mode = Mode::Hold,
         LoopRequest::Limp | LoopRequest::Shutdown => s.mode = Mode::Limp,
         LoopRequest::EStop => s.mode = Mode::EStop,
         LoopRequest::Arm => s.mode = Mode::Running,
-        LoopRequest::SetController(_) | LoopRequest::ControllerCommand(..) => {}
+        LoopRequest::SetController { .. } | LoopRequest::ControllerCommand { .. } => {}
     }
     s.reason = Reason::Operator;
 }
@@ -156,8 +156,8 @@ pub fn fake_loop(spec: LoopSpec) -> (FakeLoop, LoopHandle) {
                             if result.is_ok() {
                                 apply(&mut state, &env.request);
                                 let gait = match env.request {
-                                    LoopRequest::SetController(g)
-                                    | LoopRequest::SetParams(g, _) => Some(g),
+                                    LoopRequest::SetController { gait: g }
+                                    | LoopRequest::SetParams { gait: g, patch: _ } => Some(g),
                                     _ => None,
                                 };
                                 if let (Some(c), Some(g)) = (&env.controller, gait) {

@@ -1,6 +1,7 @@
 //! Rolling helix on a pole (SPEC §6): a coil that squeezes holds without creeping, a
 //! loose one slides down. The body starts already coiled around the pole.
 
+use crate::controller::TickClock;
 use std::f64::consts::TAU;
 
 use super::kinematics::upright_helix;
@@ -292,8 +293,13 @@ fn drive(
 ) {
     let buf = ObservationBuf::new(N);
     let (pos, mut tau, mut out) = ([0.0; N], [0.0; N], vec![0.0; N]);
+    let mut clock = TickClock::default();
     for k in 1..=steps {
-        c.step(k as f64 * 1e-3, &buf.observe(&pos, &tau), &mut out);
+        c.step(
+            clock.tick(k as f64 * 1e-3),
+            &buf.observe(&pos, &tau),
+            &mut out,
+        );
         plant.step(1e-3, &hold(&out));
         for (i, t) in tau.iter_mut().enumerate() {
             *t = plant.ground_truth(i).torque_nm;
