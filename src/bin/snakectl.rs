@@ -158,7 +158,7 @@ fn endpoint(cli: &Cli) -> Endpoint {
         .socket
         .clone()
         .or_else(|| std::env::var_os("SNAKED_SOCKET").map(PathBuf::from))
-        .unwrap_or_else(snaked::daemon::paths::client_socket);
+        .unwrap_or_else(snaked::control::paths::client_socket);
     Endpoint::Unix(path)
 }
 

@@ -16,7 +16,7 @@ use crate::controllers::REGISTRY;
 use crate::gait::{BodyLayout, GaitKind, GaitParams, ParamPatch};
 use crate::rt::controller_slots::Engagement;
 use crate::rt::controller_slots::{ControllerTelemetry, Installed};
-use crate::rt::messages::{LoopRequest, Rejection};
+use crate::rt::messages::{LoopRequest, Refusal, Rejection};
 use crate::rt::telemetry::Snapshot;
 use crate::safety::failsafe::Reason;
 
@@ -206,7 +206,7 @@ pub(crate) async fn calibrate(
             code::REFUSED,
             format!(
                 "refused: {} (the calibration of {} did not finish)",
-                Rejection::ShuttingDown,
+                Rejection::Failsafe(Refusal::ShuttingDown),
                 gait.name()
             ),
         )

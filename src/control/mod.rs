@@ -28,6 +28,7 @@ mod conn;
 mod controllers;
 mod lines;
 mod methods;
+pub mod paths;
 mod router;
 mod server;
 mod session;
@@ -50,8 +51,8 @@ pub use methods::{
 };
 pub use server::{RunningServer, ServerError, start};
 
-/// The system service's socket (see `daemon::paths` for how "auto" resolves).
-pub const DEFAULT_SOCKET_PATH: &str = crate::daemon::paths::SYSTEM_SOCKET;
+/// The system service's socket (see [`paths`] for how "auto" resolves).
+pub const DEFAULT_SOCKET_PATH: &str = paths::SYSTEM_SOCKET;
 
 /// How the server listens and what it tolerates.
 #[derive(Debug, Clone, PartialEq)]

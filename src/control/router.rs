@@ -21,7 +21,7 @@ use tokio::sync::oneshot;
 
 use super::api::{RpcError, code};
 use crate::rt::controller_slots::Installed;
-use crate::rt::messages::{Ack, Envelope, LoopRequest, Rejection};
+use crate::rt::messages::{Ack, Envelope, LoopRequest, Refusal, Rejection};
 
 type Pending = Arc<Mutex<HashMap<u64, oneshot::Sender<Result<(), Rejection>>>>>;
 
@@ -193,7 +193,7 @@ fn not_running() -> RpcError {
         code::REFUSED,
         format!(
             "refused: the loop is not running ({})",
-            Rejection::ShuttingDown
+            Rejection::Failsafe(Refusal::ShuttingDown)
         ),
     )
 }
@@ -243,7 +243,7 @@ mod tests {
                 let result = if i == 0 {
                     Ok(())
                 } else {
-                    Err(Rejection::EStopLatched)
+                    Err(Rejection::Failsafe(Refusal::EStopLatched))
                 };
                 ack_tx
                     .send(Ack {

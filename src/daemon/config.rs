@@ -249,7 +249,7 @@ impl Default for GaitSection {
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ControlConfig {
-    /// Unix socket path; "auto" = see `daemon::paths`; empty = no Unix socket.
+    /// Unix socket path; "auto" = see `control::paths`; empty = no Unix socket.
     pub socket: PathBuf,
     /// TCP port on 127.0.0.1; 0 = no TCP listener.
     pub tcp_port: u16,

@@ -4,7 +4,6 @@
 pub mod bus_setup;
 pub mod config;
 pub mod logging;
-pub mod paths;
 pub mod service;
 pub mod token;
 
@@ -374,7 +373,7 @@ fn server_config(cfg: &Config) -> ServerConfig {
         unix_path: if socket.as_os_str().is_empty() {
             None
         } else if socket.as_os_str() == "auto" {
-            Some(paths::daemon_socket())
+            Some(crate::control::paths::daemon_socket())
         } else {
             Some(socket.clone())
         },

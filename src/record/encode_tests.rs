@@ -88,14 +88,14 @@ fn windows_carry_edges_and_named_columns_of_the_used_windows() {
 
 #[test]
 fn events_say_their_kind() {
-    use crate::rt::messages::Rejection;
+    use crate::rt::messages::{Refusal, Rejection};
     let mut out = Vec::new();
     let e = RecordEvent::Request {
         ticket: 9,
         request: LoopRequest::SetGait {
             gait: GaitKind::Sidewinding,
         },
-        result: Err(Rejection::EStopLatched),
+        result: Err(Rejection::Failsafe(Refusal::EStopLatched)),
     };
     write_event(&mut out, 5, &e, |_| None).expect("encodes");
     let v: Value = serde_json::from_slice(&out).expect("json");

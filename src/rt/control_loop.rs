@@ -15,7 +15,7 @@ use crate::gait::{GaitKind, GaitSelector, ParamPatch};
 use crate::protocol::Command;
 use crate::record::RecordEvent;
 use crate::rt::controller_slots::{ControllerSlots, Installed};
-use crate::rt::messages::{Ack, Envelope, LoopRequest, Rejection};
+use crate::rt::messages::{Ack, Envelope, LoopRequest, Refusal, Rejection};
 use crate::rt::pacer::{Cycle, Pacer};
 use crate::rt::recording::{LoopRecording, Recording};
 use crate::rt::setpoint_guard::{NonFiniteSetpoint, SetpointGuard};
@@ -323,7 +323,7 @@ impl ControlLoop {
                 // Setting a gait also arms a held or limp robot, never an e-stopped one:
                 // only an explicit arm releases the e-stop.
                 match fs.mode() {
-                    Mode::EStop => return Err(Rejection::EStopLatched),
+                    Mode::EStop => return Err(Rejection::Failsafe(Refusal::EStopLatched)),
                     Mode::Running => {}
                     Mode::Hold | Mode::Limp => fs.request(now_s, Event::Arm)?,
                 }
@@ -343,13 +343,13 @@ impl ControlLoop {
                 .selector
                 .set_blend_time(s)
                 .map_err(|_| Rejection::InvalidParams),
-            LoopRequest::Hold => fs.request(now_s, Event::Hold),
-            LoopRequest::Limp => fs.request(now_s, Event::Limp),
-            LoopRequest::EStop => fs.request(now_s, Event::EStop),
-            LoopRequest::Arm => fs.request(now_s, Event::Arm),
+            LoopRequest::Hold => Ok(fs.request(now_s, Event::Hold)?),
+            LoopRequest::Limp => Ok(fs.request(now_s, Event::Limp)?),
+            LoopRequest::EStop => Ok(fs.request(now_s, Event::EStop)?),
+            LoopRequest::Arm => Ok(fs.request(now_s, Event::Arm)?),
             LoopRequest::Shutdown => {
                 self.stop_seen = true;
-                fs.request(now_s, Event::Shutdown)
+                Ok(fs.request(now_s, Event::Shutdown)?)
             }
             LoopRequest::SetParams { .. } | LoopRequest::SetController { .. } => {
                 unreachable!("handled above")

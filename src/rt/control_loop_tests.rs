@@ -2,7 +2,7 @@
 use crate::gait::GaitKind;
 use crate::rt::control_loop::Flow;
 use crate::rt::harness::{Harness, echo_harness};
-use crate::rt::messages::{Envelope, LoopRequest, Rejection};
+use crate::rt::messages::{Envelope, LoopRequest, Refusal, Rejection};
 use crate::safety::failsafe::{FailsafeConfig, Mode, Reason};
 
 fn request(h: &mut Harness, ticket: u64, r: LoopRequest) -> Result<(), Rejection> {
@@ -183,11 +183,11 @@ fn estop_latches_and_only_arm_releases_it() {
                 gait: GaitKind::Sidewinding
             }
         ),
-        Err(Rejection::EStopLatched)
+        Err(Rejection::Failsafe(Refusal::EStopLatched))
     );
     assert_eq!(
         request(&mut h, 3, LoopRequest::Hold),
-        Err(Rejection::EStopLatched)
+        Err(Rejection::Failsafe(Refusal::EStopLatched))
     );
     assert_eq!(h.telemetry.latest().mode, Mode::EStop);
     assert_eq!(request(&mut h, 4, LoopRequest::Arm), Ok(()));

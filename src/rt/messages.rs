@@ -7,6 +7,7 @@ use serde::Serialize;
 use crate::controller::{CommandRefused, ControllerCommand, NominalMismatch};
 use crate::gait::{GaitKind, ParamPatch};
 use crate::rt::controller_slots::Installed;
+pub use crate::safety::failsafe::Refusal;
 
 /// An operator request, applied by the loop at a cycle boundary. Recorded as it is
 /// defined (`/events`: `"request"` the variant's name, `"args"` its fields).
@@ -68,14 +69,11 @@ impl Envelope {
 /// Why the loop refused a request.
 #[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
 pub enum Rejection {
-    #[error("e-stop is latched: send arm first")]
-    EStopLatched,
-    #[error("feedback is not healthy; cannot arm")]
-    FeedbackUnhealthy,
+    /// The failsafe's (e-stop latched, feedback unhealthy, shutting down).
+    #[error(transparent)]
+    Failsafe(#[from] Refusal),
     #[error("parameter out of range")]
     InvalidParams,
-    #[error("shutting down")]
-    ShuttingDown,
     #[error("the gait's controller cannot follow these parameters: {0}")]
     ControllerRefuses(NominalMismatch),
     #[error("no controller attached")]

@@ -13,7 +13,17 @@
 use serde::Serialize;
 
 use crate::num::Num;
-use crate::rt::messages::Rejection;
+
+/// Why the failsafe refused an event (the loop answers the request with it).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+pub enum Refusal {
+    #[error("e-stop is latched: send arm first")]
+    EStopLatched,
+    #[error("feedback is not healthy; cannot arm")]
+    FeedbackUnhealthy,
+    #[error("shutting down")]
+    ShuttingDown,
+}
 
 /// What the loop does with the joints.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -275,7 +285,7 @@ impl Failsafe {
     }
 
     /// Applies an operator event at a cycle boundary.
-    pub fn request(&mut self, now_s: f64, event: Event) -> Result<(), Rejection> {
+    pub fn request(&mut self, now_s: f64, event: Event) -> Result<(), Refusal> {
         let before = self.state;
         let result = self.apply(now_s, event);
         if self.state != before {
@@ -284,14 +294,14 @@ impl Failsafe {
         result
     }
 
-    fn apply(&mut self, now_s: f64, event: Event) -> Result<(), Rejection> {
+    fn apply(&mut self, now_s: f64, event: Event) -> Result<(), Refusal> {
         if self.shutting_down() {
             // An e-stop still cuts a shutdown's hold short: limp at once.
             if event == Event::EStop && self.state != State::Finished {
                 self.enter(State::ShutdownLimp, Mode::EStop, Reason::EStop, now_s);
                 return Ok(());
             }
-            return Err(Rejection::ShuttingDown);
+            return Err(Refusal::ShuttingDown);
         }
         match event {
             Event::EStop => {
@@ -314,7 +324,7 @@ impl Failsafe {
                 }
                 Ok(())
             }
-            _ if self.state == State::EStop && event != Event::Arm => Err(Rejection::EStopLatched),
+            _ if self.state == State::EStop && event != Event::Arm => Err(Refusal::EStopLatched),
             Event::Limp => {
                 self.enter(State::Limp, Mode::Limp, Reason::Operator, now_s);
                 Ok(())
@@ -361,9 +371,9 @@ impl Failsafe {
     }
 
     /// Asks the loop for a resync leading to `then`, if feedback is healthy.
-    fn start_resync(&mut self, then: Then) -> Result<(), Rejection> {
+    fn start_resync(&mut self, then: Then) -> Result<(), Refusal> {
         if !self.healthy {
-            return Err(Rejection::FeedbackUnhealthy);
+            return Err(Refusal::FeedbackUnhealthy);
         }
         // The operator vouches for the feedback: a new fault starts a new episode.
         self.episode_start_s = None;

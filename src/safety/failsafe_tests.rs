@@ -57,7 +57,7 @@ struct Sim {
     fs: Failsafe,
     t: f64,
     out: Option<Output>,
-    result: Option<Result<(), Rejection>>,
+    result: Option<Result<(), Refusal>>,
     /// Every output seen by `run`.
     seen: Vec<Output>,
 }
@@ -132,7 +132,7 @@ struct Row {
     auto_resume: bool,
     steps: &'static [Step],
     /// Result of the last request, if the row expects one.
-    result: Option<Result<(), Rejection>>,
+    result: Option<Result<(), Refusal>>,
     /// Output of the last update, if the row expects one.
     out: Option<Output>,
     mode: Mode,
@@ -143,7 +143,7 @@ const fn row(
     name: &'static str,
     start: Start,
     steps: &'static [Step],
-    result: Option<Result<(), Rejection>>,
+    result: Option<Result<(), Refusal>>,
     out: Option<Output>,
     mode: Mode,
     reason: Reason,
@@ -168,9 +168,9 @@ const fn auto(mut r: Row) -> Row {
 use Event as E;
 use Output as O;
 use Reason as R;
-use Rejection as X;
-const OK_: Option<Result<(), Rejection>> = Some(Ok(()));
-const fn err(x: Rejection) -> Option<Result<(), Rejection>> {
+use Refusal as X;
+const OK_: Option<Result<(), Refusal>> = Some(Ok(()));
+const fn err(x: Refusal) -> Option<Result<(), Refusal>> {
     Some(Err(x))
 }
 

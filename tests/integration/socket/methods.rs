@@ -9,7 +9,7 @@ use serde_json::{Value, json};
 use snaked::control::api::code;
 use snaked::control::client::ClientError;
 use snaked::gait::{GaitKind, ParamPatch};
-use snaked::rt::messages::{LoopRequest, Rejection};
+use snaked::rt::messages::{LoopRequest, Refusal, Rejection};
 use socket::{Harness, LoopSpec, error_code, error_message, raw};
 
 #[test]
@@ -128,8 +128,8 @@ fn refused_requests_carry_the_loops_reason() {
     let spec = LoopSpec {
         policy: Arc::new(|r| {
             Some(match r {
-                LoopRequest::Arm => Err(Rejection::FeedbackUnhealthy),
-                LoopRequest::SetGait { .. } => Err(Rejection::EStopLatched),
+                LoopRequest::Arm => Err(Rejection::Failsafe(Refusal::FeedbackUnhealthy)),
+                LoopRequest::SetGait { .. } => Err(Rejection::Failsafe(Refusal::EStopLatched)),
                 _ => Ok(()),
             })
         }),

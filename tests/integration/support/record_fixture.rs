@@ -11,7 +11,7 @@ use snaked::gait::{BodyLayout, GaitKind, Plane};
 use snaked::record::{
     CycleRecord, RecordEvent, RecordItem, RecordOptions, RecordTx, RecordingInfo,
 };
-use snaked::rt::messages::{LoopRequest, Rejection};
+use snaked::rt::messages::{LoopRequest, Refusal, Rejection};
 use snaked::rt::stats::LoopStats;
 use snaked::safety::failsafe::{Mode, Reason};
 
@@ -123,7 +123,7 @@ pub fn events_at(k: u64, controller_id: u64) -> Vec<RecordItem> {
             RecordEvent::Request {
                 ticket: 2,
                 request: LoopRequest::Arm,
-                result: Err(Rejection::FeedbackUnhealthy),
+                result: Err(Rejection::Failsafe(Refusal::FeedbackUnhealthy)),
             },
         )],
         100 => vec![event(
