@@ -1,7 +1,7 @@
 //! Cost of one update of the virtual-chassis estimator (joint angles and IMUs in, the
 //! body estimate out) for N = 18 modules on a bent, moving body.
 use criterion::{Criterion, criterion_group, criterion_main};
-use snaked::controller::{BodyEstimate, Estimator, Imu, Observation};
+use snaked::controller_interface::{BodyEstimate, Estimator, Imu, Observation};
 use snaked::estimation::{DEFAULT_TIME_CONSTANT_S, VirtualChassisEstimator};
 use snaked::gait::{BodyLayout, Plane};
 

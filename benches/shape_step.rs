@@ -1,9 +1,9 @@
 //! Cost of one step of the slithering controllers (torques in, set-points out) for
 //! N = 18 and how it grows up to N = 1024 modules.
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
-use snaked::controller::Tick;
-use snaked::controller::registry::{BuildContext, Selection, build};
-use snaked::controller::testing::{ObservationBuf, engage_at};
+use snaked::controller_interface::Tick;
+use snaked::controller_interface::registry::{BuildContext, Selection, build};
+use snaked::controller_interface::testing::{ObservationBuf, engage_at};
 use snaked::controllers::REGISTRY;
 use snaked::gait::{BodyLayout, GaitKind, GaitParams, Plane};
 

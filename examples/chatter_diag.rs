@@ -7,7 +7,7 @@
 //! (comma-separated signal names, default the amplitude and spatial frequency), HZ (the
 //! sample rate, 200), RECORD (an MCAP file to write: every cycle, `/joints` and more).
 use snaked::gait::GaitKind;
-use snaked::lab::controllers::LabController;
+use snaked::lab::compared::LabController;
 use snaked::lab::experiment::Goal;
 use snaked::lab::trial::{TrialConfig, TrialRecording, run_trial};
 

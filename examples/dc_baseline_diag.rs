@@ -16,7 +16,7 @@ use std::io::Write;
 use snaked::emu::world::scenario::{MODULE_LENGTH_M, WorldScenario};
 use snaked::gait::GaitKind;
 use snaked::lab::calibration::calibrate;
-use snaked::lab::controllers::LabController;
+use snaked::lab::compared::LabController;
 use snaked::lab::displacement::FieldEdge;
 use snaked::lab::layout::Layout;
 use snaked::lab::layout::noise_seed;

@@ -7,7 +7,7 @@
 //! WT (ωT), ROLL (the start's roll, rad), LEAD (the lead-in, s), DETAIL (every 0.25 s
 //! to 8 s), LINKS (every third link's position).
 use snaked::gait::GaitKind;
-use snaked::lab::controllers::LabController;
+use snaked::lab::compared::LabController;
 use snaked::lab::experiment::Experiment;
 use snaked::lab::layout::Layout;
 use snaked::lab::layout::noise_seed;

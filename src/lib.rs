@@ -14,17 +14,18 @@
 //! - [`daemon`]: configuration and wiring of the service.
 
 pub mod bus;
-pub mod control;
-pub mod controller;
+pub mod controller_interface;
 pub mod controllers;
 pub mod daemon;
 pub mod emu;
 pub mod estimation;
 pub mod gait;
 pub mod lab;
+pub mod module;
 pub mod num;
 pub mod protocol;
 pub mod record;
 pub mod rt;
 pub mod safety;
 pub mod shape;
+pub mod socket;

@@ -44,7 +44,7 @@ fn check_error(e: &ConfigError) {
         }
         ConfigError::Controller { gait, source, .. } => {
             assert!(msg.contains(&format!("[gait.controllers.{gait}]")), "{msg}");
-            use snaked::controller::ConfigError as C;
+            use snaked::controller_interface::ConfigError as C;
             if let C::Field { path: f, .. }
             | C::OutOfRange { field: f, .. }
             | C::Invalid { field: f, .. } = source

@@ -11,8 +11,8 @@ use std::time::Duration;
 
 use clap::{Parser, Subcommand};
 use serde_json::{Map, Value, json};
-use snaked::control::api::PATCH_FIELDS;
-use snaked::control::client::{Client, ClientError, Endpoint};
+use snaked::socket::api::PATCH_FIELDS;
+use snaked::socket::client::{Client, ClientError, Endpoint};
 
 use controller::ControllerCmd;
 
@@ -158,7 +158,7 @@ fn endpoint(cli: &Cli) -> Endpoint {
         .socket
         .clone()
         .or_else(|| std::env::var_os("SNAKED_SOCKET").map(PathBuf::from))
-        .unwrap_or_else(snaked::control::paths::client_socket);
+        .unwrap_or_else(snaked::socket::paths::client_socket);
     Endpoint::Unix(path)
 }
 
@@ -499,9 +499,17 @@ fn print_stats(r: &Value) {
     }
     println!();
     println!("bus");
+    // The counters every bus keeps, then the bus's own (`detail`), one per line.
     let bus = r["bus"].as_object().cloned().unwrap_or_default();
-    let width = bus.keys().map(String::len).max().unwrap_or(0);
-    for (k, v) in &bus {
+    let mut rows: Vec<(String, Value)> = Vec::new();
+    for (k, v) in bus {
+        match v {
+            Value::Object(detail) => rows.extend(detail),
+            v => rows.push((k, v)),
+        }
+    }
+    let width = rows.iter().map(|(k, _)| k.len()).max().unwrap_or(0);
+    for (k, v) in &rows {
         println!("  {k:<width$}  {v:>12}");
     }
 }

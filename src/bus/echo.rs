@@ -7,7 +7,7 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use crate::bus::{Bus, BusCounters, BusError, FeedbackWait, GroupFeedback};
-use crate::protocol::{Command, Feedback};
+use crate::module::{Command, Feedback};
 
 pub struct EchoBus {
     period_us: u64,

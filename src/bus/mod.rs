@@ -1,12 +1,18 @@
-//! The loop's view of the module network. `UdpBus` talks to real or emulated
-//! modules over UDP; `SimBus` steps an in-process emulator. The loop and the
-//! controllers cannot tell them apart.
+//! The loop's view of the module network, whatever carries it. `UdpBus` talks to
+//! real or emulated modules over UDP (protocol v2); `emu::sim_bus::SimBus` steps an
+//! in-process emulator. The loop and the controllers cannot tell them apart; what a
+//! bus knows beyond [`Bus`] (the UDP bus's reasons for dropping datagrams, the
+//! simulated bus's ground truth) is reached through the bus's own type.
 
+mod counters;
 pub mod echo;
-pub mod sim;
 pub mod udp;
 
-use crate::protocol::{Command, Feedback};
+use std::any::Any;
+
+pub use counters::{BusCounters, CounterSet, MAX_DETAIL};
+
+use crate::module::{Command, Feedback};
 
 /// Newest feedback of one module as the loop sees it.
 #[derive(Debug, Clone, Copy, Default)]
@@ -48,34 +54,6 @@ impl GroupFeedback {
     }
 }
 
-/// Counters a bus keeps for the statistics; monotonically increasing.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
-pub struct BusCounters {
-    pub feedback_received: u64,
-    /// Feedback sequence gaps (datagrams the network lost).
-    pub feedback_lost: u64,
-    /// Authenticated feedback not newer than the newest held (replayed or reordered).
-    pub feedback_replayed: u64,
-    pub commands_sent: u64,
-    /// Send calls that failed (socket full, unreachable).
-    pub send_errors: u64,
-    /// Datagrams dropped, by reason.
-    pub bad_truncated: u64,
-    pub bad_magic: u64,
-    pub bad_version: u64,
-    /// Datagrams of protocol v1 (an old module or emulator): refused.
-    pub v1_refused: u64,
-    pub bad_type: u64,
-    pub bad_length: u64,
-    /// Frames whose tag did not verify: corrupted, forged, or of another session.
-    pub bad_tag: u64,
-    pub bad_malformed: u64,
-    pub wrong_session: u64,
-    /// Well-formed datagrams from an address that is not in the group, or of a type
-    /// the loop does not expect.
-    pub unexpected: u64,
-}
-
 /// How `receive` waits.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum FeedbackWait {
@@ -101,7 +79,9 @@ pub enum BusError {
 
 /// The module network as the loop uses it. Implementations never allocate in
 /// `send` or `receive` and never block in them except as `FeedbackWait` allows.
-pub trait Bus: Send {
+/// `Any`: a caller that built a particular bus reaches its own methods through
+/// `&dyn Any` (e.g. `SimBus::of`).
+pub trait Bus: Send + Any {
     /// Number of modules in the group.
     fn module_count(&self) -> usize;
     /// Send one command per module, head first.
@@ -117,9 +97,4 @@ pub trait Bus: Send {
     fn counters(&self) -> BusCounters;
     /// Hand the modules back (release the session). Called once at shutdown.
     fn release(&mut self) {}
-    /// The simulated plant behind an in-process bus, for ground truth (the lab's
-    /// metrics, the recorder's 3-D scene); `None` for real modules.
-    fn plant(&self) -> Option<&dyn crate::emu::Plant> {
-        None
-    }
 }

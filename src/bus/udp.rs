@@ -12,6 +12,7 @@
 mod batch;
 mod clock;
 mod connect;
+mod counters;
 mod discovery;
 mod endpoints;
 mod net;
@@ -38,6 +39,7 @@ use crate::protocol::{
     peek,
 };
 use batch::{BATCH, RecvBatch};
+pub use counters::UdpCounters;
 use endpoints::Endpoints;
 use rx::Slot;
 
@@ -72,7 +74,7 @@ pub struct UdpBus {
     last_receive_ns: u64,
     /// `receive` calls so far (0: still connecting).
     receives: u64,
-    counters: BusCounters,
+    counters: UdpCounters,
     released: bool,
 }
 
@@ -95,6 +97,12 @@ impl UdpBus {
     /// Local address of the bus socket (where feedback arrives).
     pub fn local_addr(&self) -> io::Result<SocketAddr> {
         self.socket.local_addr()
+    }
+
+    /// Its own counters, every reason for a dropped datagram apart (the statistics
+    /// see them as [`Bus::counters`]' detail).
+    pub fn udp_counters(&self) -> UdpCounters {
+        self.counters
     }
 
     /// Header seq of the last Command cycle sent (0 before the first).
@@ -209,7 +217,7 @@ impl UdpBus {
             // A bad header ends the datagram: nothing after it can be framed.
             let (header, len) = match peek(d) {
                 Ok(h) => h,
-                Err(e) => return rx::count_decode_error(&mut self.counters, e),
+                Err(e) => return self.counters.count_decode_error(e),
             };
             let frame = at..at + len;
             at += len;
@@ -228,7 +236,7 @@ impl UdpBus {
             let msg = match open(&datagram[frame], &key) {
                 Ok(m) => m,
                 Err(e) => {
-                    rx::count_decode_error(&mut self.counters, e);
+                    self.counters.count_decode_error(e);
                     continue;
                 }
             };
@@ -368,7 +376,7 @@ impl Bus for UdpBus {
     }
 
     fn counters(&self) -> BusCounters {
-        self.counters
+        self.counters.to_bus()
     }
 
     /// Send Release to every module (once; also done on drop). Fire and forget: a

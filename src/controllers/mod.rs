@@ -10,7 +10,7 @@ pub mod open_loop;
 pub mod serpenoid_admittance;
 pub mod sidewinding;
 
-use crate::controller::registry::{Entry, Family};
+use crate::controller_interface::registry::{Entry, Family};
 
 /// The registry, one line per controller. The first that runs a gait is its default.
 pub static REGISTRY: &[&dyn Family] = &[

@@ -5,16 +5,16 @@ use std::time::Duration;
 use anyhow::{Context, Result, bail};
 
 use crate::bus::Bus;
-use crate::bus::sim::{SimBus, SimBusConfig};
 use crate::bus::udp::{self, UdpBus};
-use crate::control::BusKind;
 use crate::daemon::config::{Config, LookupBy, parse_mac};
 use crate::emu::Plant;
 use crate::emu::module::{EMULATOR_FIRMWARE, ModuleIdentity};
 use crate::emu::plant::{JointSpacePlant, PlantConfig};
+use crate::emu::sim_bus::{SimBus, SimBusConfig};
 use crate::emu::world::physics::{PhysicsConfig, PhysicsPlant};
 use crate::emu::world::scenario::WorldScenario;
 use crate::protocol::{ControlStrategy, LookupFilter, Name, Settings};
+use crate::socket::BusKind;
 
 pub struct BuiltBus {
     pub bus: Box<dyn Bus>,

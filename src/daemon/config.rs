@@ -226,7 +226,7 @@ pub struct GaitSection {
     pub params: std::collections::HashMap<GaitKind, crate::gait::ParamPatch>,
     /// Per-gait controllers, e.g. `[gait.controllers.slithering] controller =
     /// "a_ws_omega"`; a gait not named runs `open_loop`.
-    pub controllers: std::collections::HashMap<GaitKind, crate::controller::Selection>,
+    pub controllers: std::collections::HashMap<GaitKind, crate::controller_interface::Selection>,
     /// Replaced by `controllers`; kept only to say so.
     #[serde(default)]
     pub slithering_controller: Option<String>,
@@ -249,7 +249,7 @@ impl Default for GaitSection {
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ControlConfig {
-    /// Unix socket path; "auto" = see `control::paths`; empty = no Unix socket.
+    /// Unix socket path; "auto" = see `socket::paths`; empty = no Unix socket.
     pub socket: PathBuf,
     /// TCP port on 127.0.0.1; 0 = no TCP listener.
     pub tcp_port: u16,
@@ -330,7 +330,7 @@ pub enum ConfigError {
     Controller {
         path: PathBuf,
         gait: &'static str,
-        source: crate::controller::ConfigError,
+        source: crate::controller_interface::ConfigError,
     },
 }
 

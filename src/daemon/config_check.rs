@@ -136,12 +136,12 @@ impl Config {
     }
 
     /// Each gait's controller: `[gait.controllers.*]` or `open_loop`.
-    pub fn controller_selection(&self, gait: GaitKind) -> crate::controller::Selection {
+    pub fn controller_selection(&self, gait: GaitKind) -> crate::controller_interface::Selection {
         self.gait
             .controllers
             .get(&gait)
             .cloned()
-            .unwrap_or_else(|| crate::controller::Selection::named("open_loop"))
+            .unwrap_or_else(|| crate::controller_interface::Selection::named("open_loop"))
     }
 
     /// Builds every configured controller once (for a body of `emulator.modules`
@@ -154,19 +154,18 @@ impl Config {
             self.body.module_length_m,
         );
         for gait in GaitKind::ALL {
-            let ctx = crate::controller::BuildContext {
+            let ctx = crate::controller_interface::BuildContext {
                 gait,
                 layout: &layout,
                 params: table.get(gait),
             };
             let sel = self.controller_selection(gait);
-            crate::controller::registry::build(crate::controllers::REGISTRY, &sel, &ctx).map_err(
-                |source| ConfigError::Controller {
+            crate::controller_interface::registry::build(crate::controllers::REGISTRY, &sel, &ctx)
+                .map_err(|source| ConfigError::Controller {
                     path: path.to_owned(),
                     gait: gait.name(),
                     source,
-                },
-            )?;
+                })?;
         }
         Ok(())
     }

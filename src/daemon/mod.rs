@@ -14,20 +14,21 @@ use std::time::Duration;
 
 use anyhow::{Context, Result};
 
-use crate::control::{self, DaemonInfo, LoopHandle, ServerConfig};
-use crate::controller::BuildContext;
-use crate::controller::catalog::Catalog;
-use crate::controller::registry;
+use crate::controller_interface::BuildContext;
+use crate::controller_interface::catalog::Catalog;
+use crate::controller_interface::registry;
 use crate::controllers::REGISTRY;
 use crate::gait::{BodyLayout, GaitKind, GaitSelector, GaitTable};
 use crate::record::{LiveOptions, McapOptions, RecordOptions, RecordTx, Recorder, RecordingInfo};
+use crate::record::{LoopRecorder, LoopRecording};
 use crate::rt::control_loop::{ControlLoop, LoopParts};
 use crate::rt::controller_slots::Installed;
+use crate::rt::observer::CycleObserver;
 use crate::rt::pacer::{LockstepPacer, Pacer, RealTimePacer};
-use crate::rt::recording::LoopRecording;
 use crate::rt::sys;
 use crate::rt::telemetry::{self, Snapshot, TelemetryReader};
 use crate::safety::failsafe::{Failsafe, FailsafeConfig};
+use crate::socket::{self, DaemonInfo, LoopHandle, ServerConfig};
 use config::{Config, Pacing, StartMode};
 
 /// What the command line chose, over the configuration file.
@@ -216,7 +217,7 @@ pub fn run(cfg: Config, emulated: bool) -> Result<()> {
             .with_context(|| format!("control.tcp_token_file {}", path.display()))?;
         server_cfg.tcp_token = Some(token);
     }
-    let server = control::start(
+    let server = socket::start(
         server_cfg,
         LoopHandle {
             requests: control_ends.requests,
@@ -229,8 +230,8 @@ pub fn run(cfg: Config, emulated: bool) -> Result<()> {
                 loop_rate_hz: cfg.loop_.rate_hz,
                 bus: built.kind,
                 pacing: match cfg.loop_.pacing {
-                    Pacing::Realtime => control::Pacing::Realtime,
-                    Pacing::Lockstep => control::Pacing::Lockstep,
+                    Pacing::Realtime => socket::Pacing::Realtime,
+                    Pacing::Lockstep => socket::Pacing::Lockstep,
                 },
             },
             layout,
@@ -255,9 +256,12 @@ pub fn run(cfg: Config, emulated: bool) -> Result<()> {
         retired: loop_ends.retired,
         controllers,
         estimators,
-        recording: recorder.as_ref().map(|(tx, _)| LoopRecording {
-            tx: tx.clone(),
-            wait_when_full: false,
+        observer: recorder.as_ref().map(|(tx, _)| {
+            let out = LoopRecording {
+                tx: tx.clone(),
+                wait_when_full: false,
+            };
+            Box::new(LoopRecorder::new(out)) as Box<dyn CycleObserver>
         }),
     };
     let rt = cfg.loop_.clone();
@@ -373,7 +377,7 @@ fn server_config(cfg: &Config) -> ServerConfig {
         unix_path: if socket.as_os_str().is_empty() {
             None
         } else if socket.as_os_str() == "auto" {
-            Some(crate::control::paths::daemon_socket())
+            Some(crate::socket::paths::daemon_socket())
         } else {
             Some(socket.clone())
         },

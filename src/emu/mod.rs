@@ -12,9 +12,10 @@ pub mod recorder;
 pub mod scenario;
 pub mod server;
 pub mod servo;
+pub mod sim_bus;
 pub mod world;
 
-use crate::protocol::{Command, Feedback};
+use crate::module::{Command, Feedback};
 
 /// A simulated snake: N series-elastic modules and the world they touch.
 pub trait Plant: Send {

@@ -61,7 +61,7 @@ mod tests {
     use super::*;
     use crate::emu::world::WorldSpec;
     use crate::emu::world::physics::{PhysicsConfig, PhysicsPlant};
-    use crate::protocol::Command;
+    use crate::module::Command;
 
     #[test]
     fn writes_poses_and_contacts() {

@@ -9,7 +9,7 @@ use std::io::{self, BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 use super::Plant;
-use crate::protocol::Command;
+use crate::module::Command;
 
 /// Rows between flushes.
 pub const FLUSH_EVERY_ROWS: u32 = 1000;

@@ -47,7 +47,7 @@ pub enum PositionLoop {
     /// The clamp caps what the position error alone can ask at `Kv·v_max` (0.7 N·m),
     /// so a loaded joint leans on the fast integrator, and that makes any load above
     /// 0.005 kg·m² oscillate (Routh): a lifted body thrashes (docs/emulator.md, "The
-    /// servo loop"). The default until 2026-12-02; kept to reproduce the results
+    /// servo loop"). The earlier default; kept to reproduce the results
     /// measured with it.
     SpeedClamped,
     /// The position loop chases a target that approaches the set-point at no more than

@@ -12,7 +12,7 @@
 
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 
-use crate::controller::Imu;
+use crate::controller_interface::Imu;
 
 /// Largest |‖a‖ − g| / g of a module whose accelerometer is read as gravity.
 pub const ACCEL_GATE: f64 = 0.2;

@@ -16,7 +16,7 @@ pub mod chassis;
 
 use nalgebra::{Isometry3, UnitQuaternion, Vector3};
 
-use crate::controller::{BodyEstimate, Estimator, Observation};
+use crate::controller_interface::{BodyEstimate, Estimator, Observation};
 use crate::gait::BodyLayout;
 use attitude::FusedAttitude;
 use chassis::{Chassis, chassis};

@@ -8,14 +8,14 @@ use nalgebra::{UnitQuaternion, Vector3};
 
 use super::VirtualChassisEstimator;
 use super::chassis::{Chassis, chassis};
-use crate::controller::{BodyEstimate, Estimator, Imu, Observation};
+use crate::controller_interface::{BodyEstimate, Estimator, Imu, Observation};
 use crate::emu::Plant;
 use crate::emu::servo::{MODULE_LENGTH_M, PositionLoop};
 use crate::emu::world::WorldSpec;
 use crate::emu::world::physics::{ImuBias, PhysicsConfig, PhysicsPlant};
 use crate::emu::world::scenario::WorldScenario;
 use crate::gait::{BodyLayout, GaitKind, GaitParams, Plane, Serpenoid};
-use crate::protocol::Command;
+use crate::module::Command;
 
 const N: usize = 18;
 

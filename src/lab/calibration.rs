@@ -10,9 +10,9 @@
 use serde_json::{Value, json};
 
 use super::LabError;
-use super::controllers::LabController;
+use super::compared::LabController;
 use super::trial::{TrialConfig, plant_of, trial_loop};
-use crate::controller::ControllerCommand;
+use crate::controller_interface::ControllerCommand;
 use crate::emu::world::WorldSpec;
 use crate::emu::world::physics::PhysicsPlant;
 use crate::rt::control_loop::Flow;
@@ -107,7 +107,7 @@ pub fn calibrate(
             json!({ "lateral_rad": offsets_of(lateral), "dorsal_rad": offsets_of(dorsal) });
         let mut c = controller.clone();
         let config = c.selection.config.get_or_insert_with(|| json!({}));
-        crate::controller::config::merge(config, &json!({ "friction_offset": offsets }));
+        crate::controller_interface::config::merge(config, &json!({ "friction_offset": offsets }));
         return Ok(Some(Calibrated {
             controller: c,
             offsets,

@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use clap::{Args, FromArgMatches};
 
 use super::LabError;
-use super::controllers::LabController;
+use super::compared::LabController;
 use super::experiment::Experiment;
 use super::layout::Layout;
 use super::report::{SummaryContext, write_report};
@@ -58,7 +58,8 @@ pub struct CommonArgs {
     #[arg(long)]
     pub quiet: bool,
     /// The emulated servos' position loop: `profiled` (the default) or `speed-clamped`
-    /// (the loop before 2026-12-02: docs/emulator.md, "The servo loop").
+    /// (the earlier loop, to reproduce results measured with it: docs/emulator.md, "The
+    /// servo loop").
     #[arg(long, value_enum, default_value = "profiled")]
     pub servo_loop: PositionLoop,
     /// The experiment's gait's nominal parameters, a partial set as the socket's

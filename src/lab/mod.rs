@@ -21,7 +21,7 @@
 
 pub mod calibration;
 pub mod cli;
-pub mod controllers;
+pub mod compared;
 pub mod displacement;
 pub mod experiment;
 pub mod flat_ground;

@@ -10,7 +10,7 @@ use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use super::LabError;
-use super::controllers::LabController;
+use super::compared::LabController;
 use super::experiment::Experiment;
 use super::file_stem;
 use super::layout::{Layout, noise_seed};
@@ -94,7 +94,7 @@ pub fn plan<E: Experiment>(
 ) -> Result<Vec<PlannedWorld<E::Goal>>, LabError> {
     if exp.controllers.is_empty() {
         return Err(LabError::NoControllers {
-            known: crate::controller::registry::known_names(
+            known: crate::controller_interface::registry::known_names(
                 crate::controllers::REGISTRY,
                 module.gait(),
             ),

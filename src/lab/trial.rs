@@ -9,14 +9,14 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU64};
 
 use super::LabError;
-use super::controllers::LabController;
+use super::compared::LabController;
 use super::experiment::Goal;
 use super::strain::{Strain, StrainLimits};
-use crate::bus::sim::{SimBus, SimBusConfig};
-use crate::controller::catalog::Catalog;
-use crate::controller::report::MAX_COLUMNS;
+use crate::controller_interface::catalog::Catalog;
+use crate::controller_interface::report::MAX_COLUMNS;
 use crate::emu::Plant;
 use crate::emu::servo::PositionLoop;
+use crate::emu::sim_bus::{SimBus, SimBusConfig};
 use crate::emu::world::WorldSpec;
 use crate::emu::world::physics::{PhysicsConfig, PhysicsPlant};
 use crate::emu::world::scenario::MODULE_LENGTH_M;
@@ -24,11 +24,12 @@ use crate::gait::{
     BodyLayout, DEFAULT_BLEND_TIME_S, GaitKind, GaitParams, GaitSelector, GaitTable, Plane,
     SEA_MAX_JOINT_SPEED_RAD_S,
 };
+use crate::record::{LoopRecorder, LoopRecording};
 use crate::record::{McapOptions, RecordOptions, Recorder, RecordingInfo};
 use crate::rt::control_loop::{ControlLoop, Flow, LoopParts};
 use crate::rt::controller_slots::Installed;
+use crate::rt::observer::CycleObserver;
 use crate::rt::pacer::LockstepPacer;
-use crate::rt::recording::LoopRecording;
 use crate::rt::telemetry::{self, Snapshot};
 use crate::safety::failsafe::{Failsafe, FailsafeConfig};
 
@@ -252,7 +253,8 @@ pub(crate) fn trial_loop(
                 tx,
                 wait_when_full: true,
             };
-            (Some(out), Some(recorder))
+            let observer: Box<dyn CycleObserver> = Box::new(LoopRecorder::new(out));
+            (Some(observer), Some(recorder))
         }
     };
     let period_ns = (config.dt_s * 1e9).round() as u64;
@@ -298,7 +300,7 @@ pub(crate) fn trial_loop(
             },
         )],
         estimators,
-        recording: record,
+        observer: record,
     };
     Ok((ControlLoop::new(parts), names, recorder, req_tx))
 }
@@ -402,7 +404,9 @@ fn add_strain(lp: &ControlLoop, guarded_before: u64, strain: &mut Strain) {
 }
 
 pub(crate) fn plant_of(lp: &ControlLoop) -> &dyn Plant {
-    lp.bus().plant().expect("a trial runs over a SimBus")
+    SimBus::of(lp.bus())
+        .expect("a trial runs over a SimBus")
+        .plant()
 }
 
 fn record(lp: &ControlLoop, rec: &mut TrialRecord) {

@@ -1,8 +1,8 @@
 //! What the loop hands the recorder: `Copy` items pushed into a bounded lock-free ring
 //! (never blocking, never allocating; a full ring drops the item and counts it).
 
-use crate::controller::BodyEstimate;
-use crate::controller::report::ControllerReport;
+use crate::controller_interface::BodyEstimate;
+use crate::controller_interface::report::ControllerReport;
 use crate::emu::LinkPose;
 use crate::gait::GaitKind;
 use crate::rt::messages::{LoopRequest, Rejection};
@@ -38,7 +38,7 @@ pub struct CycleRecord {
     pub reason: Reason,
     /// The gait run or blended into.
     pub gait: GaitKind,
-    /// The active gait's controller ([`crate::controller::catalog`] id; 0: none).
+    /// The active gait's controller ([`crate::controller_interface::catalog`] id; 0: none).
     pub controller_id: u64,
     /// Whether that controller drove the joints this cycle (else the selector did).
     pub engaged: bool,

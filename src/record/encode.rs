@@ -7,8 +7,8 @@ use serde::Serialize;
 use serde::ser::{SerializeMap, SerializeSeq, Serializer};
 
 use super::cycle::{CycleRecord, JointSample, RecordEvent};
-use crate::controller::catalog::ControllerInfo;
-use crate::controller::report::{MAX_COLUMNS, MAX_FIELDS, MAX_SIGNALS, WindowField};
+use crate::controller_interface::catalog::ControllerInfo;
+use crate::controller_interface::report::{MAX_COLUMNS, MAX_FIELDS, MAX_SIGNALS, WindowField};
 use crate::rt::messages::LoopRequest;
 use crate::rt::stats::LoopStats;
 
@@ -126,7 +126,7 @@ pub struct BodyEstimateMsg<'a> {
     cycle: u64,
     t_ns: u64,
     #[serde(flatten)]
-    body: &'a crate::controller::BodyEstimate,
+    body: &'a crate::controller_interface::BodyEstimate,
 }
 
 impl<'a> BodyEstimateMsg<'a> {
@@ -196,7 +196,7 @@ impl<'a> ControllerSignals<'a> {
 /// One window: edges and the field's named columns.
 struct Window<'a> {
     field: &'a WindowField,
-    names: &'a [crate::controller::report::SignalSpec],
+    names: &'a [crate::controller_interface::report::SignalSpec],
     k: usize,
 }
 
@@ -215,7 +215,7 @@ impl Serialize for Window<'_> {
 
 struct Windows<'a> {
     field: &'a WindowField,
-    names: &'a [crate::controller::report::SignalSpec],
+    names: &'a [crate::controller_interface::report::SignalSpec],
 }
 
 impl Serialize for Windows<'_> {

@@ -13,7 +13,7 @@ fn info() -> ControllerInfo {
         controller: "compliant",
         preset: "test",
         config: json!({"k": 1}),
-        report: crate::controller::testing::sample_report_spec(),
+        report: crate::controller_interface::testing::sample_report_spec(),
     }
 }
 
@@ -120,7 +120,7 @@ fn events_say_their_kind() {
 /// request).
 #[test]
 fn requests_are_recorded_as_defined() {
-    use crate::controller::ControllerCommand;
+    use crate::controller_interface::ControllerCommand;
     use crate::gait::ParamPatch;
     let json = |request: LoopRequest| {
         let mut out = Vec::new();

@@ -56,6 +56,7 @@ mod error;
 mod file;
 pub mod kinematics;
 mod live;
+mod loop_recorder;
 mod options;
 mod recorder;
 mod recover;
@@ -69,6 +70,7 @@ pub use cycle::{
     CycleRecord, JointSample, RECORD_MAX_LINKS, RECORD_MAX_MODULES, RecordEvent, RecordItem,
 };
 pub use error::RecordError;
+pub use loop_recorder::{LoopRecorder, LoopRecording};
 pub use options::{
     CapReason, DEFAULT_CHUNK_DURATION_S, DEFAULT_LIVE_PORT, FileState, LiveOptions, McapOptions,
     RecordOptions, RecordSummary, RecorderStatus, RecordingInfo,

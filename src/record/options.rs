@@ -5,7 +5,7 @@ use std::collections::BTreeMap;
 use std::net::{Ipv4Addr, SocketAddr};
 use std::path::PathBuf;
 
-use crate::controller::catalog::Catalog;
+use crate::controller_interface::catalog::Catalog;
 use crate::emu::world::WorldSpec;
 use crate::gait::BodyLayout;
 

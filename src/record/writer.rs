@@ -22,7 +22,7 @@ use super::live::{Latch, Live};
 use super::options::{CapReason, FileState, RecordOptions, RecordSummary, RecordingInfo};
 use super::ring::Ring;
 use super::scene::{BodyDrawer, world_scene};
-use crate::controller::catalog::{Catalog, ControllerInfo, NO_CONTROLLER};
+use crate::controller_interface::catalog::{Catalog, ControllerInfo, NO_CONTROLLER};
 use crate::rt::stats::LoopStats;
 
 /// How long the writer sleeps when the ring is empty. The loop never wakes it (that

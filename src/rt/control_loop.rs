@@ -10,14 +10,13 @@ use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use crossbeam_channel::{Receiver, Sender};
 
 use crate::bus::{Bus, GroupFeedback};
-use crate::controller::{BodyEstimate, Estimator, Imu, Observation};
+use crate::controller_interface::{BodyEstimate, Estimator, Imu, Observation};
 use crate::gait::{GaitKind, GaitSelector, ParamPatch};
-use crate::protocol::Command;
-use crate::record::RecordEvent;
+use crate::module::Command;
 use crate::rt::controller_slots::{ControllerSlots, Installed};
 use crate::rt::messages::{Ack, Envelope, LoopRequest, Refusal, Rejection};
+use crate::rt::observer::CycleObserver;
 use crate::rt::pacer::{Cycle, Pacer};
-use crate::rt::recording::{LoopRecording, Recording};
 use crate::rt::setpoint_guard::{NonFiniteSetpoint, SetpointGuard};
 use crate::rt::stats::{LoopStats, StatsReport};
 use crate::rt::telemetry::TelemetryWriter;
@@ -27,7 +26,7 @@ use crate::safety::failsafe::{Event, Failsafe, Health, Mode, Output};
 pub const MAX_REQUESTS_PER_CYCLE: usize = 8;
 
 /// The ack channel for a request channel of `requests`: a full queue and one cycle's
-/// answers. The server keeps no more requests in flight than this (`control::router`),
+/// answers. The server keeps no more requests in flight than this (`socket::router`),
 /// so the loop's `try_send` of an answer never finds it full; while the server takes
 /// the answers within a cycle, only a full queue makes it answer "busy".
 pub const fn ack_capacity(requests: usize) -> usize {
@@ -59,7 +58,7 @@ pub struct LoopParts {
     /// Fill the body estimate each cycle before the controllers run, in order.
     pub estimators: Vec<Box<dyn Estimator>>,
     /// Where every cycle is recorded (`None`: not recorded).
-    pub recording: Option<LoopRecording>,
+    pub observer: Option<Box<dyn CycleObserver>>,
 }
 
 /// Whether the loop goes on.
@@ -83,7 +82,7 @@ pub struct ControlLoop {
     body: BodyEstimate,
     slots: ControllerSlots,
     guard: SetpointGuard,
-    recording: Option<Recording>,
+    observer: Option<Box<dyn CycleObserver>>,
     held: Vec<f64>,
     held_valid: bool,
     stats: LoopStats,
@@ -105,7 +104,7 @@ impl ControlLoop {
             slots.install(gait, c, &mut parts.selector, &[], 0.0);
         }
         let guard = SetpointGuard::new(n, parts.selector.max_joint_speed_rad_s());
-        let recording = parts.recording.take().map(Recording::new);
+        let observer = parts.observer.take();
         Self {
             p: parts,
             group: GroupFeedback::new(n),
@@ -119,7 +118,7 @@ impl ControlLoop {
             body: BodyEstimate::default(),
             slots,
             guard,
-            recording,
+            observer,
             held: vec![0.0; n],
             held_valid: false,
             stats: LoopStats::default(),
@@ -213,16 +212,8 @@ impl ControlLoop {
             };
             let request = env.request;
             let result = self.apply(request, env.controller, now_s, t_s, &health);
-            if let Some(r) = &self.recording {
-                let ticket = env.ticket;
-                r.event(
-                    c.t_ns,
-                    RecordEvent::Request {
-                        ticket,
-                        request,
-                        result,
-                    },
-                );
+            if let Some(o) = self.observer.as_mut() {
+                o.request(c.t_ns, env.ticket, request, result);
             }
             if result.is_ok() {
                 self.applied += 1;

@@ -3,10 +3,9 @@
 //! recording. Part of [`super::ControlLoop`]; nothing here allocates or blocks.
 
 use super::ControlLoop;
-use crate::controller::Imu;
-use crate::record::RecordEvent;
+use crate::controller_interface::Imu;
+use crate::rt::observer::CycleView;
 use crate::rt::pacer::Cycle;
-use crate::rt::recording::{CycleView, Recording};
 use crate::rt::setpoint_guard::NonFiniteSetpoint;
 use crate::safety::failsafe::Health;
 
@@ -66,18 +65,14 @@ impl ControlLoop {
 
     /// Hands the cycle to the recorder, if there is one.
     pub(super) fn record_cycle(&mut self, c: &Cycle, fault: Option<NonFiniteSetpoint>) {
-        let Some(r) = self.recording.as_mut() else {
+        let Some(o) = self.observer.as_mut() else {
             return;
         };
         if let Some(f) = fault {
             let controller_id = self.slots.id(self.p.selector.active());
-            let event = RecordEvent::SetpointFault {
-                joint: f.joint,
-                controller_id,
-            };
-            r.event(c.t_ns, event);
+            o.setpoint_fault(c.t_ns, f.joint, controller_id);
         }
-        r.cycle(&CycleView {
+        o.cycle(&CycleView {
             cycle: c.index,
             t_ns: c.t_ns,
             mode: self.p.failsafe.mode(),
@@ -107,7 +102,7 @@ impl ControlLoop {
         let (group, commands, stats) = (&self.group, &self.commands, &self.stats);
         let (selector, failsafe, bus) = (&self.p.selector, &self.p.failsafe, &self.p.bus);
         let (slots, guard) = (&self.slots, self.guard.counters());
-        let record_dropped = self.recording.as_ref().map_or(0, Recording::dropped);
+        let record_dropped = self.observer.as_ref().map_or(0, |o| o.dropped());
         let (applied, refused, body) = (self.applied, self.refused, self.body);
         self.p.telemetry.write(|snap| {
             snap.cycle = c.index;

@@ -16,9 +16,9 @@
 use crossbeam_channel::{Sender, TrySendError};
 use serde::Serialize;
 
-use crate::controller::catalog::NO_CONTROLLER;
-use crate::controller::report::ControllerReport;
-use crate::controller::{
+use crate::controller_interface::catalog::NO_CONTROLLER;
+use crate::controller_interface::report::ControllerReport;
+use crate::controller_interface::{
     Controller, ControllerCommand, Handover, NominalMismatch, Observation, TickClock,
 };
 use crate::gait::{GaitKind, GaitParams, GaitSelector};
@@ -28,7 +28,7 @@ const KINDS: usize = GaitKind::ALL.len();
 
 /// A built controller on its way to (or back from) the loop.
 pub struct Installed {
-    /// Its [`crate::controller::catalog`] id.
+    /// Its [`crate::controller_interface::catalog`] id.
     pub id: u64,
     pub controller: Box<dyn Controller>,
 }

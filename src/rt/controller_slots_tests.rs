@@ -3,7 +3,7 @@
 //! Many tests run a twin loop without a controller beside the one with it: without
 //! torques the two must send the same set-points (the takeover is seamless).
 use crate::bus::echo::{EchoBus, TorqueModel};
-use crate::controller::Selection;
+use crate::controller_interface::Selection;
 use crate::gait::{GaitKind, GaitTable, ParamPatch};
 use crate::rt::controller_slots::{Engagement, Installed};
 use crate::rt::harness::{Harness, PERIOD_NS, build_installed, echo_harness_on};
@@ -357,26 +357,26 @@ fn parameters_are_checked_against_the_gait_s_controller() {
 /// A registered controller that, `after_s` into its engagement, sends a NaN at one
 /// joint (what an unguarded bug or a runaway parameter would do).
 struct Poisoned {
-    inner: Box<dyn crate::controller::Controller>,
+    inner: Box<dyn crate::controller_interface::Controller>,
     after_s: f64,
     t0: f64,
 }
 
-impl crate::controller::Controller for Poisoned {
+impl crate::controller_interface::Controller for Poisoned {
     fn accepts(
         &self,
         p: &crate::gait::GaitParams,
-    ) -> Result<(), crate::controller::NominalMismatch> {
+    ) -> Result<(), crate::controller_interface::NominalMismatch> {
         self.inner.accepts(p)
     }
-    fn engage(&mut self, h: &crate::controller::Handover<'_>) {
+    fn engage(&mut self, h: &crate::controller_interface::Handover<'_>) {
         self.t0 = h.t_s;
         self.inner.engage(h);
     }
     fn step(
         &mut self,
-        tick: crate::controller::Tick,
-        obs: &crate::controller::Observation<'_>,
+        tick: crate::controller_interface::Tick,
+        obs: &crate::controller_interface::Observation<'_>,
         out: &mut [f64],
     ) {
         let t = tick.t_s;
@@ -385,14 +385,14 @@ impl crate::controller::Controller for Poisoned {
             out[3] = f64::NAN;
         }
     }
-    fn report(&self, out: &mut crate::controller::report::ControllerReport) {
+    fn report(&self, out: &mut crate::controller_interface::report::ControllerReport) {
         self.inner.report(out);
     }
 }
 
 #[test]
 fn a_non_finite_set_point_from_any_registered_controller_holds_with_the_reason() {
-    use crate::controller::registry::{BuildContext, for_gait};
+    use crate::controller_interface::registry::{BuildContext, for_gait};
     use crate::controllers::REGISTRY;
     use crate::safety::failsafe::{Mode, Reason};
     let mut checked = 0;

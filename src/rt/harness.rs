@@ -6,8 +6,8 @@ use std::sync::atomic::{AtomicBool, AtomicU64};
 use crossbeam_channel::{Receiver, Sender};
 
 use crate::bus::echo::{EchoBus, EchoFaults};
-use crate::controller::catalog::Catalog;
-use crate::controller::registry::{self, BuildContext, Selection};
+use crate::controller_interface::catalog::Catalog;
+use crate::controller_interface::registry::{self, BuildContext, Selection};
 use crate::controllers::REGISTRY;
 use crate::gait::{BodyLayout, GaitKind, GaitSelector, GaitTable, Plane};
 use crate::rt::control_loop::{ControlLoop, LoopParts};
@@ -132,7 +132,7 @@ pub fn echo_harness_sized(
         retired: loop_ends.retired,
         controllers,
         estimators,
-        recording: None,
+        observer: None,
     });
     Harness {
         control,

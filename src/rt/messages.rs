@@ -4,7 +4,7 @@
 //! allocates per message.
 use serde::Serialize;
 
-use crate::controller::{CommandRefused, ControllerCommand, NominalMismatch};
+use crate::controller_interface::{CommandRefused, ControllerCommand, NominalMismatch};
 use crate::gait::{GaitKind, ParamPatch};
 use crate::rt::controller_slots::Installed;
 pub use crate::safety::failsafe::Refusal;

@@ -51,7 +51,7 @@ pub struct Snapshot {
     /// Recorder items dropped because its ring was full (0 without a recorder).
     pub record_dropped: u64,
     /// The estimators' body estimate (pose, heading) this cycle.
-    pub body: crate::controller::BodyEstimate,
+    pub body: crate::controller_interface::BodyEstimate,
 }
 
 impl Snapshot {
@@ -73,7 +73,7 @@ impl Snapshot {
             controller: ControllerTelemetry::default(),
             guard: GuardCounters::default(),
             record_dropped: 0,
-            body: crate::controller::BodyEstimate::default(),
+            body: crate::controller_interface::BodyEstimate::default(),
         }
     }
 }

@@ -4,7 +4,7 @@
 //! whose nominal moves (`Ω₀ = ωT·t`), it makes damping act on the deviation's rate, so
 //! an unforced wave runs at ωT instead of lagging by `B·ωT/K`.
 
-use crate::controller::config::{ConfigError, check_range};
+use crate::controller_interface::config::{ConfigError, check_range};
 use crate::num::Num;
 
 /// Compliant (`+1`: the shape gives way to the force) or anti-compliant (`−1`: it
@@ -37,13 +37,13 @@ pub struct AdmittanceGains {
     /// Range of σ (absolute, not of the deviation). Infinite bounds are allowed
     /// (`null` in JSON).
     #[serde(
-        serialize_with = "crate::controller::config::bound::serialize",
-        deserialize_with = "crate::controller::config::bound::lower"
+        serialize_with = "crate::controller_interface::config::bound::serialize",
+        deserialize_with = "crate::controller_interface::config::bound::lower"
     )]
     pub min: f64,
     #[serde(
-        serialize_with = "crate::controller::config::bound::serialize",
-        deserialize_with = "crate::controller::config::bound::upper"
+        serialize_with = "crate::controller_interface::config::bound::serialize",
+        deserialize_with = "crate::controller_interface::config::bound::upper"
     )]
     pub max: f64,
     /// τ_D, added to the force.
@@ -55,8 +55,8 @@ pub struct AdmittanceGains {
     /// that run within what the motors can follow (docs/compliance.md, "Speed budget").
     #[serde(
         default = "unbounded",
-        serialize_with = "crate::controller::config::bound::serialize",
-        deserialize_with = "crate::controller::config::bound::upper"
+        serialize_with = "crate::controller_interface::config::bound::serialize",
+        deserialize_with = "crate::controller_interface::config::bound::upper"
     )]
     pub max_rate: f64,
 }

@@ -57,7 +57,7 @@ mod tests {
     use crate::emu::Plant;
     use crate::emu::world::physics::{PhysicsConfig, PhysicsPlant};
     use crate::emu::world::{Peg, WorldSpec};
-    use crate::protocol::Command;
+    use crate::module::Command;
 
     #[test]
     fn small_torques_are_ignored_and_steady_ones_pass_reversed() {

@@ -4,9 +4,10 @@ use std::io;
 use std::net::SocketAddr;
 use std::time::{Duration, Instant};
 
+use super::UdpCounters;
 use super::endpoints::Endpoints;
 use super::{FoundModule, UdpBus, net};
-use crate::bus::{Bus, BusCounters};
+use crate::bus::Bus;
 use crate::protocol::{Key, MAX_DATAGRAM, Message, NO_SESSION, Nonce, Settings};
 
 /// Valid feedback rates, Hz (docs/protocol.md §3.5).
@@ -163,7 +164,7 @@ impl UdpBus {
             sent_ns: Box::new([0; super::SENT_RING]),
             last_receive_ns: 0,
             receives: 0,
-            counters: BusCounters::default(),
+            counters: UdpCounters::default(),
             // Nothing to release until something is acquired.
             released: true,
         };

@@ -1,8 +1,8 @@
 //! Receive-side bookkeeping of the bus: per-module newest feedback, sequence gaps,
 //! counting of rejected datagrams. Pure logic, no I/O.
 use super::clock::ModuleClock;
-use crate::bus::BusCounters;
-use crate::protocol::{DecodeError, Feedback, VERSION_1};
+use super::counters::UdpCounters;
+use crate::module::Feedback;
 
 /// Newest feedback of one module.
 #[derive(Debug, Clone, Copy, Default)]
@@ -53,7 +53,7 @@ impl Slot {
         fb: Feedback,
         rx_ns: Option<u64>,
         on_clock: bool,
-        counters: &mut BusCounters,
+        counters: &mut UdpCounters,
     ) -> bool {
         match judge_seq(self.last_seq, seq) {
             SeqVerdict::Stale => {
@@ -80,21 +80,6 @@ impl Slot {
     }
 }
 
-/// Count a rejected datagram under its reason.
-pub(super) fn count_decode_error(c: &mut BusCounters, e: DecodeError) {
-    let counter = match e {
-        DecodeError::Truncated => &mut c.bad_truncated,
-        DecodeError::BadMagic => &mut c.bad_magic,
-        DecodeError::WrongVersion(VERSION_1) => &mut c.v1_refused,
-        DecodeError::WrongVersion(_) => &mut c.bad_version,
-        DecodeError::UnknownType(_) => &mut c.bad_type,
-        DecodeError::BadLength => &mut c.bad_length,
-        DecodeError::BadTag => &mut c.bad_tag,
-        DecodeError::Malformed(_) => &mut c.bad_malformed,
-    };
-    *counter += 1;
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -114,7 +99,7 @@ mod tests {
 
     #[test]
     fn slot_keeps_newest_and_counts() {
-        let mut c = BusCounters::default();
+        let mut c = UdpCounters::default();
         let mut s = Slot::default();
         let fb = |t| Feedback {
             module_time_us: t,
@@ -130,33 +115,5 @@ mod tests {
             (c.feedback_received, c.feedback_lost, c.feedback_replayed),
             (2, 2, 2)
         );
-    }
-
-    #[test]
-    fn every_decode_error_has_a_counter() {
-        let mut c = BusCounters::default();
-        for e in [
-            DecodeError::Truncated,
-            DecodeError::BadMagic,
-            DecodeError::WrongVersion(3),
-            DecodeError::WrongVersion(1),
-            DecodeError::UnknownType(0),
-            DecodeError::BadLength,
-            DecodeError::BadTag,
-            DecodeError::Malformed("x"),
-        ] {
-            count_decode_error(&mut c, e);
-        }
-        let all = [
-            c.bad_truncated,
-            c.bad_magic,
-            c.bad_version,
-            c.v1_refused,
-            c.bad_type,
-            c.bad_length,
-            c.bad_tag,
-            c.bad_malformed,
-        ];
-        assert_eq!(all, [1; 8]);
     }
 }

@@ -290,7 +290,7 @@ fn commands_reach_modules_with_the_cycle_seq() {
     assert_eq!(seqs, other);
     assert_eq!(f[0].state().commands[1].1.position_rad, 0.5);
     assert!(f[1].state().commands[1].1.is_limp());
-    assert_eq!(bus.counters().commands_sent, 4);
+    assert_eq!(bus.udp_counters().commands_sent, 4);
     assert!(matches!(
         bus.send(&[Command::LIMP]),
         Err(BusError::WrongCount {
@@ -306,7 +306,7 @@ fn commands_reach_modules_with_the_cycle_seq() {
     bus.send(&[inf, Command::LIMP]).unwrap();
     assert!(eventually(|| f[1].state().commands.len() == 3));
     assert_eq!(f[0].state().commands.len(), 2);
-    assert_eq!(bus.counters().send_errors, 1);
+    assert_eq!(bus.udp_counters().send_errors, 1);
     assert_eq!(bus.command_seq(), seqs[1] + 1);
 }
 
@@ -328,7 +328,7 @@ fn feedback_keeps_the_newest_and_counts_lost() {
         assert_eq!(m.feedback.module_time_us, 2000);
         assert_eq!(m.feedback.position_rad, 0.25);
     }
-    let c = bus.counters();
+    let c = bus.udp_counters();
     assert_eq!((c.feedback_received, c.feedback_lost), (5, 2));
 
     // Late and duplicate datagrams are dropped, not counted as lost.
@@ -341,7 +341,7 @@ fn feedback_keeps_the_newest_and_counts_lost() {
     }));
     assert!(!group.modules[0].fresh);
     assert_eq!(group.modules[0].feedback.module_time_us, 2000);
-    let c = bus.counters();
+    let c = bus.udp_counters();
     assert_eq!((c.feedback_received, c.feedback_lost), (6, 2));
     assert_eq!(c.feedback_replayed, 2);
 }
@@ -365,7 +365,7 @@ fn forged_far_ahead_feedback_never_hides_genuine_feedback() {
         f[0].send_feedback(7, seq, t);
     }
     bus.receive(&mut group, 1, lockstep(2000, LONG)).unwrap();
-    let c = bus.counters();
+    let c = bus.udp_counters();
     assert_eq!((c.bad_tag, c.feedback_replayed, c.feedback_lost), (2, 0, 0));
     assert_eq!(group.modules[0].feedback.module_time_us, 2000);
 }
@@ -428,7 +428,7 @@ fn bad_datagrams_are_counted_and_dropped() {
     }
     bus.receive(&mut group, 1, lockstep(1000, LONG)).unwrap();
     assert!(group.modules[0].fresh);
-    let c = bus.counters();
+    let c = bus.udp_counters();
     let got = [
         c.bad_truncated,
         c.bad_magic,
@@ -464,7 +464,7 @@ fn wrong_session_and_strangers_are_counted() {
     f[0].send_feedback(7, 2, 1000);
     let mut group = GroupFeedback::new(1);
     bus.receive(&mut group, 1, lockstep(1000, LONG)).unwrap();
-    let c = bus.counters();
+    let c = bus.udp_counters();
     assert_eq!((c.wrong_session, c.unexpected, c.feedback_lost), (1, 1, 0));
     assert_eq!(group.modules[0].feedback.module_time_us, 1000);
 }
@@ -485,7 +485,7 @@ fn lockstep_returns_once_every_module_reported() {
             assert_eq!(m.feedback.last_command_seq, bus.command_seq());
         }
     }
-    assert_eq!(bus.counters().feedback_lost, 0);
+    assert_eq!(bus.udp_counters().feedback_lost, 0);
 }
 
 #[test]

@@ -3,9 +3,11 @@
 //! torques, each central, windowed (travelling half-wave windows) or per joint.
 
 use super::config::{Centralization, CompliantSlitheringConfig};
-use crate::controller::nominal::{Nominal, lateral_room, within};
-use crate::controller::report::{ControllerReport, MAX_WINDOWS as REPORT_WINDOWS, WindowField};
-use crate::controller::{Controller, Handover, NominalMismatch, Observation, Tick};
+use crate::controller_interface::nominal::{Nominal, lateral_room, within};
+use crate::controller_interface::report::{
+    ControllerReport, MAX_WINDOWS as REPORT_WINDOWS, WindowField,
+};
+use crate::controller_interface::{Controller, Handover, NominalMismatch, Observation, Tick};
 use crate::gait::{BodyLayout, GaitParams, Plane};
 use crate::shape::ShapeFunction;
 use crate::shape::admittance::ParamState;

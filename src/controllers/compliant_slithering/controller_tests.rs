@@ -1,8 +1,8 @@
-use crate::controller::TickClock;
+use crate::controller_interface::TickClock;
 use std::f64::consts::PI;
 
 use super::*;
-use crate::controller::testing::ObservationBuf;
+use crate::controller_interface::testing::ObservationBuf;
 use crate::controllers::open_loop::OpenLoop;
 use crate::emu::servo::MODULE_LENGTH_M;
 use crate::gait::{GaitKind, Plane};
@@ -201,7 +201,7 @@ fn the_report_shows_each_field_and_engaging_starts_afresh() {
 
     // Engaged again at t = 5 s with the phase the open-loop gait has then: a new
     // controller's behaviour from there, whatever it learnt before.
-    crate::controller::testing::engage_at(&mut c, &layout(), &params(), 5.0);
+    crate::controller_interface::testing::engage_at(&mut c, &layout(), &params(), 5.0);
     c.report(&mut report);
     let amp = &report.fields[Param::Amplitude.index()];
     assert!(
@@ -210,14 +210,14 @@ fn the_report_shows_each_field_and_engaging_starts_afresh() {
             .all(|&v| v == params().amplitude_lat_rad)
     );
     let mut fresh = full();
-    crate::controller::testing::engage_at(&mut fresh, &layout(), &params(), 5.0);
+    crate::controller_interface::testing::engage_at(&mut fresh, &layout(), &params(), 5.0);
     let ours = run_from(&mut c, 5.0, 1.0, push);
     let theirs = run_from(&mut fresh, 5.0, 1.0, push);
     assert_eq!(ours, theirs, "an engaged controller is a new one");
     let mut open = OpenLoop::new(GaitKind::Slithering, &layout(), &params());
     let reference = run(&mut open, 5.5, |_, _| [0.0; N]);
     let mut late = full();
-    crate::controller::testing::engage_at(&mut late, &layout(), &params(), 5.0);
+    crate::controller_interface::testing::engage_at(&mut late, &layout(), &params(), 5.0);
     let continued = run_from(&mut late, 5.0, 0.5, |_, _| [0.0; N]);
     for (a, b) in continued.iter().zip(&reference) {
         assert!((a - b).abs() < 1e-6, "engaged late, it continues the gait");

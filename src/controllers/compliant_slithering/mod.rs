@@ -7,8 +7,8 @@ mod controller;
 pub use config::{Centralization, CompliantSlitheringConfig, ParamConfig};
 pub use controller::CompliantSlithering;
 
-use crate::controller::report::{FieldSpec, ReportSpec, SignalSpec};
-use crate::controller::{BuildContext, ConfigError, Controller, ControllerKind};
+use crate::controller_interface::report::{FieldSpec, ReportSpec, SignalSpec};
+use crate::controller_interface::{BuildContext, ConfigError, Controller, ControllerKind};
 use crate::gait::GaitKind;
 use crate::shape::slithering_shape::Param;
 

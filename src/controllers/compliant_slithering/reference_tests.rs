@@ -2,11 +2,11 @@
 //! evaluated at every joint from its definition, every field kept apart, the phase grid
 //! scanned whole. The controller's step is pinned to it over long runs.
 
-use crate::controller::TickClock;
+use crate::controller_interface::TickClock;
 use std::f64::consts::PI;
 
 use super::*;
-use crate::controller::testing::{ObservationBuf, engage_at};
+use crate::controller_interface::testing::{ObservationBuf, engage_at};
 use crate::gait::Plane;
 
 /// One field: its windows, their values and the last shape forces on them.

@@ -4,10 +4,10 @@
 //! and frequency. Output `θ_i = r_i·sin(ωS·s_i − ϑ_i)`; with no torque it is the
 //! open-loop serpenoid.
 
-use crate::controller::config::{ConfigError, check_range};
-use crate::controller::nominal::{Nominal, lateral_room, within};
-use crate::controller::report::ControllerReport;
-use crate::controller::{Controller, Handover, NominalMismatch, Observation, Tick};
+use crate::controller_interface::config::{ConfigError, check_range};
+use crate::controller_interface::nominal::{Nominal, lateral_room, within};
+use crate::controller_interface::report::ControllerReport;
+use crate::controller_interface::{Controller, Handover, NominalMismatch, Observation, Tick};
 use crate::gait::{BodyLayout, GaitParams, JOINT_LIMIT_RAD, Plane};
 use crate::shape::torque::TorqueFilter;
 
@@ -204,8 +204,8 @@ impl Controller for Cpg {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::controller::TickClock;
-    use crate::controller::testing::{ObservationBuf, engage_at};
+    use crate::controller_interface::TickClock;
+    use crate::controller_interface::testing::{ObservationBuf, engage_at};
     use crate::controllers::open_loop::OpenLoop;
     use crate::emu::servo::MODULE_LENGTH_M;
     use crate::gait::GaitKind;

@@ -4,8 +4,8 @@ mod controller;
 
 pub use controller::{Cpg, CpgGains};
 
-use crate::controller::report::{ReportSpec, SignalSpec};
-use crate::controller::{BuildContext, ConfigError, Controller, ControllerKind};
+use crate::controller_interface::report::{ReportSpec, SignalSpec};
+use crate::controller_interface::{BuildContext, ConfigError, Controller, ControllerKind};
 use crate::gait::GaitKind;
 
 /// The registry's entry.

@@ -4,7 +4,7 @@
 //! (`controller.calibrate`), and kept with the controller until cleared.
 
 use super::config::{FrictionOffset, MAX_SECTIONS, SectionValues, clamp_offset};
-use crate::controller::CommandRefused;
+use crate::controller_interface::CommandRefused;
 
 /// Longest calibration accepted, s.
 const MAX_DURATION_S: f64 = 3600.0;

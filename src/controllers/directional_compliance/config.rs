@@ -6,7 +6,7 @@ use std::f64::consts::{FRAC_PI_2, PI};
 
 use serde::{Deserialize, Serialize};
 
-use crate::controller::config::{ConfigError, check_range};
+use crate::controller_interface::config::{ConfigError, check_range};
 use crate::gait::JOINT_LIMIT_RAD;
 use crate::shape::admittance::AdmittanceGains;
 

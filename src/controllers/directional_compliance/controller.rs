@@ -8,9 +8,11 @@ use super::absition::{AmplitudeState, Mode};
 use super::calibration::Calibration;
 use super::config::{DirectionalComplianceConfig, MAX_SECTIONS, Strategy};
 use super::sections::Sections;
-use crate::controller::nominal::{Nominal, lateral_room, within};
-use crate::controller::report::{ControllerReport, MAX_WINDOWS as REPORT_WINDOWS, WindowField};
-use crate::controller::{
+use crate::controller_interface::nominal::{Nominal, lateral_room, within};
+use crate::controller_interface::report::{
+    ControllerReport, MAX_WINDOWS as REPORT_WINDOWS, WindowField,
+};
+use crate::controller_interface::{
     CommandRefused, Controller, ControllerCommand, Handover, NominalMismatch, Observation, Tick,
 };
 use crate::gait::{BodyLayout, GaitParams, JOINT_LIMIT_RAD, Plane};

@@ -1,7 +1,7 @@
 use super::*;
-use crate::controller::ControllerKind;
-use crate::controller::TickClock;
-use crate::controller::testing::{ObservationBuf, engage_at};
+use crate::controller_interface::ControllerKind;
+use crate::controller_interface::TickClock;
+use crate::controller_interface::testing::{ObservationBuf, engage_at};
 use crate::controllers::directional_compliance::{
     DirectionalComplianceKind, FrictionOffset, SectionValues,
 };

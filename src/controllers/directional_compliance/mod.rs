@@ -18,8 +18,8 @@ pub use config::{
 pub use controller::DirectionalCompliance;
 pub use sections::{Boxcar, Sections};
 
-use crate::controller::report::{FieldSpec, ReportSpec, SignalSpec};
-use crate::controller::{BuildContext, ConfigError, Controller, ControllerKind};
+use crate::controller_interface::report::{FieldSpec, ReportSpec, SignalSpec};
+use crate::controller_interface::{BuildContext, ConfigError, Controller, ControllerKind};
 use crate::gait::GaitKind;
 
 /// The registry's entry.

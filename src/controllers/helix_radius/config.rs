@@ -3,7 +3,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::{GettingOnConfig, SlipConfig};
-use crate::controller::config::{ConfigError, check_range};
+use crate::controller_interface::config::{ConfigError, check_range};
 use crate::shape::admittance::{AdmittanceGains, AdmittanceSign};
 
 /// The controller's configuration.

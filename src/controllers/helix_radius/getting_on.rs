@@ -27,8 +27,8 @@ use std::f64::consts::TAU;
 use nalgebra::{Isometry3, Point3, Vector3};
 use serde::{Deserialize, Serialize};
 
-use crate::controller::Imu;
-use crate::controller::config::{ConfigError, check_range};
+use crate::controller_interface::Imu;
+use crate::controller_interface::config::{ConfigError, check_range};
 use crate::gait::kinematics::link_poses;
 use crate::gait::{BodyLayout, GaitKind, GaitParams, Serpenoid};
 

@@ -11,9 +11,9 @@
 //!
 //! docs/compliance.md, "Rolling helix".
 
-use crate::controller::config::ConfigError;
-use crate::controller::report::{ControllerReport, FieldSpec, ReportSpec, SignalSpec};
-use crate::controller::{
+use crate::controller_interface::config::ConfigError;
+use crate::controller_interface::report::{ControllerReport, FieldSpec, ReportSpec, SignalSpec};
+use crate::controller_interface::{
     BuildContext, Controller, ControllerKind, Handover, NominalMismatch, Observation, Tick,
 };
 use crate::gait::{

@@ -13,8 +13,8 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::controller::Imu;
-use crate::controller::config::{ConfigError, check_range};
+use crate::controller_interface::Imu;
+use crate::controller_interface::config::{ConfigError, check_range};
 
 const G: f64 = 9.81;
 

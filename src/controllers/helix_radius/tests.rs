@@ -1,6 +1,6 @@
 use super::*;
-use crate::controller::report::ControllerReport;
-use crate::controller::testing::{engage_at, run_with_torques};
+use crate::controller_interface::report::ControllerReport;
+use crate::controller_interface::testing::{engage_at, run_with_torques};
 use crate::controllers::open_loop::OpenLoop;
 
 const N: usize = 18;
@@ -201,7 +201,7 @@ fn the_adaptive_set_point_keeps_the_grip_in_its_band() {
 /// near zero) acts at once.
 #[test]
 fn a_lost_grip_holds_the_roll_and_squeezes_until_it_is_back() {
-    use crate::controller::{BodyEstimate, Imu};
+    use crate::controller_interface::{BodyEstimate, Imu};
     let (layout, params) = setup();
     let config = HelixRadiusConfig::central().on_the_pole();
     let mut c = HelixRadius::new(config, &layout, &params);
@@ -215,7 +215,7 @@ fn a_lost_grip_holds_the_roll_and_squeezes_until_it_is_back() {
     let (pos, vel, mut out) = ([0.0; N], [0.0; N], vec![0.0; N]);
     let mut report = ControllerReport::EMPTY;
     let mut t = 0.0;
-    let mut clock = crate::controller::TickClock::default();
+    let mut clock = crate::controller_interface::TickClock::default();
     // Steps `seconds` with the pole pushing back by `push_nm` (0: no pole) and the
     // IMUs given; returns the phase advance and the report's slipping, slips, squeeze.
     let mut run = |c: &mut HelixRadius, seconds: f64, push_nm: f64, imu: &[Imu]| {

@@ -6,7 +6,7 @@
 //! leaves is dropped with what it learnt.
 
 use super::{AdaptiveConfig, HelixRadiusConfig};
-use crate::controller::report::{MAX_WINDOWS, WindowField};
+use crate::controller_interface::report::{MAX_WINDOWS, WindowField};
 use crate::shape::ShapeFunction;
 use crate::shape::admittance::ParamState;
 use crate::shape::helix_shape::HelixShape;

@@ -3,8 +3,8 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::controller::report::{ControllerReport, ReportSpec, SignalSpec};
-use crate::controller::{
+use crate::controller_interface::report::{ControllerReport, ReportSpec, SignalSpec};
+use crate::controller_interface::{
     BuildContext, ConfigError, Controller, ControllerKind, Handover, NominalMismatch, Observation,
     Tick,
 };

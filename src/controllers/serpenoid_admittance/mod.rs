@@ -8,9 +8,9 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::controller::config::{ConfigError, check_range};
-use crate::controller::report::{ControllerReport, ReportSpec, SignalSpec};
-use crate::controller::{
+use crate::controller_interface::config::{ConfigError, check_range};
+use crate::controller_interface::report::{ControllerReport, ReportSpec, SignalSpec};
+use crate::controller_interface::{
     BuildContext, Controller, ControllerKind, Handover, NominalMismatch, Observation, Tick,
 };
 use crate::gait::{
@@ -290,7 +290,7 @@ impl Controller for SerpenoidAdmittance {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::controller::testing::{engage_at, run_with_torques};
+    use crate::controller_interface::testing::{engage_at, run_with_torques};
     use crate::controllers::open_loop::OpenLoop;
 
     const N: usize = 18;

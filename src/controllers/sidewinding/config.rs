@@ -8,7 +8,7 @@ use serde::{Deserialize, Serialize};
 
 use super::heading::HeadingConfig;
 use super::reversal::ReversalConfig;
-use crate::controller::config::{ConfigError, check_range};
+use crate::controller_interface::config::{ConfigError, check_range};
 use crate::controllers::compliant_slithering::{
     Centralization, CompliantSlitheringConfig, ParamConfig,
 };
@@ -96,11 +96,11 @@ impl SidewindingConfig {
             heading_filter_s: 1.0,
             // K_h 6, not the bistable 2: among the pegs β then follows the heading
             // (through a steep step at 90°, no hysteresis, `ReversalConfig::bistable`)
-            // instead of holding its well until 110°. It got `ac_sfc` through in 15 of
-            // the thesis protocol's 21 trials against 6 (docs/lab-results/sidewinding/
-            // REPORT.md, sessions 3-4); the thesis's snap between the wells is lost.
-            // With the gait's δ = π/2 (2026-12-03) still the better: 21 of 21 against
-            // 19 with K_h 2 (REPORT.md, "Session 5").
+            // instead of holding its well until 110°. It got `ac_sfc` through the peg
+            // array more often, with the gait's δ = π/2 too (the tallies:
+            // docs/measurements.md, "Sidewinding with the presets' K_h 6", and
+            // docs/lab-results/sidewinding/REPORT.md); the thesis's snap between the
+            // wells is lost.
             reversal: ReversalConfig {
                 k_h: 6.0,
                 ..ReversalConfig::DEFAULT

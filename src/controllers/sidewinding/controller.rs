@@ -8,9 +8,9 @@ use std::f64::consts::TAU;
 
 use super::heading::{HeadingAdjust, taper_factor};
 use super::reversal::{Reversal, wrap_pi};
-use crate::controller::nominal::{Nominal, lateral_room, within};
-use crate::controller::report::ControllerReport;
-use crate::controller::{
+use crate::controller_interface::nominal::{Nominal, lateral_room, within};
+use crate::controller_interface::report::ControllerReport;
+use crate::controller_interface::{
     CommandRefused, Controller, ControllerCommand, Handover, NominalMismatch, Observation, Tick,
 };
 use crate::controllers::compliant_slithering::CompliantSlithering;

@@ -1,9 +1,9 @@
-use crate::controller::TickClock;
+use crate::controller_interface::TickClock;
 use std::f64::consts::PI;
 
 use super::*;
-use crate::controller::testing::engage_at;
-use crate::controller::{BodyEstimate, Imu};
+use crate::controller_interface::testing::engage_at;
+use crate::controller_interface::{BodyEstimate, Imu};
 use crate::controllers::open_loop::OpenLoop;
 use crate::emu::servo::MODULE_LENGTH_M;
 use crate::gait::{GaitKind, Plane};

@@ -14,8 +14,8 @@ pub use controller::AntiCompliantSidewinding;
 pub use heading::{HeadingAdjust, HeadingConfig, taper_factor};
 pub use reversal::{Reversal, ReversalConfig, wrap_pi};
 
-use crate::controller::report::{ReportSpec, SignalSpec};
-use crate::controller::{BuildContext, ConfigError, Controller, ControllerKind};
+use crate::controller_interface::report::{ReportSpec, SignalSpec};
+use crate::controller_interface::{BuildContext, ConfigError, Controller, ControllerKind};
 use crate::controllers::compliant_slithering::CompliantSlitheringKind;
 use crate::gait::GaitKind;
 

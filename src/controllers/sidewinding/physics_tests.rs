@@ -5,12 +5,12 @@
 use crate::controllers::sidewinding::{HeadingConfig, wrap_pi};
 use std::f64::consts::{PI, TAU};
 
-use crate::controller::ControllerCommand;
+use crate::controller_interface::ControllerCommand;
 use crate::emu::Plant;
 use crate::emu::world::WorldSpec;
 use crate::emu::world::physics::PhysicsPlant;
 use crate::gait::GaitKind;
-use crate::lab::controllers::LabController;
+use crate::lab::compared::LabController;
 use crate::lab::trial::{TrialConfig, plant_of, trial_loop};
 use crate::rt::messages::LoopRequest;
 

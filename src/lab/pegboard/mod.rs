@@ -86,7 +86,7 @@ impl Experiment for Pegboard {
         CONTROLLERS
     }
     fn variant_base(&self) -> &'static str {
-        crate::lab::controllers::VARIANT_BASE
+        crate::lab::compared::VARIANT_BASE
     }
     fn defaults(&self) -> Defaults {
         Defaults {

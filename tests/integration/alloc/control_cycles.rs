@@ -4,7 +4,7 @@
 //! can run in parallel.
 
 use snaked::bus::echo::EchoBus;
-use snaked::controller::registry::{BuildContext, for_gait};
+use snaked::controller_interface::registry::{BuildContext, for_gait};
 use snaked::controllers::REGISTRY;
 use snaked::gait::{GaitKind, GaitTable, ParamPatch};
 use snaked::rt::controller_slots::{Engagement, Installed};

@@ -3,10 +3,10 @@
 //! ones) windows being born at the head and dropped at the tail: proved with a
 //! counting global allocator (this test binary only).
 
-use snaked::controller::TickClock;
-use snaked::controller::registry::{BuildContext, for_gait};
-use snaked::controller::report::ControllerReport;
-use snaked::controller::testing::{ObservationBuf, engage_at};
+use snaked::controller_interface::TickClock;
+use snaked::controller_interface::registry::{BuildContext, for_gait};
+use snaked::controller_interface::report::ControllerReport;
+use snaked::controller_interface::testing::{ObservationBuf, engage_at};
 use snaked::controllers::REGISTRY;
 use snaked::gait::{BodyLayout, GaitKind, GaitTable, Plane};
 

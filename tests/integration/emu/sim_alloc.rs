@@ -1,8 +1,8 @@
 //! The in-process bus and the joint-space plant allocate nothing per cycle.
 
-use snaked::bus::sim::{SimBus, SimBusConfig};
 use snaked::bus::{Bus, FeedbackWait, GroupFeedback};
 use snaked::emu::plant::{JointSpacePlant, Obstacle, ObstacleSide, PlantConfig, ScriptedTorque};
+use snaked::emu::sim_bus::{SimBus, SimBusConfig};
 use snaked::protocol::Command;
 
 use crate::support::counting_alloc;

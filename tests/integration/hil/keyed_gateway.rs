@@ -36,8 +36,9 @@ fn the_daemon_drives_a_keyed_gateway() {
     std::thread::sleep(Duration::from_millis(4000));
     let stats = rig.client.call("stats", serde_json::json!({}));
     let bus = &stats["bus"];
-    assert_eq!(bus["bad_tag"], 0, "{stats}");
-    assert_eq!(bus["wrong_session"], 0, "{stats}");
+    assert_eq!(bus["detail"]["bad_tag"], 0, "{stats}");
+    assert_eq!(bus["detail"]["wrong_session"], 0, "{stats}");
+    assert_eq!(bus["dropped"], 0, "{stats}");
     assert!(bus["feedback_received"].as_u64().unwrap() > 2000, "{stats}");
     let rec = rig.stop(N);
     // Every module behind the one endpoint followed its rolling set-points.

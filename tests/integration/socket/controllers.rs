@@ -8,12 +8,12 @@ use std::time::{Duration, Instant};
 
 use serde_json::{Value, json};
 use snaked::bus::echo::EchoBus;
-use snaked::control::api::code;
-use snaked::control::client::{Client, Endpoint};
 use snaked::gait::{GaitKind, GaitTable};
 use snaked::rt::harness::{PERIOD_NS, echo_harness_on};
 use snaked::rt::messages::LoopRequest;
 use snaked::safety::failsafe::FailsafeConfig;
+use snaked::socket::api::code;
+use snaked::socket::client::{Client, Endpoint};
 use socket::{Harness, RealLoop, error_code, error_message, raw, serve_real_loop};
 
 fn call(c: &mut Client, method: &str, params: Value) -> Value {

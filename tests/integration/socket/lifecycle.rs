@@ -4,9 +4,9 @@ use crate::support::socket;
 use std::os::unix::fs::PermissionsExt;
 use std::time::{Duration, Instant};
 
-use snaked::control::api::code;
-use snaked::control::client::{Client, ClientError, Endpoint};
-use snaked::control::{ServerConfig, ServerError};
+use snaked::socket::api::code;
+use snaked::socket::client::{Client, ClientError, Endpoint};
+use snaked::socket::{ServerConfig, ServerError};
 use socket::{Harness, LoopSpec, error_code, fake_loop, serve_real_loop};
 
 fn connect(path: &std::path::Path) -> Client {
@@ -28,7 +28,7 @@ fn tcp_listener_on_loopback_needs_the_token() {
         ..ServerConfig::default()
     };
     assert!(matches!(
-        snaked::control::start(cfg.clone(), handle),
+        snaked::socket::start(cfg.clone(), handle),
         Err(ServerError::TcpWithoutToken)
     ));
     let (fake, handle) = fake_loop(LoopSpec::default());
@@ -36,7 +36,7 @@ fn tcp_listener_on_loopback_needs_the_token() {
         tcp_token: Some("s3cret-token".into()),
         ..cfg
     };
-    let server = snaked::control::start(cfg, handle).unwrap();
+    let server = snaked::socket::start(cfg, handle).unwrap();
     let addr = server.tcp_addr().unwrap();
     assert!(addr.ip().is_loopback());
     let connect = || {
@@ -79,7 +79,7 @@ fn stale_socket_file_is_replaced() {
         unix_path: Some(path.clone()),
         ..ServerConfig::default()
     };
-    let server = snaked::control::start(cfg, handle).expect("stale socket replaced");
+    let server = snaked::socket::start(cfg, handle).expect("stale socket replaced");
     assert_eq!(connect(&path).call("ping", None).unwrap()["pong"], true);
     server.shutdown();
 }
@@ -92,7 +92,7 @@ fn a_live_socket_is_refused_and_keeps_serving() {
         unix_path: Some(h.path.clone()),
         ..ServerConfig::default()
     };
-    match snaked::control::start(cfg, handle) {
+    match snaked::socket::start(cfg, handle) {
         Err(e @ ServerError::InUse { .. }) => {
             assert!(e.to_string().contains(&h.path.display().to_string()), "{e}");
         }
@@ -113,7 +113,7 @@ fn a_regular_file_is_not_replaced() {
         ..ServerConfig::default()
     };
     assert!(matches!(
-        snaked::control::start(cfg, handle),
+        snaked::socket::start(cfg, handle),
         Err(ServerError::NotASocket { .. })
     ));
     assert_eq!(std::fs::read_to_string(&path).unwrap(), "precious");
@@ -129,7 +129,7 @@ fn missing_directories_are_created_and_the_mode_is_set() {
         socket_mode: 0o600,
         ..ServerConfig::default()
     };
-    let server = snaked::control::start(cfg, handle).unwrap();
+    let server = snaked::socket::start(cfg, handle).unwrap();
     let mode = std::fs::metadata(&path).unwrap().permissions().mode() & 0o777;
     assert_eq!(mode, 0o600);
     assert_eq!(server.unix_path(), Some(path.as_path()));
@@ -147,7 +147,7 @@ fn an_unusable_path_is_a_clear_error_naming_it() {
         unix_path: Some(path.clone()),
         ..ServerConfig::default()
     };
-    let e = snaked::control::start(cfg, handle)
+    let e = snaked::socket::start(cfg, handle)
         .err()
         .expect("cannot bind there");
     let msg = e.to_string();
@@ -164,7 +164,7 @@ fn no_listener_is_an_error() {
         ..ServerConfig::default()
     };
     assert!(matches!(
-        snaked::control::start(cfg, handle),
+        snaked::socket::start(cfg, handle),
         Err(ServerError::NoListener)
     ));
 }
@@ -317,7 +317,7 @@ fn an_untrusted_socket_directory_is_refused() {
             unix_path: Some(dir.join("snaked.sock")),
             ..ServerConfig::default()
         };
-        snaked::control::start(cfg, handle)
+        snaked::socket::start(cfg, handle)
     };
     let base = tempfile::tempdir().unwrap();
     let open = base.path().join("open");

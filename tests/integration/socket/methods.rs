@@ -6,10 +6,10 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use serde_json::{Value, json};
-use snaked::control::api::code;
-use snaked::control::client::ClientError;
 use snaked::gait::{GaitKind, ParamPatch};
 use snaked::rt::messages::{LoopRequest, Refusal, Rejection};
+use snaked::socket::api::code;
+use snaked::socket::client::ClientError;
 use socket::{Harness, LoopSpec, error_code, error_message, raw};
 
 #[test]
@@ -212,7 +212,7 @@ fn many_clients_at_once() {
 }
 
 /// Count telemetry messages during `window`, reading `c` only.
-fn count_stream(c: &mut snaked::control::client::Client, window: Duration) -> Vec<Value> {
+fn count_stream(c: &mut snaked::socket::client::Client, window: Duration) -> Vec<Value> {
     let mut out = Vec::new();
     let end = Instant::now() + window;
     while Instant::now() < end {

@@ -3,7 +3,7 @@
 use crate::support::socket;
 
 use serde_json::Value;
-use snaked::control::api::code;
+use snaked::socket::api::code;
 use socket::{Harness, LoopSpec, error_code, error_message, raw};
 
 /// Send `line`, expect error `code` with a message containing `needle`, then

@@ -5,7 +5,7 @@
 use std::collections::BTreeMap;
 use std::path::Path;
 
-use snaked::controller::catalog::{Catalog, ControllerInfo, next_id};
+use snaked::controller_interface::catalog::{Catalog, ControllerInfo, next_id};
 use snaked::emu::world::{Peg, WorldSpec};
 use snaked::gait::{BodyLayout, GaitKind, Plane};
 use snaked::record::{
@@ -29,7 +29,7 @@ pub fn catalog() -> (Catalog, u64) {
         controller: "fake_compliant",
         preset: "test",
         config: serde_json::json!({"gain": 0.5}),
-        report: snaked::controller::testing::sample_report_spec(),
+        report: snaked::controller_interface::testing::sample_report_spec(),
     });
     (catalog, id)
 }

@@ -8,9 +8,7 @@ use std::thread::JoinHandle;
 use std::time::Duration;
 
 use serde_json::Value;
-use snaked::control::client::{Client, Endpoint};
-use snaked::control::{BusKind, DaemonInfo, LoopHandle, Pacing, RunningServer, ServerConfig};
-use snaked::controller::catalog::Catalog;
+use snaked::controller_interface::catalog::Catalog;
 use snaked::gait::{BodyLayout, GaitKind, GaitParams, GaitTable, Plane};
 use snaked::rt::channels::loop_channels;
 use snaked::rt::control_loop::ControlLoop;
@@ -18,6 +16,8 @@ use snaked::rt::harness::Harness as LoopHarness;
 use snaked::rt::messages::{Ack, LoopRequest, Rejection};
 use snaked::rt::telemetry::{self, Snapshot};
 use snaked::safety::failsafe::{Mode, Reason};
+use snaked::socket::client::{Client, Endpoint};
+use snaked::socket::{BusKind, DaemonInfo, LoopHandle, Pacing, RunningServer, ServerConfig};
 
 /// What the fake loop answers to a request.
 pub type Policy = Arc<dyn Fn(&LoopRequest) -> Option<Result<(), Rejection>> + Send + Sync>;
@@ -242,7 +242,7 @@ impl Harness {
         };
         tweak(&mut cfg);
         let (fake, handle) = fake_loop(spec);
-        let server = snaked::control::start(cfg, handle).expect("server starts");
+        let server = snaked::socket::start(cfg, handle).expect("server starts");
         Self {
             server: Some(server),
             path,
@@ -339,7 +339,7 @@ pub fn serve_real_loop(
         unix_path: Some(path.clone()),
         ..ServerConfig::default()
     };
-    let server = snaked::control::start(cfg, handle).unwrap();
+    let server = snaked::socket::start(cfg, handle).unwrap();
     let stop = Arc::new(AtomicBool::new(false));
     let mut control = h.control;
     let thread = {

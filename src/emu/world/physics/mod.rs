@@ -34,7 +34,7 @@ use crate::emu::plant::{GRAVITY_M_S2, NoiseConfig};
 use crate::emu::servo::{Servo, ServoParamError, ServoParams};
 pub use crate::emu::{ContactSummary, LinkPose};
 use crate::gait::Plane;
-use crate::protocol::Feedback;
+use crate::module::Feedback;
 
 /// Constant IMU biases: each module draws its own from a zero-mean Gaussian of these
 /// standard deviations at construction (seeded).

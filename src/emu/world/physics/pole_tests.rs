@@ -1,14 +1,14 @@
 //! Rolling helix on a pole (SPEC §6): a coil that squeezes holds without creeping, a
 //! loose one slides down. The body starts already coiled around the pole.
 
-use crate::controller::TickClock;
+use crate::controller_interface::TickClock;
 use std::f64::consts::TAU;
 
 use super::kinematics::upright_helix;
 use super::tests::{hold, quiet};
 use super::*;
-use crate::controller::Controller;
-use crate::controller::testing::{ObservationBuf, engage_at};
+use crate::controller_interface::Controller;
+use crate::controller_interface::testing::{ObservationBuf, engage_at};
 use crate::controllers::helix_radius::HelixRadiusConfig;
 use crate::emu::Plant;
 use crate::emu::servo::MODULE_LENGTH_M;
@@ -429,7 +429,7 @@ fn radius_compliance_climbs_a_thinner_section_the_fixed_coil_stalls_on() {
 /// the grip kept in its band.
 #[test]
 fn the_adaptive_set_point_follows_a_thinner_section() {
-    use crate::controller::report::ControllerReport;
+    use crate::controller_interface::report::ControllerReport;
     use crate::controllers::helix_radius::HelixRadius;
     let l = BodyLayout::alternating(N, Plane::Lateral, MODULE_LENGTH_M);
     let d = GaitParams::default_for(GaitKind::RollingHelix);

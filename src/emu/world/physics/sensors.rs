@@ -9,7 +9,7 @@ use rand::Rng;
 
 use super::{ImuBias, PhysicsPlant};
 use crate::emu::plant::{GRAVITY_M_S2, gaussian};
-use crate::protocol::Feedback;
+use crate::module::Feedback;
 
 /// Per-module IMU state: biases and the velocity at the start of the step.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]

@@ -3,7 +3,7 @@
 use super::*;
 use crate::emu::Plant;
 use crate::emu::world::{Peg, StartPose};
-use crate::protocol::Command;
+use crate::module::Command;
 
 pub(super) fn quiet(modules: usize) -> PhysicsConfig {
     PhysicsConfig {

@@ -449,7 +449,7 @@ fn slithering_on_anisotropic_skin_moves_forward() {
 }
 
 /// The physics with the servo's old speed-clamped position loop
-/// (`PositionLoop::SpeedClamped`, the default until 2026-12-02), for comparison.
+/// (`PositionLoop::SpeedClamped`, the earlier default), for comparison.
 fn speed_clamped(modules: usize) -> PhysicsConfig {
     let mut c = quiet(modules);
     c.servo.position_loop = crate::emu::servo::PositionLoop::SpeedClamped;

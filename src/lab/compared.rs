@@ -5,8 +5,8 @@
 use serde_json::Value;
 
 use super::LabError;
-use crate::controller::config::merge;
-use crate::controller::registry::{self, BuildContext, Built, Selection};
+use crate::controller_interface::config::merge;
+use crate::controller_interface::registry::{self, BuildContext, Built, Selection};
 use crate::controllers::REGISTRY;
 use crate::gait::{BodyLayout, GaitKind, GaitParams};
 

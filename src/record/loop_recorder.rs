@@ -1,18 +1,17 @@
-//! The loop's side of recording: each cycle it copies what it read and sent into a
+//! The recorder's side in the loop: each cycle it copies what it read and sent into a
 //! preallocated [`CycleRecord`] and pushes it into the recorder's ring (never blocking
 //! in the daemon; a full ring drops and counts), plus events as they happen (mode
 //! changes, requests, takeovers and hand-backs, set-point faults) and the statistics
 //! once a second of loop time. Nothing here allocates after construction.
 
-use crate::bus::{Bus, GroupFeedback};
-use crate::gait::GaitKind;
-use crate::protocol::Command;
-use crate::record::{
+use super::{
     CycleRecord, JointSample, RECORD_MAX_LINKS, RECORD_MAX_MODULES, RecordEvent, RecordItem,
     RecordTx,
 };
-use crate::rt::controller_slots::ControllerSlots;
-use crate::rt::stats::LoopStats;
+use crate::emu::sim_bus::SimBus;
+use crate::gait::GaitKind;
+use crate::rt::messages::{LoopRequest, Rejection};
+use crate::rt::observer::{CycleObserver, CycleView};
 use crate::safety::failsafe::{Mode, Reason};
 
 /// How the loop hands items to the recorder.
@@ -24,8 +23,8 @@ pub struct LoopRecording {
     pub wait_when_full: bool,
 }
 
-/// The loop's recorder state.
-pub struct Recording {
+/// The loop's recorder: the [`CycleObserver`] the loop is given when it records.
+pub struct LoopRecorder {
     out: LoopRecording,
     scratch: Box<CycleRecord>,
     last_mode: Option<(Mode, Reason)>,
@@ -33,22 +32,7 @@ pub struct Recording {
     last_stats_s: u64,
 }
 
-/// What a cycle shows the recorder.
-pub struct CycleView<'a> {
-    pub cycle: u64,
-    pub t_ns: u64,
-    pub mode: Mode,
-    pub reason: Reason,
-    pub gait: GaitKind,
-    pub group: &'a GroupFeedback,
-    pub commands: &'a [Command],
-    pub slots: &'a ControllerSlots,
-    pub bus: &'a dyn Bus,
-    pub stats: &'a LoopStats,
-    pub body: &'a crate::controller::BodyEstimate,
-}
-
-impl Recording {
+impl LoopRecorder {
     pub fn new(out: LoopRecording) -> Self {
         Self {
             out,
@@ -59,11 +43,6 @@ impl Recording {
         }
     }
 
-    /// Items the ring has dropped.
-    pub fn dropped(&self) -> u64 {
-        self.out.tx.dropped()
-    }
-
     fn push(&self, item: &RecordItem) {
         if self.out.wait_when_full {
             self.out.tx.push_wait(item);
@@ -72,12 +51,12 @@ impl Recording {
         }
     }
 
-    pub fn event(&self, t_ns: u64, event: RecordEvent) {
+    fn event(&self, t_ns: u64, event: RecordEvent) {
         self.push(&RecordItem::Event { t_ns, event });
     }
 
     /// Records the cycle just run, and the events its state shows.
-    pub fn cycle(&mut self, v: &CycleView<'_>) {
+    fn record_cycle(&mut self, v: &CycleView<'_>) {
         if self.last_mode != Some((v.mode, v.reason)) {
             self.last_mode = Some((v.mode, v.reason));
             let event = RecordEvent::Mode {
@@ -156,12 +135,46 @@ impl Recording {
             };
         }
         r.links = 0;
-        if let Some(plant) = v.bus.plant() {
+        if let Some(plant) = SimBus::of(v.bus).map(SimBus::plant) {
             let links = plant.link_count().min(RECORD_MAX_LINKS);
             for (k, pose) in r.link_poses.iter_mut().enumerate().take(links) {
                 *pose = plant.link_pose(k);
             }
             r.links = links;
         }
+    }
+}
+
+impl CycleObserver for LoopRecorder {
+    fn cycle(&mut self, view: &CycleView<'_>) {
+        self.record_cycle(view);
+    }
+
+    fn request(
+        &mut self,
+        t_ns: u64,
+        ticket: u64,
+        request: LoopRequest,
+        result: Result<(), Rejection>,
+    ) {
+        let event = RecordEvent::Request {
+            ticket,
+            request,
+            result,
+        };
+        self.event(t_ns, event);
+    }
+
+    fn setpoint_fault(&mut self, t_ns: u64, joint: usize, controller_id: u64) {
+        let event = RecordEvent::SetpointFault {
+            joint,
+            controller_id,
+        };
+        self.event(t_ns, event);
+    }
+
+    /// Items the ring has dropped.
+    fn dropped(&self) -> u64 {
+        self.out.tx.dropped()
     }
 }

@@ -9,7 +9,7 @@ use super::controllers;
 use super::session::Session;
 use super::shared::Shared;
 use super::views;
-use crate::controller::Selection;
+use crate::controller_interface::Selection;
 use crate::gait::{GaitKind, ParamPatch};
 use crate::rt::messages::LoopRequest;
 

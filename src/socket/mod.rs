@@ -40,7 +40,7 @@ use std::time::Duration;
 
 use serde::Serialize;
 
-use crate::controller::catalog::Catalog;
+use crate::controller_interface::catalog::Catalog;
 use crate::gait::BodyLayout;
 use crate::rt::controller_slots::Installed;
 use crate::rt::messages::{Ack, Envelope};

@@ -5,10 +5,15 @@
 //!
 //! Like a real module, a command older than `command_lifetime_s` (simulated time)
 //! stops driving and the joint goes limp; `release` makes every joint limp at once.
+//!
+//! Ground truth (link poses, contacts) is the simulated bus's own: [`SimBus::plant`],
+//! reached from the loop's `&dyn Bus` with [`SimBus::of`].
 
-use super::{Bus, BusCounters, BusError, FeedbackWait, GroupFeedback, ModuleState};
+use std::any::Any;
+
+use crate::bus::{Bus, BusCounters, BusError, FeedbackWait, GroupFeedback, ModuleState};
 use crate::emu::Plant;
-use crate::protocol::Command;
+use crate::module::Command;
 
 /// How the in-process bus runs its plant.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -53,6 +58,11 @@ impl SimBus {
             seq: 0,
             counters: BusCounters::default(),
         }
+    }
+
+    /// `bus` as the simulated bus, if it is one (the loop holds its bus as `dyn Bus`).
+    pub fn of(bus: &dyn Bus) -> Option<&SimBus> {
+        (bus as &dyn Any).downcast_ref()
     }
 
     /// The simulated world, e.g. for ground truth in tests and the lab.
@@ -127,10 +137,6 @@ impl Bus for SimBus {
 
     fn counters(&self) -> BusCounters {
         self.counters
-    }
-
-    fn plant(&self) -> Option<&dyn Plant> {
-        Some(self.plant.as_ref())
     }
 
     fn release(&mut self) {

@@ -5,7 +5,7 @@ use serde_json::{Value, json};
 
 use super::DaemonInfo;
 use super::controllers::telemetry_view;
-use crate::controller::catalog::Catalog;
+use crate::controller_interface::catalog::Catalog;
 use crate::gait::{GaitKind, GaitTable};
 use crate::rt::telemetry::Snapshot;
 
@@ -32,7 +32,7 @@ pub(crate) fn status(s: &Snapshot, info: &DaemonInfo, catalog: &Catalog) -> Valu
 
 /// The body estimate (docs/estimation.md): its frame and heading while valid; only
 /// `valid: false` before the estimator has settled or when its input was not finite.
-fn body_view(b: &crate::controller::BodyEstimate) -> Value {
+fn body_view(b: &crate::controller_interface::BodyEstimate) -> Value {
     if !b.valid {
         return json!({ "valid": false });
     }

@@ -3,7 +3,7 @@ use crossbeam_channel::Receiver;
 
 use super::DaemonInfo;
 use super::router::AckRouter;
-use crate::controller::catalog::Catalog;
+use crate::controller_interface::catalog::Catalog;
 use crate::gait::BodyLayout;
 use crate::rt::controller_slots::Installed;
 use crate::rt::telemetry::TelemetryReader;

@@ -9,7 +9,7 @@ use tokio::time::MissedTickBehavior;
 
 use super::api;
 use super::views;
-use crate::controller::catalog::Catalog;
+use crate::controller_interface::catalog::Catalog;
 use crate::rt::telemetry::TelemetryReader;
 
 /// Per-connection state the methods can change.
