@@ -297,6 +297,8 @@ fn validate(c: &PhysicsConfig) -> Result<(), PhysicsError> {
 #[cfg(test)]
 mod coulomb_model;
 #[cfg(test)]
+mod drift_tests;
+#[cfg(test)]
 mod joint_speed_tests;
 #[cfg(test)]
 mod pole_tests;
