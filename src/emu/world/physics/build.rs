@@ -213,16 +213,18 @@ fn lowest_point_m(poses: &[Isometry3<f64>]) -> f64 {
 
 /// Links (capsules of the module's length and diameter and mass, skin friction
 /// `skin_mu`) and revolute impulse joints between them, with contacts between the two
-/// links of a joint disabled.
+/// links of a joint disabled; `skin_hooks`: the links' contacts go through the
+/// skin-friction hook.
 pub fn build_chain(
     world: &mut PhysicsWorld,
     config: &PhysicsConfig,
     poses: &[Isometry3<f64>],
     skin_mu: f32,
+    skin_hooks: bool,
 ) -> Chain {
     let radius = 0.5 * MODULE_DIAMETER_M;
     let half_len = 0.5 * MODULE_LENGTH_M;
-    let hooks = if config.anisotropic_hooks {
+    let hooks = if skin_hooks {
         ActiveHooks::MODIFY_SOLVER_CONTACTS
     } else {
         ActiveHooks::empty()

@@ -77,10 +77,7 @@ pub fn displacement_per_cycle_with(
         contact_points(layout, &angles, inset_m, per_link, &mut pts);
         let rot = nalgebra::Rotation2::new(yaw);
         let centre = pos + rot * (pts.iter().sum::<Vector2<f64>>() / pts.len() as f64);
-        let (centre0, fwd) = *start.get_or_insert_with(|| {
-            let line = pts[0] - pts[pts.len() - 1];
-            (centre, line / line.norm())
-        });
+        let (centre0, fwd) = *start.get_or_insert_with(|| (centre, tail_to_head(&pts, per_link)));
         if k == steps {
             let d = centre - centre0;
             return [d.dot(&fwd), fwd.perp(&d)];
@@ -131,10 +128,7 @@ pub fn displacement_of_loaded_shapes(
         contact_points(layout, &shapes[k % steps], inset_m, per_link, &mut pts);
         let rot = nalgebra::Rotation2::new(yaw);
         let centre = pos + rot * (pts.iter().sum::<Vector2<f64>>() / pts.len() as f64);
-        let (centre0, fwd) = *start.get_or_insert_with(|| {
-            let line = pts[0] - pts[pts.len() - 1];
-            (centre, line / line.norm())
-        });
+        let (centre0, fwd) = *start.get_or_insert_with(|| (centre, tail_to_head(&pts, per_link)));
         if k == steps {
             let d = centre - centre0;
             return [d.dot(&fwd), fwd.perp(&d)];
@@ -150,6 +144,7 @@ pub fn displacement_of_loaded_shapes(
         let shape_v: Vec<Vector2<f64>> = pts.iter().zip(&pts_next).map(|(a, b)| b - a).collect();
         w.clear();
         match loads {
+            Some(l) if l[k].len() == pts.len() => w.extend_from_slice(&l[k]),
             Some(l) => w.extend(l[k].iter().flat_map(|&x| std::iter::repeat_n(x, per_link))),
             None => w.resize(pts.len(), 1.0),
         }
@@ -158,6 +153,14 @@ pub fn displacement_of_loaded_shapes(
         yaw += u.z;
     }
     unreachable!("the loop returns at k == steps")
+}
+
+/// Unit vector from the tail link's centre to the head link's (the physics' own
+/// definition of "forward"), `per_link` points per link.
+fn tail_to_head(pts: &[Vector2<f64>], per_link: usize) -> Vector2<f64> {
+    let centre = |s: &[Vector2<f64>]| s.iter().sum::<Vector2<f64>>() / s.len() as f64;
+    let line = centre(&pts[..per_link]) - centre(&pts[pts.len() - per_link..]);
+    line / line.norm()
 }
 
 /// Rigid twist (vx, vy, ω about the body origin) that balances isotropic Coulomb

@@ -9,16 +9,18 @@
 //!   torque is applied equal and opposite to the two links about the joint axis.
 //!   Reported torque = spring torque (sign as in `servo.rs`).
 //! - Sensors: encoder, torque and an IMU on each module's output link ([`sensors`]).
-//! - Contacts: Coulomb friction cones (isotropic `mu`), optional anisotropy ([`hooks`]);
+//! - Contacts: Coulomb friction (isotropic `mu`, optional anisotropy), rapier's cone
+//!   where a skin contact sticks and an explicit force opposing the slip where it
+//!   slides ([`skin_friction`]);
 //!   links not joined by a joint collide with each other, skin on skin at `mu`
 //!   ([`self_contact`] counts the contacts).
 
 pub mod build;
-pub mod hooks;
 pub mod kinematics;
 pub mod no_slip_bound;
 mod self_contact;
 pub mod sensors;
+pub mod skin_friction;
 mod step;
 
 use nalgebra::Isometry3;
@@ -87,9 +89,12 @@ pub struct PhysicsConfig {
     /// `friction.mu` (only pairs 3 or more apart are tested: 2 apart cannot touch
     /// within the joint limits); false: they pass through each other (the old model).
     pub self_collision: bool,
-    /// Install the anisotropic friction hook (set from the world's friction).
-    #[serde(skip)]
-    pub anisotropic_hooks: bool,
+    /// Skin friction on the world's surfaces while sliding as an explicit force opposing
+    /// the slip (true), or rapier's cone alone (false, the default: its sliding friction
+    /// is off the slip's opposite, [`skin_friction`]). Not yet the default: among pegs it
+    /// tripled the head-tilt error of the pose estimate (docs/measurements.md,
+    /// "Slithering on open ground"), and every lab table stands on the default.
+    pub explicit_sliding_friction: bool,
     pub temperature_c: f32,
     pub voltage_v: f32,
 }
@@ -113,7 +118,7 @@ impl Default for PhysicsConfig {
             contact_damping_ratio: 10.0,
             link_angular_damping: 0.05,
             self_collision: true,
-            anisotropic_hooks: false,
+            explicit_sliding_friction: true,
             temperature_c: 35.0,
             voltage_v: 48.0,
         }
@@ -143,7 +148,7 @@ pub struct PhysicsPlant {
     joint_rad_s: Vec<f64>,
     imu: Vec<ImuState>,
     feedback: Vec<Feedback>,
-    hooks: Option<hooks::AnisotropicFriction>,
+    hooks: Option<skin_friction::SkinFriction>,
     self_contacts: self_contact::SelfContacts,
     time_ns: u64,
     rng: Pcg64,
@@ -159,11 +164,10 @@ impl PhysicsPlant {
     /// `start.head_m` / `yaw_rad` (the joint angles still come from the spec).
     pub fn with_head_pose(
         spec: &WorldSpec,
-        mut config: PhysicsConfig,
+        config: PhysicsConfig,
         head: Option<Isometry3<f64>>,
     ) -> Result<Self, PhysicsError> {
         validate(&config)?;
-        config.anisotropic_hooks = spec.friction.anisotropic.is_some();
         let mut world = PhysicsWorld::new();
         world.gravity = Vector::new(0.0, 0.0, -GRAVITY_M_S2 as f32);
         let ip = &mut world.integration_parameters;
@@ -187,7 +191,14 @@ impl PhysicsPlant {
         ip.static_contact_softness = soft;
         build_world(&mut world, spec)?;
         let poses = start_poses(spec, &config, head);
-        let chain = build_chain(&mut world, &config, &poses, spec.friction.mu as f32);
+        let hooks = skin_hooks(spec, &config);
+        let chain = build_chain(
+            &mut world,
+            &config,
+            &poses,
+            spec.friction.mu as f32,
+            hooks.is_some(),
+        );
         let n = config.modules;
         let mut plant = Self {
             servos: Vec::with_capacity(n),
@@ -195,10 +206,7 @@ impl PhysicsPlant {
             joint_rad_s: vec![0.0; n],
             imu: Vec::new(),
             feedback: vec![Feedback::default(); n],
-            hooks: spec
-                .friction
-                .anisotropic
-                .map(|coefficients| hooks::AnisotropicFriction { coefficients }),
+            hooks,
             self_contacts: self_contact::SelfContacts::new(chain.links.len()),
             time_ns: 0,
             rng: Pcg64::seed_from_u64(config.seed),
@@ -292,6 +300,22 @@ fn validate(c: &PhysicsConfig) -> Result<(), PhysicsError> {
         }
     }
     Ok(())
+}
+
+/// The skin-friction hook of `spec`'s friction, or none where rapier's cone does it all
+/// (isotropic, no explicit sliding).
+fn skin_hooks(spec: &WorldSpec, config: &PhysicsConfig) -> Option<skin_friction::SkinFriction> {
+    let f = &spec.friction;
+    if f.anisotropic.is_none() && !config.explicit_sliding_friction {
+        return None;
+    }
+    Some(skin_friction::SkinFriction {
+        coefficients: f.anisotropic.unwrap_or(super::Anisotropic {
+            mu_axial: f.mu,
+            mu_lateral: f.mu,
+        }),
+        explicit_sliding: config.explicit_sliding_friction,
+    })
 }
 
 #[cfg(test)]

@@ -31,7 +31,7 @@ impl PhysicsPlant {
             self.world.bodies[link].reset_torques(false);
             self.world.bodies[link].reset_forces(false);
         }
-        self.apply_anisotropic_friction(h);
+        self.apply_skin_friction(h);
         for i in 0..self.config.modules {
             let cmd = commands.get(i).copied().unwrap_or(Command::LIMP);
             let (x, w) = (self.joint_rad[i], self.joint_rad_s[i]);
