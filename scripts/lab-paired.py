@@ -1,75 +1,64 @@
 #!/usr/bin/env python3
-"""Paired comparison of two snake-lab runs (or two controllers of one run), world by world.
+"""lab-paired.py BEFORE.csv AFTER.csv COLUMN...: two runs' results.csv joined on the key columns
+(controller, layout or pole, start or pose, repeat), per controller: the rows joined, the outcome
+(or success) counts before and after, and for each numeric COLUMN the mean before, after, and the paired mean
+difference (after - before) ± its standard error. Used where a change (the physics) moves the
+figures, to compare over the same worlds."""
+import csv, math, sys
+from collections import Counter
 
-    scripts/lab-paired.py A.csv[:CONTROLLER] B.csv[:CONTROLLER] [--metric COLUMN ...]
-
-Trials are paired by (layout, start, repeat) - the same world and sensor-noise seed - and
-for each metric the script prints the mean of A and of B, the mean of B - A with its
-standard error, and in how many worlds B is above A. Columns that are not numbers
-(outcome) are compared as "through" shares. Only the standard library is used.
-"""
-import argparse
-import csv
-import math
-import sys
+KEYS = ["controller", "layout", "pole", "start", "pose", "repeat"]
 
 
-def load(spec):
-    path, _, controller = spec.partition(":")
-    with open(path, newline="") as f:
-        rows = list(csv.DictReader(f))
-    if controller:
-        rows = [r for r in rows if r["controller"] == controller]
-    if not rows:
-        sys.exit(f"{spec}: no trials")
-    names = {r["controller"] for r in rows}
-    if len(names) > 1:
-        sys.exit(f"{spec}: several controllers ({', '.join(sorted(names))}): name one with :NAME")
-    start = "start" if "start" in rows[0] else "pose"
-    key = lambda r: (r["layout"], r[start], r.get("repeat", "0"))
-    return {key(r): r for r in rows}
+def load(path):
+    with open(path) as f:
+        r = csv.DictReader(f)
+        return r.fieldnames, list(r)
 
 
-def value(row, metric):
-    v = row[metric]
-    if metric == "outcome":
-        return 1.0 if v == "through" else 0.0
-    if metric == "success":
-        return 1.0 if v == "true" else 0.0
-    return float(v) if v not in ("", "NaN", "nan") else math.nan
+def number(x):
+    try:
+        v = float(x)
+        return v if math.isfinite(v) else None
+    except ValueError:
+        return None
 
 
 def main():
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("a")
-    p.add_argument("b")
-    p.add_argument("--metric", action="append", help="a results.csv column (repeatable)")
-    args = p.parse_args()
-    a, b = load(args.a), load(args.b)
-    keys = sorted(set(a) & set(b))
-    if not keys:
-        sys.exit("no world in common")
-    metrics = args.metric or ["seconds"]
-    print(f"{len(keys)} paired worlds; A = {args.a}, B = {args.b}")
-    for m in metrics:
-        pairs = [(value(a[k], m), value(b[k], m)) for k in keys]
-        pairs = [(x, y) for x, y in pairs if not (math.isnan(x) or math.isnan(y))]
-        n = len(pairs)
-        if n < 2:
-            print(f"{m}: fewer than two finite pairs")
-            continue
-        d = [y - x for x, y in pairs]
-        mean = sum(d) / n
-        sd = math.sqrt(sum((x - mean) ** 2 for x in d) / (n - 1))
-        ma = sum(x for x, _ in pairs) / n
-        mb = sum(y for _, y in pairs) / n
-        above = sum(1 for x in d if x > 0)
-        below = sum(1 for x in d if x < 0)
-        print(
-            f"{m}: A {ma:.4g}, B {mb:.4g}, B - A {mean:+.4g} ± {sd / math.sqrt(n):.2g} (se), "
-            f"B above in {above}, below in {below} of {n}"
-        )
+    if len(sys.argv) < 3:
+        sys.exit(__doc__)
+    fa, a = load(sys.argv[1])
+    fb, b = load(sys.argv[2])
+    columns = sys.argv[3:]
+    keys = [k for k in KEYS if k in fa and k in fb]
+    ka = {tuple(r[k] for k in keys): r for r in a}
+    kb = {tuple(r[k] for k in keys): r for r in b}
+    joined = [k for k in kb if k in ka]
+    for c in columns:
+        if c not in fa or c not in fb:
+            sys.exit(f"no column {c!r} in both files")
+    by = {}
+    for k in joined:
+        by.setdefault(k[0], []).append(k)
+    print(f"joined on {keys}: {len(joined)} rows")
+    for ctrl, ks in by.items():
+        oc = next((c for c in ("outcome", "success") if c in fa and c in fb), None)
+        before = Counter(ka[k][oc] for k in ks) if oc else {}
+        after = Counter(kb[k][oc] for k in ks) if oc else {}
+        line = f"{ctrl} ({len(ks)}): {oc} before {dict(before)}, after {dict(after)}"
+        for c in columns:
+            pairs = [(number(ka[k][c]), number(kb[k][c])) for k in ks]
+            pairs = [(x, y) for x, y in pairs if x is not None and y is not None]
+            if not pairs:
+                continue
+            d = [y - x for x, y in pairs]
+            n = len(d)
+            mean = sum(d) / n
+            se = math.sqrt(sum((x - mean) ** 2 for x in d) / (n - 1) / n) if n > 1 else float("nan")
+            mb = sum(x for x, _ in pairs) / n
+            ma = sum(y for _, y in pairs) / n
+            line += f"; {c}: {mb:.3f} -> {ma:.3f}, diff {mean:+.3f} ± {se:.3f} (n {n})"
+        print(line)
 
 
-if __name__ == "__main__":
-    main()
+main()

@@ -437,3 +437,52 @@ fn friction_against_coulomb(p: &PhysicsPlant, acc: &mut [f64; 8]) {
         }
     }
 }
+
+/// Diagnostic (issue 28, point 1): how slithering turns with a lateral joint offset on
+/// isotropic ground, per cycle: the change of the tail-to-head line's heading and the
+/// displacement along and across it. Environment: `WS` (ωS/π, default 3), `AMP`.
+#[test]
+#[ignore]
+fn slithering_turn_by_offset() {
+    let env = |k: &str| std::env::var(k).ok().and_then(|s| s.parse::<f64>().ok());
+    for offset in [0.0, 0.05, 0.1, 0.2, 0.3] {
+        let params = GaitParams {
+            spatial_freq_rad: env("WS").unwrap_or(3.0) * PI,
+            amplitude_lat_rad: env("AMP").unwrap_or(std::f64::consts::FRAC_PI_4),
+            offset_lat_rad: offset,
+            ..GaitParams::default_for(GaitKind::Slithering)
+        };
+        let cycle_s = 2.0 * PI / params.temporal_freq_rad_s;
+        let cycles = 2;
+        let heading = |p: &PhysicsPlant| {
+            let head = p.link_pose(0).position_m;
+            let tail = p.link_pose(p.link_count() - 1).position_m;
+            (head[1] - tail[1]).atan2(head[0] - tail[0])
+        };
+        let mut marks: Vec<(f64, [f64; 3])> = Vec::new();
+        run_gait_from(
+            &WorldSpec::default(),
+            quiet(N),
+            GaitKind::Slithering,
+            params,
+            0.0,
+            cycle_s * (1 + cycles) as f64 + 1e-3,
+            |t, p| {
+                if t >= cycle_s * (1 + marks.len()) as f64 - 1e-9 {
+                    marks.push((heading(p), p.centre_of_mass_m()));
+                }
+            },
+        );
+        let (h0, c0) = marks[0];
+        let (h1, c1) = marks[marks.len() - 1];
+        let n = (marks.len() - 1) as f64;
+        let turn = (h1 - h0 + PI).rem_euclid(2.0 * PI) - PI;
+        let d = [c1[0] - c0[0], c1[1] - c0[1]];
+        let along = (d[0] * h0.cos() + d[1] * h0.sin()) / n;
+        let across = (-d[0] * h0.sin() + d[1] * h0.cos()) / n;
+        println!(
+            "offset {offset:.2} rad: turn {:+.1}° per cycle, along {along:+.3} m, across {across:+.3} m per cycle",
+            (turn / n).to_degrees()
+        );
+    }
+}
