@@ -91,9 +91,9 @@ pub struct PhysicsConfig {
     pub self_collision: bool,
     /// Skin friction on the world's surfaces while sliding as an explicit force opposing
     /// the slip (true), or rapier's cone alone (false, the default: its sliding friction
-    /// is off the slip's opposite, [`skin_friction`]). Not yet the default: among pegs it
-    /// tripled the head-tilt error of the pose estimate (docs/measurements.md,
-    /// "Slithering on open ground"), and every lab table stands on the default.
+    /// is off the slip's opposite, [`skin_friction`]). Not the default yet: with it the
+    /// pole climbers failed to get onto the pole from the ground in 7-11 of 18 trials
+    /// (docs/measurements.md, "The friction fix and the experiments").
     pub explicit_sliding_friction: bool,
     pub temperature_c: f32,
     pub voltage_v: f32,
@@ -118,7 +118,7 @@ impl Default for PhysicsConfig {
             contact_damping_ratio: 10.0,
             link_angular_damping: 0.05,
             self_collision: true,
-            explicit_sliding_friction: true,
+            explicit_sliding_friction: false,
             temperature_c: 35.0,
             voltage_v: 48.0,
         }

@@ -48,7 +48,7 @@ pub fn slide_share(speed: f32) -> f32 {
 pub struct SkinFriction {
     pub coefficients: Anisotropic,
     /// False: rapier's cone carries all of `µ_min`
-    /// (`PhysicsConfig::explicit_sliding_friction`, the default for now).
+    /// (`PhysicsConfig::explicit_sliding_friction` false, the default for now).
     pub explicit_sliding: bool,
 }
 
