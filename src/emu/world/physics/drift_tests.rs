@@ -10,6 +10,16 @@ use super::*;
 use crate::emu::Plant;
 use crate::gait::{GaitKind, GaitParams, Serpenoid};
 
+/// Unit vector from the tail link's centre to the head link's, in the ground plane: the
+/// body's "forward" (the model's too).
+fn forward(p: &PhysicsPlant) -> [f64; 2] {
+    let head = p.link_pose(0).position_m;
+    let tail = p.link_pose(p.link_count() - 1).position_m;
+    let d = [head[0] - tail[0], head[1] - tail[1]];
+    let n = d[0].hypot(d[1]);
+    [d[0] / n, d[1] / n]
+}
+
 /// Open-loop slithering's drift on isotropic ground along the body's tail-to-head line
 /// at the start of the cycles, m per cycle: one settling cycle, then `cycles` cycles.
 fn physics_drift_per_cycle(config: PhysicsConfig, params: GaitParams, cycles: usize) -> f64 {
@@ -25,11 +35,7 @@ fn physics_drift_per_cycle(config: PhysicsConfig, params: GaitParams, cycles: us
         cycle_s * (1 + cycles) as f64,
         |t, p| {
             if start.is_none() && t >= cycle_s - 1e-9 {
-                let head = p.link_pose(0).position_m;
-                let tail = p.link_pose(p.link_count() - 1).position_m;
-                let d = [head[0] - tail[0], head[1] - tail[1]];
-                let n = d[0].hypot(d[1]);
-                start = Some((p.centre_of_mass_m(), [d[0] / n, d[1] / n]));
+                start = Some((p.centre_of_mass_m(), forward(p)));
             }
             end = p.centre_of_mass_m();
         },
@@ -165,11 +171,7 @@ fn slithering_drift_sweep() {
                 settle + cycle_s * cycles as f64,
                 |t, p| {
                     if start.is_none() && t >= settle - 1e-9 {
-                        let head = p.link_pose(0).position_m;
-                        let tail = p.link_pose(p.link_count() - 1).position_m;
-                        let d = [head[0] - tail[0], head[1] - tail[1]];
-                        let n = d[0].hypot(d[1]);
-                        start = Some((p.centre_of_mass_m(), [d[0] / n, d[1] / n]));
+                        start = Some((p.centre_of_mass_m(), forward(p)));
                     }
                     if start.is_some() && measured.len() < period_ms {
                         loads.push(ground_loads(p));
@@ -455,9 +457,8 @@ fn slithering_turn_by_offset() {
         let cycle_s = 2.0 * PI / params.temporal_freq_rad_s;
         let cycles = 2;
         let heading = |p: &PhysicsPlant| {
-            let head = p.link_pose(0).position_m;
-            let tail = p.link_pose(p.link_count() - 1).position_m;
-            (head[1] - tail[1]).atan2(head[0] - tail[0])
+            let f = forward(p);
+            f[1].atan2(f[0])
         };
         let mut marks: Vec<(f64, [f64; 3])> = Vec::new();
         run_gait_from(
