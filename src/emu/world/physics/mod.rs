@@ -90,10 +90,9 @@ pub struct PhysicsConfig {
     /// within the joint limits); false: they pass through each other (the old model).
     pub self_collision: bool,
     /// Skin friction on the world's surfaces while sliding as an explicit force opposing
-    /// the slip (true), or rapier's cone alone (false, the default: its sliding friction
-    /// is off the slip's opposite, [`skin_friction`]). Not the default yet: with it the
-    /// pole climbers failed to get onto the pole from the ground in 7-11 of 18 trials
-    /// (docs/measurements.md, "The friction fix and the experiments").
+    /// the slip (true, the default), or rapier's cone alone (false: its sliding friction
+    /// is off the slip's opposite and slithering drifts back 0.02-0.04 m per cycle too
+    /// far, [`skin_friction`]; every lab table before 2026-12-05).
     pub explicit_sliding_friction: bool,
     pub temperature_c: f32,
     pub voltage_v: f32,
@@ -118,7 +117,7 @@ impl Default for PhysicsConfig {
             contact_damping_ratio: 10.0,
             link_angular_damping: 0.05,
             self_collision: true,
-            explicit_sliding_friction: false,
+            explicit_sliding_friction: true,
             temperature_c: 35.0,
             voltage_v: 48.0,
         }

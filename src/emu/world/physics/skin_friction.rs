@@ -19,7 +19,8 @@
 //!   (antiparallel to that point's slip, `N` its normal force of the previous
 //!   substep) and, if anisotropic, the orthotropic remainder `−N·[(µ_axial − µ_min)·v_a·â
 //!   + (µ_lateral − µ_min)·v_l] / max(|v|, v_ε)` (`v_a·â` the slip along the link's
-//!   axis, `v_l` across, `v_ε` = [`STICK_SPEED_M_S`] regularising the stick).
+//!   axis, `v_l` across, `v_ε` = [`STICK_SPEED_M_S`] regularising the stick), at most
+//!   the impulse that stops the point's slip ([`stopping_impulse`]).
 //!
 //! Total: the principal-axis anisotropic Coulomb model, the force opposing the slip
 //! wherever the contact slides. Poles and pegs of their own coefficient and skin on
@@ -48,7 +49,7 @@ pub fn slide_share(speed: f32) -> f32 {
 pub struct SkinFriction {
     pub coefficients: Anisotropic,
     /// False: rapier's cone carries all of `µ_min`
-    /// (`PhysicsConfig::explicit_sliding_friction` false, the default for now).
+    /// (`PhysicsConfig::explicit_sliding_friction` false).
     pub explicit_sliding: bool,
 }
 
@@ -102,16 +103,24 @@ fn touch_point(link: &Collider, n: Vector) -> Vector {
     link.translation() - n * (0.5 * super::build::MODULE_DIAMETER_M as f32)
 }
 
-/// The point on `link`'s axis nearest `point`: the explicit forces act there, so they
-/// put no torque about the link's own axis. A link's roll inertia is tiny (m·r²/2); an
-/// explicit friction torque on it, one step late, made the links chatter about their
-/// axes among pegs (±1 rad/s at 1 kHz). The slip is still the contact point's (a link
-/// that rolls without slipping feels no sliding force), and rapier's cone, implicit,
-/// holds what rolls or sticks.
-fn on_axis(link: &Collider, point: Vector) -> Vector {
-    let centre = link.translation();
-    let axis = link.position().rotation * Vector::X;
-    centre + axis * axis.dot(point - centre)
+/// The largest impulse (N·s) that a force along `dir` at `point` on `body` can give
+/// before it has stopped the slip `speed` there, counting the body alone (its mass and
+/// its inertia about `point`). An explicit friction is one substep late: uncapped, it
+/// reverses a slip it should only have stopped, and a link's roll inertia (m·r²/2) is so
+/// small that the reversal became a chatter about the links' own axes among pegs
+/// (±1 rad/s). The body alone is the conservative reading: the chain's joints only add
+/// effective mass.
+fn stopping_impulse(body: &RigidBody, point: Vector, dir: Vector, speed: f32) -> f32 {
+    let mp = body.mass_properties();
+    let r = point - body.center_of_mass();
+    let rxd = r.cross(dir);
+    let inv_mass =
+        dir.dot(mp.effective_inv_mass * dir) + rxd.dot(mp.effective_world_inv_inertia * rxd);
+    if inv_mass > 0.0 {
+        speed / inv_mass
+    } else {
+        0.0
+    }
 }
 
 /// A manifold's normal (rapier's: from collider 1 to collider 2) turned to point into
@@ -173,6 +182,7 @@ impl PhysicsPlant {
                     } else {
                         0.0
                     };
+                    let points = m.points.iter().filter(|p| p.data.impulse > 0.0).count();
                     for pt in &m.points {
                         let n_force = pt.data.impulse / h as f32;
                         if n_force <= 0.0 {
@@ -181,7 +191,6 @@ impl PhysicsPlant {
                         let local = if link_is_1 { pt.local_p1 } else { pt.local_p2 };
                         let point = *link.position() * local;
                         let v = slip(&self.world.bodies, link, surface, point, n);
-                        let point = on_axis(link, point);
                         let speed = v.length();
                         let mut force = Vector::ZERO;
                         if s > 0.0 && speed > 0.0 {
@@ -193,6 +202,16 @@ impl PhysicsPlant {
                             let vl = v - at * va;
                             force -= (at * (extra_a * va) + vl * extra_l)
                                 * (n_force / speed.max(STICK_SPEED_M_S));
+                        }
+                        // The manifold's points share the link's stopping impulse.
+                        let magnitude = force.length();
+                        if magnitude > 0.0 {
+                            let body = &self.world.bodies[body_h];
+                            let cap = stopping_impulse(body, point, force / magnitude, speed)
+                                / (points as f32 * h as f32);
+                            if magnitude > cap {
+                                force *= cap / magnitude;
+                            }
                         }
                         self.world.bodies[body_h].add_force_at_point(force, point, false);
                     }

@@ -353,11 +353,12 @@ fn interpolate_w(uw: &[[f64; 2]], u: f64) -> f64 {
     uw[0][1]
 }
 
-/// Slithering on isotropic skin needs pegs, and pegs it can slide along: on open ground
-/// the body drifts slightly back (as the quasi-static Coulomb model predicts); along
-/// matched pegs as rough as the ground (µ 0.5) it is held (no shaking to free it, with
-/// the profiled servo loop); along smooth matched pegs (µ 0.2, as the thesis's robot in
-/// its low-friction sleeve) the pegs' reaction carries it head first.
+/// Slithering on isotropic skin needs pegs: on open ground the body drifts slightly
+/// back (as the quasi-static Coulomb model predicts); along matched pegs the pegs'
+/// reaction carries it head first, as rough as the ground (µ 0.5) or smooth (µ 0.2, as
+/// the thesis's robot in its low-friction sleeve) alike: 0.635 and 0.638 m per cycle.
+/// (With rapier's cone alone, whose sliding friction is off the slip's opposite, rough
+/// pegs held the body: 0.03 m per cycle; `skin_friction`.)
 #[test]
 fn slithering_needs_pegs() {
     let params = GaitParams::default_for(GaitKind::Slithering);
@@ -414,13 +415,10 @@ fn slithering_needs_pegs() {
         (0.5..2.0).contains(&ratio),
         "physics/model drift ratio {ratio}"
     );
-    assert!(rough < 0.05, "rough pegs: {rough}");
-    // Smooth pegs: head first, and by a clear margin over open ground and rough pegs.
-    assert!(smooth > 0.08, "smooth pegs: {smooth}");
-    assert!(
-        smooth > along(free_d) + 0.15 && smooth > rough + 0.05,
-        "{smooth} vs {free_d:?}, {rough}"
-    );
+    // Pegs: head first, by a clear margin over open ground.
+    for (pegs, v) in [("rough", rough), ("smooth", smooth)] {
+        assert!(v > along(free_d) + 0.15, "{pegs} pegs: {v} vs {free_d:?}");
+    }
 }
 
 /// Snake-like anisotropic skin (sliding along the body easier than across it) lets
