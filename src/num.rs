@@ -1,7 +1,14 @@
 //! Numbers in messages as a person reads them: the shortest digits that read back as
 //! the same double (so a printed bound, pasted back, is the bound exactly), in exponent
-//! form when very large or small (`1e308`, not 309 digits).
+//! form when very large or small (`1e308`, not 309 digits); and angles wrapped.
+use std::f64::consts::{PI, TAU};
 use std::fmt;
+
+/// `x` wrapped into (−π, π].
+pub fn wrap_pi(x: f64) -> f64 {
+    let y = x.rem_euclid(TAU);
+    if y > PI { y - TAU } else { y }
+}
 
 /// Displays an `f64` readably (see the module docs).
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -145,6 +145,23 @@ pub enum ControllerCommand {
     SetHeading { heading_rad: Option<f64> },
 }
 
+impl ControllerCommand {
+    /// A `SetHeading`'s nominal heading wrapped into (−π, π], `Ok(None)` for "the
+    /// heading now"; refused when not finite or not a `SetHeading`.
+    pub fn nominal_heading(self) -> Result<Option<f64>, CommandRefused> {
+        match self {
+            ControllerCommand::SetHeading {
+                heading_rad: Some(h),
+            } if h.is_finite() => Ok(Some(crate::num::wrap_pi(h))),
+            ControllerCommand::SetHeading {
+                heading_rad: Some(_),
+            } => Err(CommandRefused::BadHeading),
+            ControllerCommand::SetHeading { heading_rad: None } => Ok(None),
+            other => Err(CommandRefused::unsupported(other)),
+        }
+    }
+}
+
 /// Why a controller refused a command (built without allocating).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
 pub enum CommandRefused {

@@ -7,7 +7,7 @@
 use serde::Serialize;
 
 /// Signal values a controller may report.
-pub const MAX_SIGNALS: usize = 32;
+pub const MAX_SIGNALS: usize = 40;
 /// Window fields a controller may report (e.g. amplitude, spatial frequency, phase).
 pub const MAX_FIELDS: usize = 4;
 /// Windows kept per field (a per-joint field of a 64-module body has 32).

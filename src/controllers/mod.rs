@@ -9,6 +9,7 @@ pub mod helix_radius;
 pub mod open_loop;
 pub mod serpenoid_admittance;
 pub mod sidewinding;
+pub mod steering;
 
 use crate::controller_interface::registry::{Entry, Family};
 

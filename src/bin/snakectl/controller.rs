@@ -39,7 +39,8 @@ pub enum ControllerCmd {
         #[arg(long, conflicts_with = "seconds")]
         clear: bool,
     },
-    /// The nominal heading GAIT's controller steers to (anti-compliant sidewinding):
+    /// The nominal heading GAIT's controller steers to (anti-compliant sidewinding, the
+    /// slithering controllers):
     /// RAD in the pose estimate's world (yaw 0 where the daemon started), or `here`
     /// for the heading now.
     Heading {

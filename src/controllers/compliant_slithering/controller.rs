@@ -7,7 +7,10 @@ use crate::controller_interface::nominal::{Nominal, lateral_room, within};
 use crate::controller_interface::report::{
     ControllerReport, MAX_WINDOWS as REPORT_WINDOWS, WindowField,
 };
-use crate::controller_interface::{Controller, Handover, NominalMismatch, Observation, Tick};
+use crate::controller_interface::{
+    CommandRefused, Controller, ControllerCommand, Handover, NominalMismatch, Observation, Tick,
+};
+use crate::controllers::steering::HeadingHold;
 use crate::gait::{BodyLayout, GaitParams, Plane};
 use crate::shape::ShapeFunction;
 use crate::shape::admittance::ParamState;
@@ -20,7 +23,7 @@ use crate::shape::window_manager::{Slope, WindowEvents, WindowManager};
 const MAX_WINDOWS: usize = 16;
 
 /// Signals reported, in order (names and units in `super::report_spec`).
-pub(super) const SIGNALS: usize = 9;
+pub(super) const SIGNALS: usize = 13;
 
 /// The controller. Construction allocates; nothing else does.
 pub struct CompliantSlithering {
@@ -44,6 +47,7 @@ pub struct CompliantSlithering {
     forces: Vec<f64>,
     t: f64,
     last_events: WindowEvents,
+    heading: HeadingHold,
 }
 
 impl CompliantSlithering {
@@ -113,6 +117,7 @@ impl CompliantSlithering {
             forces: Vec::with_capacity(values),
             t: 0.0,
             last_events: WindowEvents::default(),
+            heading: HeadingHold::new(config.steering),
         };
         c.start_nominal();
         c
@@ -319,6 +324,31 @@ impl CompliantSlithering {
     }
 }
 
+impl CompliantSlithering {
+    /// The largest lateral amplitude the controller may command with `params`, rad.
+    fn reach(&self, params: &GaitParams) -> f64 {
+        let a = &self.config.amplitude;
+        if a.enabled {
+            a.gains.max
+        } else {
+            params.amplitude_lat_rad
+        }
+    }
+}
+
+impl CompliantSlithering {
+    /// The largest lateral amplitude the shape commands now, rad.
+    fn amplitude_now(&self) -> f64 {
+        if !self.config.amplitude.enabled || self.sigma.len() != self.shape.param_count() {
+            return self.nominal.params.amplitude_lat_rad;
+        }
+        self.field(Param::Amplitude)
+            .1
+            .iter()
+            .fold(0.0_f64, |m, a| m.max(a.abs()))
+    }
+}
+
 impl Controller for CompliantSlithering {
     /// Each compliant parameter's nominal value lies in its range (else the first
     /// step would clamp it and the wave would jump), and the amplitude's range with
@@ -341,29 +371,32 @@ impl Controller for CompliantSlithering {
                 within(field, value, pc.gains.min, pc.gains.max)?;
             }
         }
-        let a = &self.config.amplitude;
-        let reach = if a.enabled {
-            a.gains.max
-        } else {
-            params.amplitude_lat_rad
-        };
-        lateral_room(params, reach)
+        lateral_room(params, self.reach(params))
     }
 
     fn engage(&mut self, h: &Handover<'_>) {
         self.nominal = Nominal::engaged(h);
+        self.heading.engage(h.params);
         self.reset();
     }
 
     fn step(&mut self, tick: Tick, obs: &Observation<'_>, set_points_rad: &mut [f64]) {
         self.step_shape(tick, obs.torque_nm, set_points_rad);
         self.nominal.add_offsets(&self.layout, set_points_rad);
+        self.heading.step(tick, obs.body, self.amplitude_now());
+        self.heading.add_to(&self.layout, set_points_rad);
+    }
+
+    /// `SetHeading`: the direction the steering holds.
+    fn command(&mut self, command: ControllerCommand) -> Result<(), CommandRefused> {
+        self.heading.command(command)
     }
 
     fn report(&self, out: &mut ControllerReport) {
         out.clear();
         let mean = |p: Param| self.lateral_mean(p);
         let peak = |p: Param| self.field(p).2.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+        let steer = self.heading.signals();
         let signals: [f64; SIGNALS] = [
             mean(Param::Amplitude),
             mean(Param::SpatialFreq),
@@ -374,6 +407,10 @@ impl Controller for CompliantSlithering {
             peak(Param::Amplitude),
             peak(Param::SpatialFreq),
             peak(Param::Phase),
+            steer[0],
+            steer[1],
+            steer[2],
+            steer[3],
         ];
         out.signals[..SIGNALS].copy_from_slice(&signals);
         if self.sigma.len() != self.shape.param_count() {

@@ -9,6 +9,7 @@ pub use controller::CompliantSlithering;
 
 use crate::controller_interface::report::{FieldSpec, ReportSpec, SignalSpec};
 use crate::controller_interface::{BuildContext, ConfigError, Controller, ControllerKind};
+use crate::controllers::steering::HeadingHold;
 use crate::gait::GaitKind;
 use crate::shape::slithering_shape::Param;
 
@@ -33,7 +34,7 @@ impl ControllerKind for CompliantSlitheringKind {
 
     fn report_spec(config: &Self::Config, _ctx: &BuildContext<'_>) -> ReportSpec {
         let s = SignalSpec::new;
-        let signals = vec![
+        let mut signals = vec![
             s("amplitude_mean_rad", "rad"),
             s("spatial_freq_mean_rad", "rad/body length"),
             s("phase_lag_rad", "rad"),
@@ -44,6 +45,7 @@ impl ControllerKind for CompliantSlitheringKind {
             s("force_spatial_freq_peak", "N·m·body length"),
             s("force_phase_peak", "N·m"),
         ];
+        signals.extend(HeadingHold::SIGNALS.map(|(name, unit)| s(name, unit)));
         debug_assert_eq!(signals.len(), controller::SIGNALS);
         let units = [
             ("rad", "N·m"),

@@ -7,6 +7,7 @@ use std::f64::consts::{FRAC_PI_2, PI};
 use serde::{Deserialize, Serialize};
 
 use crate::controller_interface::config::{ConfigError, check_range};
+use crate::controllers::steering::SteeringConfig;
 use crate::gait::JOINT_LIMIT_RAD;
 use crate::shape::admittance::AdmittanceGains;
 
@@ -238,6 +239,9 @@ pub struct DirectionalComplianceConfig {
     pub torque_deadband_nm: f64,
     /// Width of a window's edge, in modules (SPEC: about half a module).
     pub edge_width_modules: f64,
+    /// Holding a heading by the lateral offset (off until given a heading).
+    #[serde(default)]
+    pub steering: SteeringConfig,
 }
 
 /// Largest friction offset a calibration may hold, rad.
@@ -313,6 +317,7 @@ impl DirectionalComplianceConfig {
             torque_cutoff_hz: 5.0,
             torque_deadband_nm: 0.3,
             edge_width_modules: 0.5,
+            steering: SteeringConfig::DEFAULT,
         }
     }
 
@@ -395,7 +400,8 @@ impl DirectionalComplianceConfig {
         }
         check_range("torque_cutoff_hz", self.torque_cutoff_hz, 0.01, 200.0)?;
         check_range("torque_deadband_nm", self.torque_deadband_nm, 0.0, 7.0)?;
-        check_range("edge_width_modules", self.edge_width_modules, 0.05, 4.0)
+        check_range("edge_width_modules", self.edge_width_modules, 0.05, 4.0)?;
+        self.steering.check().map_err(|e| e.under("steering"))
     }
 }
 

@@ -15,6 +15,7 @@ use crate::controller_interface::report::{
 use crate::controller_interface::{
     CommandRefused, Controller, ControllerCommand, Handover, NominalMismatch, Observation, Tick,
 };
+use crate::controllers::steering::HeadingHold;
 use crate::gait::{BodyLayout, GaitParams, JOINT_LIMIT_RAD, Plane};
 use crate::shape::admittance::{AdmittanceSign, ParamState};
 use crate::shape::torque::TorqueFilter;
@@ -27,7 +28,7 @@ pub(super) const MAX_WINDOWS: usize = 16;
 pub(super) const LAT: usize = 0;
 pub(super) const DOR: usize = 1;
 /// Signals reported before the per-section ones (names in `super::report_spec`).
-pub(super) const FIXED_SIGNALS: usize = 14;
+pub(super) const FIXED_SIGNALS: usize = 18;
 
 /// A travelling window's state: its amplitude in each plane.
 type Payload = [AmplitudeState; 2];
@@ -57,6 +58,7 @@ pub struct DirectionalCompliance {
     ramp: f64,
     t: f64,
     last_events: WindowEvents,
+    heading: HeadingHold,
 }
 
 impl DirectionalCompliance {
@@ -88,6 +90,7 @@ impl DirectionalCompliance {
             ramp: 0.0,
             t: 0.0,
             last_events: WindowEvents::default(),
+            heading: HeadingHold::new(config.steering),
         };
         c.reset();
         c
@@ -439,6 +442,7 @@ impl Controller for DirectionalCompliance {
 
     fn engage(&mut self, h: &Handover<'_>) {
         self.nominal = Nominal::engaged(h);
+        self.heading.engage(h.params);
         self.reset();
     }
 
@@ -462,6 +466,12 @@ impl Controller for DirectionalCompliance {
         self.calibrate_step(dt);
         self.set_points(set_points_rad);
         self.nominal.add_offsets(&self.layout, set_points_rad);
+        let reach = (0..self.layout.len())
+            .map(|i| self.joint_wave(i))
+            .filter(|w| w.0 == LAT)
+            .fold(0.0_f64, |m, w| m.max(w.2.abs()));
+        self.heading.step(tick, obs.body, reach);
+        self.heading.add_to(&self.layout, set_points_rad);
     }
 
     fn report(&self, out: &mut ControllerReport) {
@@ -498,6 +508,7 @@ impl Controller for DirectionalCompliance {
         s[11] = sections_in(Mode::Ndc);
         s[12] = self.switches as f64;
         s[13] = if planes > 1 { self.ramp } else { f64::NAN };
+        s[14..FIXED_SIGNALS].copy_from_slice(&self.heading.signals());
         // Per section, per plane: absition then mode (`super::report_spec`).
         let mut at = FIXED_SIGNALS;
         for p in 0..2 {
@@ -526,7 +537,7 @@ impl Controller for DirectionalCompliance {
                 self.calibration.clear();
                 Ok(())
             }
-            other => Err(CommandRefused::unsupported(other)),
+            heading @ ControllerCommand::SetHeading { .. } => self.heading.command(heading),
         }
     }
 }

@@ -20,6 +20,7 @@ pub use sections::{Boxcar, Sections};
 
 use crate::controller_interface::report::{FieldSpec, ReportSpec, SignalSpec};
 use crate::controller_interface::{BuildContext, ConfigError, Controller, ControllerKind};
+use crate::controllers::steering::HeadingHold;
 use crate::gait::GaitKind;
 
 /// The registry's entry.
@@ -98,6 +99,7 @@ impl ControllerKind for DirectionalComplianceKind {
             s("mode_switches", "count"),
             s("dorsal_ramp", ""),
         ];
+        signals.extend(HeadingHold::SIGNALS.map(|(name, unit)| s(name, unit)));
         debug_assert_eq!(signals.len(), controller::FIXED_SIGNALS);
         let names = section_names(config.sections.count);
         for plane in ["lat", "dor"] {

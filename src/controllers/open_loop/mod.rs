@@ -1,19 +1,24 @@
 //! The open-loop serpenoid of any gait (SPEC §2): what the selector blends into,
-//! continued from its phase. The default controller of every gait.
+//! continued from its phase. The default controller of every gait. Slithering may
+//! hold a heading by its lateral offset (`steering`, see `controllers::steering`).
 
 use serde::{Deserialize, Serialize};
 
 use crate::controller_interface::report::{ControllerReport, ReportSpec, SignalSpec};
 use crate::controller_interface::{
-    BuildContext, ConfigError, Controller, ControllerKind, Handover, NominalMismatch, Observation,
-    Tick,
+    BuildContext, CommandRefused, ConfigError, Controller, ControllerCommand, ControllerKind,
+    Handover, NominalMismatch, Observation, Tick,
 };
+use crate::controllers::steering::{HeadingHold, SteeringConfig};
 use crate::gait::{BodyLayout, GaitKind, GaitParams, Serpenoid};
 
-/// It has nothing to configure.
+/// Only slithering's heading hold (off until given a heading).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct OpenLoopConfig {}
+pub struct OpenLoopConfig {
+    #[serde(default)]
+    pub steering: SteeringConfig,
+}
 
 /// The registry's entry.
 pub struct OpenLoopKind;
@@ -27,22 +32,37 @@ impl ControllerKind for OpenLoopKind {
         &[("default", "the gait's nominal parameters")];
 
     fn preset(name: &str) -> Option<Self::Config> {
-        (name == "default").then_some(OpenLoopConfig {})
+        (name == "default").then_some(OpenLoopConfig::default())
     }
 
-    fn check(_config: &Self::Config, _ctx: &BuildContext<'_>) -> Result<(), ConfigError> {
+    fn check(config: &Self::Config, ctx: &BuildContext<'_>) -> Result<(), ConfigError> {
+        config.steering.check().map_err(|e| e.under("steering"))?;
+        if config.steering.hold_at_engage && ctx.gait != GaitKind::Slithering {
+            return Err(ConfigError::invalid(
+                "steering.hold_at_engage",
+                "only slithering steers by its lateral offset",
+            ));
+        }
         Ok(())
     }
 
-    fn report_spec(_config: &Self::Config, _ctx: &BuildContext<'_>) -> ReportSpec {
+    fn report_spec(_config: &Self::Config, ctx: &BuildContext<'_>) -> ReportSpec {
+        let mut signals = vec![SignalSpec::new("phase_rad", "rad")];
+        if ctx.gait == GaitKind::Slithering {
+            signals.extend(HeadingHold::SIGNALS.map(|(n, u)| SignalSpec::new(n, u)));
+        }
         ReportSpec {
-            signals: vec![SignalSpec::new("phase_rad", "rad")],
+            signals,
             fields: Vec::new(),
         }
     }
 
-    fn build(_config: &Self::Config, ctx: &BuildContext<'_>) -> Box<dyn Controller> {
-        Box::new(OpenLoop::new(ctx.gait, ctx.layout, ctx.params))
+    fn build(config: &Self::Config, ctx: &BuildContext<'_>) -> Box<dyn Controller> {
+        let mut c = OpenLoop::new(ctx.gait, ctx.layout, ctx.params);
+        if ctx.gait == GaitKind::Slithering {
+            c.heading = Some(HeadingHold::new(config.steering));
+        }
+        Box::new(c)
     }
 }
 
@@ -54,6 +74,8 @@ pub struct OpenLoop {
     phase0: f64,
     t0: f64,
     phase: f64,
+    /// Slithering's heading hold.
+    heading: Option<HeadingHold>,
 }
 
 impl OpenLoop {
@@ -65,6 +87,7 @@ impl OpenLoop {
             phase0: 0.0,
             t0: 0.0,
             phase: 0.0,
+            heading: None,
         }
     }
 }
@@ -80,16 +103,34 @@ impl Controller for OpenLoop {
         self.phase0 = h.phase_rad;
         self.t0 = h.t_s;
         self.phase = h.phase_rad;
+        if let Some(heading) = &mut self.heading {
+            heading.engage(h.params);
+        }
     }
 
-    fn step(&mut self, tick: Tick, _obs: &Observation<'_>, set_points_rad: &mut [f64]) {
+    fn step(&mut self, tick: Tick, obs: &Observation<'_>, set_points_rad: &mut [f64]) {
         let t_s = tick.t_s;
         self.phase = self.phase0 + self.wave.temporal_freq_rad_s * (t_s - self.t0);
         self.wave.evaluate(&self.layout, self.phase, set_points_rad);
+        if let Some(heading) = &mut self.heading {
+            heading.step(tick, obs.body, self.wave.lateral.amplitude_rad.abs());
+            heading.add_to(&self.layout, set_points_rad);
+        }
     }
 
     fn report(&self, out: &mut ControllerReport) {
         out.clear();
         out.signals[0] = self.phase;
+        if let Some(heading) = &self.heading {
+            out.signals[1..5].copy_from_slice(&heading.signals());
+        }
+    }
+
+    /// `SetHeading` while slithering: the direction the steering holds.
+    fn command(&mut self, command: ControllerCommand) -> Result<(), CommandRefused> {
+        match &mut self.heading {
+            Some(heading) => heading.command(command),
+            None => Err(CommandRefused::unsupported(command)),
+        }
     }
 }

@@ -196,23 +196,14 @@ impl Controller for AntiCompliantSidewinding {
 
     /// `SetHeading`: the nominal direction, or the heading now.
     fn command(&mut self, command: ControllerCommand) -> Result<(), CommandRefused> {
-        match command {
-            ControllerCommand::SetHeading {
-                heading_rad: Some(h),
-            } => {
-                if !h.is_finite() {
-                    return Err(CommandRefused::BadHeading);
-                }
-                self.nominal_heading = Some(wrap_pi(h));
+        match command.nominal_heading()? {
+            Some(h) => {
+                self.nominal_heading = Some(h);
                 self.heading_here = false;
-                Ok(())
             }
-            ControllerCommand::SetHeading { heading_rad: None } => {
-                self.heading_here = true;
-                Ok(())
-            }
-            other => Err(CommandRefused::unsupported(other)),
+            None => self.heading_here = true,
         }
+        Ok(())
     }
 }
 

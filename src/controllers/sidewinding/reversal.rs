@@ -6,11 +6,7 @@ use std::f64::consts::{FRAC_PI_2, PI, TAU};
 
 use serde::{Deserialize, Serialize};
 
-/// `x` wrapped into (−π, π].
-pub fn wrap_pi(x: f64) -> f64 {
-    let y = x.rem_euclid(TAU);
-    if y > PI { y - TAU } else { y }
-}
+pub use crate::num::wrap_pi;
 
 /// The reversal's gains.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]

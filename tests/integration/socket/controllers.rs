@@ -555,8 +555,20 @@ fn a_nominal_heading_is_set_through_the_socket_and_snakectl() {
     )
     .unwrap();
     status_when(&mut c, |s| s["controller"]["state"] == "engaged");
-    // Open loop does not steer: refused by the loop, saying why.
-    let r = call(&mut c, "controller.heading", json!({"heading_rad": 0.5}));
+    // Slithering's open loop steers by its lateral offset (issue 28) and reports it.
+    let r = c
+        .call("controller.heading", Some(json!({"heading_rad": 0.5})))
+        .unwrap();
+    assert_eq!(r["controller"], "open_loop", "{r}");
+    let steering = |s: &Value| s["controller"]["signals"]["steering"].as_f64();
+    let s = status_when(&mut c, |s| steering(s) > Some(0.0));
+    assert!(steering(&s) > Some(0.0), "{s}");
+    // Rolling's open loop does not steer: refused by the loop, saying why.
+    let r = call(
+        &mut c,
+        "controller.heading",
+        json!({"gait": "rolling", "heading_rad": 0.5}),
+    );
     assert_eq!(error_code(&r), code::REFUSED, "{r}");
     assert!(error_message(&r).contains("does not steer"), "{r}");
     for bad in [
