@@ -3,17 +3,29 @@
 (controller, layout or pole, start or pose, repeat), per controller: the rows joined, the outcome
 (or success) counts before and after, and for each numeric COLUMN the mean before, after, and the paired mean
 difference (after - before) ± its standard error. Used where a change (the physics) moves the
-figures, to compare over the same worlds."""
+figures, to compare over the same worlds.
+
+A file may be given as PATH:CONTROLLER: only that controller's rows, joined with the other
+side's (also PATH:CONTROLLER) on the world keys alone, to pair two controllers (a variant
+against its base) over the same worlds."""
+import os
 import csv, math, sys
 from collections import Counter
 
 KEYS = ["controller", "layout", "pole", "start", "pose", "repeat"]
 
 
-def load(path):
+def load(spec):
+    """(columns, rows, controller or None) of PATH or PATH:CONTROLLER."""
+    path, ctrl = spec, None
+    if not os.path.exists(spec) and ":" in spec:
+        path, ctrl = spec.rsplit(":", 1)
     with open(path) as f:
         r = csv.DictReader(f)
-        return r.fieldnames, list(r)
+        rows = [x for x in r if ctrl is None or x["controller"] == ctrl]
+        if ctrl is not None and not rows:
+            sys.exit(f"no rows of controller {ctrl!r} in {path}")
+        return r.fieldnames, rows, ctrl
 
 
 def number(x):
@@ -27,10 +39,16 @@ def number(x):
 def main():
     if len(sys.argv) < 3:
         sys.exit(__doc__)
-    fa, a = load(sys.argv[1])
-    fb, b = load(sys.argv[2])
+    fa, a, ca = load(sys.argv[1])
+    fb, b, cb = load(sys.argv[2])
     columns = sys.argv[3:]
     keys = [k for k in KEYS if k in fa and k in fb]
+    if ca or cb:
+        # Two controllers over the same worlds: join on the world, label by the pair.
+        keys = [k for k in keys if k != "controller"]
+        for r in a + b:
+            r["controller"] = f"{ca} -> {cb}"
+        keys = ["controller"] + keys
     ka = {tuple(r[k] for k in keys): r for r in a}
     kb = {tuple(r[k] for k in keys): r for r in b}
     joined = [k for k in kb if k in ka]

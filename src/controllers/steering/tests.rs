@@ -210,3 +210,40 @@ fn it_learns_how_hard_the_wave_turns_and_settles_without_overshoot() {
         assert!(worst_over < 0.1, "g {g}: overshot by {worst_over}");
     }
 }
+
+/// A toy body that the terrain turns away at 0.3 rad per cycle while the offset turns
+/// it back at G = 9 per radian (the sleeve wave among pegs): the proportional part
+/// alone settles 0.3/(0.7·…) off, beyond the band; the integral, running while the
+/// error grows, brings it back within the band and holds it there.
+#[test]
+fn the_integral_meets_a_turn_the_terrain_forces() {
+    let run_toy = |integral_cycles: f64| {
+        let config = SteeringConfig {
+            integral_cycles,
+            ..SteeringConfig::DEFAULT
+        };
+        let mut h = engaged(config, 1.0);
+        h.command(ControllerCommand::SetHeading {
+            heading_rad: Some(0.0),
+        })
+        .unwrap();
+        let cycle = TAU;
+        let mut heading = 0.0_f64;
+        let steps = (20.0 * cycle / DT) as usize;
+        let mut late = Vec::new();
+        for k in 0..steps {
+            let t = k as f64 * DT;
+            let offset = h.step(Tick { t_s: t, dt_s: DT }, &body(heading), 0.8);
+            heading += (0.3 - 9.0 * offset) / cycle * DT;
+            if k > steps * 3 / 4 {
+                late.push(heading.abs());
+            }
+        }
+        late.iter().cloned().fold(0.0, f64::max)
+    };
+    let without = run_toy(0.0);
+    let with = run_toy(SteeringConfig::DEFAULT.integral_cycles);
+    println!("late worst error: proportional {without:.3}, with the integral {with:.3}");
+    assert!(without > 0.15, "the proportional part alone: {without}");
+    assert!(with < 0.12, "with the integral: {with} (without {without})");
+}
