@@ -1,17 +1,23 @@
 //! snaked: a real-time control daemon for modular series-elastic snake robots.
 //!
-//! Layout, one folder per concern:
-//! - [`protocol`]: the module network's wire format.
+//! Layout, one folder per concern (docs/architecture.md has the table):
+//! - [`protocol`], [`module`]: the module network's wire format and a module's
+//!   command and feedback.
 //! - [`bus`]: the loop's view of the modules (UDP or in-process emulator).
 //! - [`emu`]: the module emulator (plant, module endpoints, faults).
 //! - [`estimation`]: the body's pose from its IMUs and joint angles (virtual chassis).
 //! - [`gait`]: open-loop gaits and the selector that blends between them.
+//! - [`controller_interface`], [`controllers`]: the controller seam and registry, and
+//!   every controller (one folder each).
+//! - [`shape`]: shape-based compliance the controllers are built on.
+//! - [`navigation`]: pursuing a direction on its own (stuck detection so far).
 //! - [`safety`]: the failsafe state machine.
-//! - [`shape`]: shape-based compliance and the controllers built on it.
 //! - [`rt`]: pacing, the 1 kHz loop, statistics, telemetry.
-//! - [`control`]: the JSON control socket.
+//! - [`socket`]: the JSON control socket.
+//! - [`record`]: MCAP recording and the Foxglove live view.
 //! - [`lab`]: controller comparisons in simulation (`snake-lab`).
 //! - [`daemon`]: configuration and wiring of the service.
+//! - [`num`]: numbers as people read them, angles wrapped.
 
 pub mod bus;
 pub mod controller_interface;
@@ -22,6 +28,7 @@ pub mod estimation;
 pub mod gait;
 pub mod lab;
 pub mod module;
+pub mod navigation;
 pub mod num;
 pub mod protocol;
 pub mod record;

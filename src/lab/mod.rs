@@ -113,3 +113,6 @@ pub(crate) fn file_stem(name: &str) -> String {
         })
         .collect()
 }
+
+#[cfg(test)]
+mod periodicity_tests;
