@@ -262,7 +262,10 @@ pub fn compared<E: Experiment>(
     };
     let mut controllers = names
         .into_iter()
-        .map(|n| LabController::named(gait, n))
+        .map(|n| match module.any_gait() {
+            true => LabController::named_any(gait, n),
+            false => LabController::named(gait, n),
+        })
         .collect::<Result<Vec<_>, _>>()?;
     for spec in variants {
         controllers.push(LabController::variant_on(

@@ -9,6 +9,7 @@ use crate::controller_interface::config::merge;
 use crate::controller_interface::registry::{self, BuildContext, Built, Selection};
 use crate::controllers::REGISTRY;
 use crate::gait::{BodyLayout, GaitKind, GaitParams};
+use crate::navigation::navigator::{Choice, NavigatorConfig};
 
 /// The controller a variant's overrides apply to when it names none.
 pub const VARIANT_BASE: &str = "a_ws_omega";
@@ -19,9 +20,33 @@ pub struct LabController {
     pub label: String,
     pub gait: GaitKind,
     pub selection: Selection,
+    /// Run by the navigator (`navigator`): the selection is its first choice's, and it
+    /// changes gaits and controllers as it goes (lab::trial_navigator).
+    pub navigator: Option<NavigatorConfig>,
 }
 
+/// The name that makes the navigator a compared "controller".
+pub const NAVIGATOR: &str = "navigator";
+
 impl LabController {
+    /// For an experiment that compares gaits (`Experiment::any_gait`): the navigator,
+    /// or a controller named in `gait` or else in the first other gait that has it.
+    pub fn named_any(gait: GaitKind, name: &str) -> Result<Self, LabError> {
+        if name == NAVIGATOR {
+            let first = Choice::Sidewind;
+            return Ok(Self {
+                navigator: Some(NavigatorConfig::DEFAULT),
+                label: name.to_owned(),
+                ..Self::named(first.gait(), first.controller())?
+            });
+        }
+        let selection = Selection::named(name);
+        let found = std::iter::once(gait)
+            .chain(GaitKind::ALL)
+            .find(|&g| registry::resolve(REGISTRY, g, &selection).is_ok());
+        Self::named(found.unwrap_or(gait), name)
+    }
+
     /// A named controller of `gait`, labelled by its name.
     pub fn named(gait: GaitKind, name: &str) -> Result<Self, LabError> {
         let selection = Selection::named(name);
@@ -33,6 +58,7 @@ impl LabController {
             label: name.to_owned(),
             gait,
             selection,
+            navigator: None,
         })
     }
 
@@ -89,6 +115,7 @@ impl LabController {
             label: label.to_owned(),
             gait,
             selection,
+            navigator: None,
         })
     }
 

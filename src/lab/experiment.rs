@@ -57,6 +57,11 @@ pub trait Experiment: Sync + Sized + Serialize + DeserializeOwned + 'static {
     fn gait(&self) -> GaitKind;
     /// The controllers it compares by default, in report order (registry names).
     fn controllers(&self) -> &'static [&'static str];
+    /// Whether it compares gaits: a controller name not in its gait is looked up in the
+    /// others, and `navigator` runs the navigator (default: its gait's controllers only).
+    fn any_gait(&self) -> bool {
+        false
+    }
     /// The controller a `--variant` overrides unless its JSON names another.
     fn variant_base(&self) -> &'static str;
     /// Its defaults for the common options.

@@ -22,6 +22,7 @@
 pub mod calibration;
 pub mod cli;
 pub mod compared;
+pub mod crossing;
 pub mod displacement;
 pub mod experiment;
 pub mod flat_ground;
@@ -36,7 +37,9 @@ pub mod runner;
 pub mod shard;
 pub mod sidewinding;
 pub mod strain;
+pub mod stuck_check;
 pub mod trial;
+pub mod trial_navigator;
 
 use std::path::PathBuf;
 

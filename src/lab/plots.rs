@@ -78,6 +78,24 @@ pub fn path_plot(
     root.present().map_err(plot_err(path))
 }
 
+/// A controller's plotted trial as most experiments show it: `path-<label>.png` (the
+/// path over the obstacles and `region`) and `signals-<label>.png`, titled `title`.
+pub fn path_and_signals(
+    dir: &Path,
+    label: &str,
+    title: &str,
+    world: &WorldSpec,
+    region: Option<&Region>,
+    rec: &TrialRecord,
+) -> Result<Vec<std::path::PathBuf>, LabError> {
+    let stem = crate::lab::file_stem(label);
+    let path = dir.join(format!("path-{stem}.png"));
+    path_plot(&path, title, world, region, rec)?;
+    let signals = dir.join(format!("signals-{stem}.png"));
+    signals_plot(&signals, title, rec)?;
+    Ok(vec![path, signals])
+}
+
 /// The chart [`draw_path`] draws on: metres on both axes.
 pub(crate) type PathChart<'a, 'b> =
     ChartContext<'a, BitMapBackend<'b>, Cartesian2d<RangedCoordf64, RangedCoordf64>>;

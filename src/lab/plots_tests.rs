@@ -11,7 +11,7 @@ pub(crate) fn is_png(path: &Path) -> bool {
     std::fs::read(path).is_ok_and(|b| b.len() > 1000 && b.starts_with(&PNG_SIGNATURE))
 }
 
-fn record(signals: usize) -> TrialRecord {
+pub(crate) fn record(signals: usize) -> TrialRecord {
     let centre_m: Vec<[f64; 2]> = (0..200)
         .map(|k| [0.01 * k as f64, 0.05 * (0.05 * k as f64).sin()])
         .collect();
@@ -40,6 +40,8 @@ fn record(signals: usize) -> TrialRecord {
         heights_m: Vec::new(),
         windows: Vec::new(),
         strain: Default::default(),
+        stuck_reported: Vec::new(),
+        gait_switches: 0,
     }
 }
 

@@ -3,6 +3,7 @@
 //! here.
 
 use super::cli::{Lab, Plugin};
+use super::crossing::Crossing;
 use super::displacement::Displacement;
 use super::pegboard::Pegboard;
 use super::pole::PoleClimb;
@@ -16,6 +17,7 @@ pub static EXPERIMENTS: &[&dyn Lab] = &[
     &Plugin(SidewindingPegs),
     &Plugin(PoleClimb::UNCONFIGURED),
     &Plugin(super::flat_ground::FlatGround::UNCONFIGURED),
+    &Plugin(Crossing::UNCONFIGURED),
 ];
 
 /// The experiment named `name`.

@@ -10,10 +10,12 @@ use super::LabError;
 use super::experiment::Experiment;
 use super::runner::{TrialResult, controller_names};
 use super::strain::{Strain, StrainSummary};
+use super::stuck_check::{StuckCheck, stuck_markdown};
 
-/// An experiment's CSV header with the strain columns every experiment appends.
-pub fn with_strain_header(own: &str) -> String {
-    format!("{own},{}", Strain::CSV_HEADER)
+/// An experiment's CSV header with the columns every experiment appends: the
+/// strain's and the stuck check's.
+pub fn with_common_header(own: &str) -> String {
+    format!("{own},{},{}", Strain::CSV_HEADER, StuckCheck::CSV_HEADER)
 }
 
 /// The summary's section on what the controllers asked of the actuators (any
@@ -97,7 +99,7 @@ pub fn write_text(path: &Path, text: &str) -> Result<(), LabError> {
 pub fn results_csv<E: Experiment>(module: &E, results: &[TrialResult<E>]) -> String {
     let mut out = String::with_capacity(120 * (results.len() + 1));
     let keys = module.csv_keys().join(",");
-    out.push_str(&with_strain_header(&format!(
+    out.push_str(&with_common_header(&format!(
         "{keys},{}",
         module.csv_header()
     )));
@@ -105,13 +107,14 @@ pub fn results_csv<E: Experiment>(module: &E, results: &[TrialResult<E>]) -> Str
     for r in results {
         let _ = writeln!(
             out,
-            "{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{}",
             csv_field(&r.controller),
             csv_field(&r.layout),
             r.start,
             r.repeat,
             module.csv_row(r),
-            r.strain.csv_row()
+            r.strain.csv_row(),
+            r.stuck.csv_row()
         );
     }
     out
@@ -139,6 +142,15 @@ pub fn summary_markdown<E: Experiment>(
     s.push_str(&module.summary_tables(results, ctx));
     s.push_str(&calibrations_markdown(ctx));
     s.push_str(&strain_markdown(results));
+    let pooled = controller_names(results).into_iter().map(|name| {
+        let mut c = StuckCheck::default();
+        results
+            .iter()
+            .filter(|r| r.controller == name)
+            .for_each(|r| c.add(&r.stuck));
+        (name, c)
+    });
+    s.push_str(&stuck_markdown(pooled));
     let _ = writeln!(s, "\nPer trial: `results.csv`.");
     if !ctx.plots.is_empty() {
         s.push_str("\nPlots:\n\n");

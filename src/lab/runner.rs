@@ -16,6 +16,7 @@ use super::file_stem;
 use super::layout::{Layout, noise_seed};
 use super::shard::Shard;
 use super::strain::Strain;
+use super::stuck_check::StuckCheck;
 use super::trial::{TrialConfig, TrialRecord, TrialRecording, run_trial};
 use crate::emu::world::WorldSpec;
 use crate::emu::world::scenario::MODULE_LENGTH_M;
@@ -61,6 +62,9 @@ pub struct TrialResult<E: Experiment> {
     pub metrics: E::Metrics,
     /// What the trial asked of the actuators (every experiment reports it).
     pub strain: Strain,
+    /// How the loop's stuck detector did against the truth (every experiment).
+    #[serde(default)]
+    pub stuck: StuckCheck,
     /// The world and the full record, kept for the trial the report plots (each
     /// controller's first layout and start).
     pub plotted: Option<(Arc<WorldSpec>, E::Goal, TrialRecord)>,
@@ -271,6 +275,7 @@ pub fn run_share<E: Experiment>(
             repeat: w.repeat,
             metrics,
             strain: rec.strain,
+            stuck: StuckCheck::of(&rec),
             plotted: first.then(|| (Arc::clone(&w.world), w.goal.clone(), rec)),
         })
     };

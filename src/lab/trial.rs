@@ -5,6 +5,7 @@
 //! has crossed the board or the time limit. Recorded at a fixed rate: the body centre
 //! and the controller's signals.
 
+use super::trial_navigator::TrialNavigator;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU64};
 
@@ -55,6 +56,27 @@ pub struct TrialConfig {
     /// operator's `gait.set` would (the pole: rolling on the ground, then the helix);
     /// `None`: the controller's gait from the start.
     pub lead_in: Option<(GaitKind, f64)>,
+    /// Aim the controller at a direction of travel (`controller.heading` at the takeover,
+    /// as an operator would); `None`: its own heading.
+    pub aim: Option<Aim>,
+}
+
+/// A direction of travel in the true world, which the trial turns into the body heading
+/// the controller's gait needs ([`crate::navigation::body_heading_for`]) in the estimate's
+/// world (yaw 0 along the head at the start: docs/estimation.md).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Aim {
+    pub travel_rad: f64,
+}
+
+impl Aim {
+    /// The nominal heading for `gait` in the estimate's world of a start whose head ->
+    /// tail yaw was `start_yaw_rad`; `None` for a gait that does not travel by heading.
+    pub fn nominal_heading(self, gait: GaitKind, start_yaw_rad: f64) -> Option<f64> {
+        let facing = start_yaw_rad + std::f64::consts::PI;
+        crate::navigation::body_heading_for(gait, self.travel_rad)
+            .map(|h| crate::num::wrap_pi(h - facing))
+    }
 }
 
 impl Default for TrialConfig {
@@ -68,6 +90,7 @@ impl Default for TrialConfig {
             servo_loop: PositionLoop::default(),
             gaits: GaitTable::default(),
             lead_in: None,
+            aim: None,
         }
     }
 }
@@ -137,6 +160,12 @@ pub struct TrialRecord {
     pub windows: Vec<Vec<[f64; 1 + MAX_COLUMNS]>>,
     /// What the trial asked of the actuators, every cycle (guard, joint speed, torque).
     pub strain: Strain,
+    /// The loop's stuck detector at every sample (`ControlLoop::progress`).
+    #[serde(default)]
+    pub stuck_reported: Vec<bool>,
+    /// Changes of gait or controller the navigator made (0 without one).
+    #[serde(default)]
+    pub gait_switches: u32,
 }
 
 impl TrialRecord {
@@ -267,7 +296,7 @@ pub(crate) fn trial_loop(
     );
     // The lab's loop answers no socket: its channels only need to exist, and carry the
     // requests given (their answers are not read).
-    let (control_ends, loop_ends) = crate::rt::channels::loop_channels(requests.len() + 1);
+    let (control_ends, loop_ends) = crate::rt::channels::loop_channels(requests.len() + 8);
     let req_tx = control_ends.requests;
     for (ticket, r) in requests.iter().enumerate() {
         let _ = req_tx.try_send(crate::rt::messages::Envelope::new(ticket as u64, *r));
@@ -327,12 +356,34 @@ pub fn run_trial(
         .as_ref()
         .map(|r| r.path.clone())
         .unwrap_or_default();
-    let (mut lp, signal_names, recorder, requests) =
+    let (mut lp, mut signal_names, recorder, requests) =
         trial_loop(controller, plant, config, recording, &[])?;
+    let mut nav = match controller.navigator {
+        Some(cfg) => {
+            let facing = world.start.yaw_rad + std::f64::consts::PI;
+            let travel = config.aim.map_or(0.0, |a| a.travel_rad - facing);
+            let layout = BodyLayout::alternating(config.modules, Plane::Lateral, MODULE_LENGTH_M);
+            let first = crate::navigation::navigator::Choice::Sidewind;
+            // The controllers' signals change with its choices: only its choice is kept.
+            signal_names = vec!["navigator_choice".into()];
+            Some(TrialNavigator::new(
+                cfg,
+                travel,
+                layout,
+                config.gaits,
+                first,
+            ))
+        }
+        None => None,
+    };
     let switch_step = config
         .lead_in()
         .map(|(_, s)| ((s / config.dt_s).round() as usize).max(2));
 
+    let mut aim = config
+        .aim
+        .filter(|_| nav.is_none())
+        .and_then(|a| a.nominal_heading(controller.gait, world.start.yaw_rad));
     let steps = (config.limit_s / config.dt_s).round() as usize;
     let per_sample = config.steps_per_sample();
     let samples = steps / per_sample + 1;
@@ -352,14 +403,26 @@ pub fn run_trial(
         heights_m: Vec::with_capacity(samples * n_links),
         windows: Vec::new(),
         strain: Strain::default(),
+        stuck_reported: Vec::with_capacity(samples),
+        gait_switches: 0,
     };
-    record(&lp, &mut rec);
+    record(&lp, &mut rec, nav.as_ref());
     for k in 1..=steps {
         if Some(k) == switch_step {
             let request = crate::rt::messages::LoopRequest::SetGait {
                 gait: controller.gait,
             };
             let _ = requests.try_send(crate::rt::messages::Envelope::new(1 << 32, request));
+        }
+        if aim.is_some() && lp.controllers().engaged() == Some(controller.gait) {
+            let command = crate::controller_interface::ControllerCommand::SetHeading {
+                heading_rad: aim.take(),
+            };
+            let request = crate::rt::messages::LoopRequest::ControllerCommand {
+                gait: controller.gait,
+                command,
+            };
+            let _ = requests.try_send(crate::rt::messages::Envelope::new(2 << 32, request));
         }
         let guarded = lp.guard_counters().slew_limited_cycles;
         if lp.step() == Flow::Finished {
@@ -370,7 +433,10 @@ pub fn run_trial(
         }
         add_strain(&lp, guarded, &mut rec.strain);
         if k % per_sample == 0 {
-            record(&lp, &mut rec);
+            if let Some(n) = nav.as_mut() {
+                n.step(k as f64 * config.dt_s, &lp, &requests)?;
+            }
+            record(&lp, &mut rec, nav.as_ref());
             if goal.reached(plant_of(&lp)) {
                 rec.success = true;
                 break;
@@ -381,6 +447,7 @@ pub fn run_trial(
     rec.seconds = plant.time_s();
     rec.end_links_m = links(plant);
     rec.self_contacts = plant.self_contacts();
+    rec.gait_switches = nav.as_ref().map_or(0, TrialNavigator::switches);
     drop(lp); // The loop's end of the ring first: the file then holds everything.
     if let Some(r) = recorder {
         r.finish().map_err(|source| LabError::Record {
@@ -409,13 +476,20 @@ pub(crate) fn plant_of(lp: &ControlLoop) -> &dyn Plant {
         .plant()
 }
 
-fn record(lp: &ControlLoop, rec: &mut TrialRecord) {
+fn record(lp: &ControlLoop, rec: &mut TrialRecord, nav: Option<&TrialNavigator>) {
     let plant = plant_of(lp);
     rec.centre_m.push(centre(plant));
     rec.links_m
         .extend((0..plant.link_count()).map(|k| ground(plant.link_pose(k).position_m)));
     rec.heights_m
         .extend((0..plant.link_count()).map(|k| plant.link_pose(k).position_m[2]));
+    rec.stuck_reported.push(lp.progress().stuck);
+    if let Some(n) = nav {
+        if let Some(series) = rec.signals.first_mut() {
+            series.push(n.choice_code());
+        }
+        return;
+    }
     let report = lp.controllers().report();
     for (k, series) in rec.signals.iter_mut().enumerate() {
         series.push(report.map_or(f64::NAN, |(_, r)| r.signals[k]));

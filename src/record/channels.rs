@@ -17,6 +17,7 @@ pub enum Topic {
     Commands,
     Imu,
     BodyEstimate,
+    Navigation,
     ControllerSignals,
     ControllerWindows,
     ControllerInfo,
@@ -28,11 +29,12 @@ pub enum Topic {
 }
 
 impl Topic {
-    pub const ALL: [Topic; 12] = [
+    pub const ALL: [Topic; 13] = [
         Topic::Joints,
         Topic::Commands,
         Topic::Imu,
         Topic::BodyEstimate,
+        Topic::Navigation,
         Topic::ControllerSignals,
         Topic::ControllerWindows,
         Topic::ControllerInfo,
@@ -49,6 +51,7 @@ impl Topic {
             Topic::Commands => "/commands",
             Topic::Imu => "/imu",
             Topic::BodyEstimate => "/body/estimate",
+            Topic::Navigation => "/navigation",
             Topic::ControllerSignals => "/controller/signals",
             Topic::ControllerWindows => "/controller/windows",
             Topic::ControllerInfo => "/controller/info",
@@ -70,6 +73,7 @@ impl Topic {
             Topic::Commands => schemas::commands(),
             Topic::Imu => schemas::imu(),
             Topic::BodyEstimate => schemas::body_estimate(),
+            Topic::Navigation => schemas::navigation(),
             Topic::ControllerSignals => schemas::controller_signals(),
             Topic::ControllerWindows => schemas::controller_windows(),
             Topic::ControllerInfo => schemas::controller_info(),

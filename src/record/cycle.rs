@@ -5,6 +5,7 @@ use crate::controller_interface::BodyEstimate;
 use crate::controller_interface::report::ControllerReport;
 use crate::emu::LinkPose;
 use crate::gait::GaitKind;
+use crate::navigation::progress::ProgressReport;
 use crate::rt::messages::{LoopRequest, Rejection};
 use crate::rt::stats::LoopStats;
 use crate::safety::failsafe::{Mode, Reason};
@@ -49,6 +50,8 @@ pub struct CycleRecord {
     pub report: ControllerReport,
     /// The estimators' body estimate this cycle (the robot's own, not ground truth).
     pub body: BodyEstimate,
+    /// Whether the running gait makes way (the stuck detector).
+    pub progress: ProgressReport,
     /// Ground-truth link poses (simulated runs only; 0 links otherwise), head first.
     pub links: usize,
     pub link_poses: [LinkPose; RECORD_MAX_LINKS],
@@ -81,6 +84,7 @@ impl CycleRecord {
             heading_rad: 0.0,
             round: false,
         },
+        progress: ProgressReport::NONE,
         links: 0,
         link_poses: [LinkPose {
             position_m: [0.0; 3],

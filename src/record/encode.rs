@@ -139,6 +139,43 @@ impl<'a> BodyEstimateMsg<'a> {
     }
 }
 
+/// `/navigation`: whether the running gait makes way (the stuck detector).
+#[derive(Serialize)]
+pub struct NavigationMsg<'a> {
+    cycle: u64,
+    t_ns: u64,
+    progress: Progress<'a>,
+}
+
+/// The report with a NaN repeat error as `null` (JSON has no NaN).
+struct Progress<'a>(&'a crate::navigation::progress::ProgressReport);
+
+impl Serialize for Progress<'_> {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeStruct;
+        let p = self.0;
+        let mut st = s.serialize_struct("Progress", 4)?;
+        st.serialize_field("stuck", &p.stuck)?;
+        st.serialize_field("reason", &p.reason)?;
+        st.serialize_field(
+            "repeat_error",
+            &p.repeat_error.is_finite().then_some(p.repeat_error),
+        )?;
+        st.serialize_field("measuring_s", &p.measuring_s)?;
+        st.end()
+    }
+}
+
+impl<'a> NavigationMsg<'a> {
+    pub fn new(rec: &'a CycleRecord) -> Self {
+        Self {
+            cycle: rec.cycle,
+            t_ns: rec.t_ns,
+            progress: Progress(&rec.progress),
+        }
+    }
+}
+
 /// The report's signals as `{name: value}`, names from the catalog.
 struct Signals<'a> {
     info: Option<&'a ControllerInfo>,

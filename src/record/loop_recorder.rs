@@ -111,6 +111,7 @@ impl LoopRecorder {
         let report = v.slots.report();
         r.engaged = report.is_some();
         r.body = *v.body;
+        r.progress = v.progress;
         match report {
             Some((_, rep)) => r.report = *rep,
             None => r.report.clear(),

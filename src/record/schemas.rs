@@ -74,6 +74,19 @@ pub fn body_estimate() -> Value {
     )
 }
 
+pub fn navigation() -> Value {
+    object(
+        "snaked.Navigation",
+        header(),
+        json!({"progress": {"type": "object", "properties": {
+            "stuck": {"type": "boolean", "description": "the joint torques have repeated each gait cycle: jammed (docs/navigation.md)"},
+            "reason": {"type": "string", "enum": ["measuring", "changing", "torques_repeat"]},
+            "repeat_error": {"type": ["number", "null"], "description": "the last whole cycle's RMS(τ(t) − τ(t − T)) / RMS(τ); null until measured"},
+            "measuring_s": {"type": "number", "description": "seconds since the measurement restarted (any request, blend, hold or limp restarts it)"},
+        }}}),
+    )
+}
+
 pub fn controller_signals() -> Value {
     object(
         "snaked.ControllerSignals",

@@ -14,7 +14,8 @@ use serde_json::json;
 use super::channels::{Channels, Topic};
 use super::cycle::{CycleRecord, RecordEvent, RecordItem};
 use super::encode::{
-    BodyEstimateMsg, Commands, ControllerSignals, ControllerWindows, Imu, Joints, Stats,
+    BodyEstimateMsg, Commands, ControllerSignals, ControllerWindows, Imu, Joints, NavigationMsg,
+    Stats,
 };
 use super::error::RecordError;
 use super::file::McapFile;
@@ -278,6 +279,9 @@ impl Writer {
         ch.log_json(Topic::Imu, t, |b| serde_json::to_writer(b, &Imu::new(rec)));
         ch.log_json(Topic::BodyEstimate, t, |b| {
             serde_json::to_writer(b, &BodyEstimateMsg::new(rec))
+        });
+        ch.log_json(Topic::Navigation, t, |b| {
+            serde_json::to_writer(b, &NavigationMsg::new(rec))
         });
         ch.log_json(Topic::ControllerSignals, t, |b| {
             serde_json::to_writer(b, &ControllerSignals::new(rec, info))

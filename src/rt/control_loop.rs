@@ -13,6 +13,8 @@ use crate::bus::{Bus, GroupFeedback};
 use crate::controller_interface::{BodyEstimate, Estimator, Imu, Observation};
 use crate::gait::{GaitKind, GaitSelector, ParamPatch};
 use crate::module::Command;
+use crate::navigation::progress::{ProgressMonitor, ProgressReport};
+use crate::navigation::stuck::StuckConfig;
 use crate::rt::controller_slots::{ControllerSlots, Installed};
 use crate::rt::messages::{Ack, Envelope, LoopRequest, Refusal, Rejection};
 use crate::rt::observer::CycleObserver;
@@ -80,6 +82,8 @@ pub struct ControlLoop {
     torques: Vec<f64>,
     imu: Vec<Imu>,
     body: BodyEstimate,
+    /// Whether the running gait makes way (issue 28): restarted by every change.
+    progress: ProgressMonitor,
     slots: ControllerSlots,
     guard: SetpointGuard,
     observer: Option<Box<dyn CycleObserver>>,
@@ -116,6 +120,7 @@ impl ControlLoop {
             torques: vec![0.0; n],
             imu: vec![Imu::default(); n],
             body: BodyEstimate::default(),
+            progress: ProgressMonitor::new(StuckConfig::DEFAULT, n),
             slots,
             guard,
             observer,
@@ -178,6 +183,16 @@ impl ControlLoop {
     }
 
     /// The controller slots (which one drives, its last report).
+    /// The estimators' body estimate of the last cycle.
+    pub fn body(&self) -> &BodyEstimate {
+        &self.body
+    }
+
+    /// Whether the running gait makes way (the stuck detector).
+    pub fn progress(&self) -> ProgressReport {
+        self.progress.report()
+    }
+
     pub fn controllers(&self) -> &ControllerSlots {
         &self.slots
     }
@@ -216,6 +231,7 @@ impl ControlLoop {
                 o.request(c.t_ns, env.ticket, request, result);
             }
             if result.is_ok() {
+                self.progress.restart();
                 self.applied += 1;
             } else {
                 self.refused += 1;
@@ -409,6 +425,14 @@ impl ControlLoop {
         let drove = self
             .slots
             .drive(t_s, &self.p.selector, &obs, &mut self.positions);
+        let table = self.p.selector.table();
+        let steady = self.p.selector.blend_progress() >= 1.0;
+        let freq = table
+            .get(self.p.selector.active())
+            .temporal_freq_rad_s
+            .abs();
+        let cycle_s = (steady && freq > 1e-6).then(|| std::f64::consts::TAU / freq);
+        self.progress.update(t_s, cycle_s, &self.torques);
         let checked = self
             .guard
             .check(t_s, &mut self.positions, &mut self.velocities, drove);
@@ -439,6 +463,7 @@ impl ControlLoop {
     /// Freeze the set-points: the last commanded ones when there are any, else the
     /// measured pose (coming out of limp).
     fn hold_commands(&mut self) {
+        self.progress.restart();
         self.slots.pause();
         self.guard.forget();
         if !self.held_valid {
@@ -462,6 +487,7 @@ impl ControlLoop {
     }
 
     fn limp_commands(&mut self) {
+        self.progress.restart();
         self.slots.pause();
         self.guard.forget();
         self.held_valid = false;

@@ -84,6 +84,7 @@ impl ControlLoop {
             bus: self.p.bus.as_ref(),
             stats: &self.stats,
             body: &self.body,
+            progress: self.progress.report(),
         });
     }
 
@@ -104,6 +105,7 @@ impl ControlLoop {
         let (slots, guard) = (&self.slots, self.guard.counters());
         let record_dropped = self.observer.as_ref().map_or(0, |o| o.dropped());
         let (applied, refused, body) = (self.applied, self.refused, self.body);
+        let progress = self.progress.report();
         self.p.telemetry.write(|snap| {
             snap.cycle = c.index;
             snap.t_s = c.t_ns as f64 * 1e-9;
@@ -135,6 +137,7 @@ impl ControlLoop {
             snap.guard = guard;
             snap.record_dropped = record_dropped;
             snap.body = body;
+            snap.progress = progress;
         });
     }
 }

@@ -7,6 +7,7 @@ use crate::bus::{Bus, GroupFeedback};
 use crate::controller_interface::BodyEstimate;
 use crate::gait::GaitKind;
 use crate::module::Command;
+use crate::navigation::progress::ProgressReport;
 use crate::rt::controller_slots::ControllerSlots;
 use crate::rt::messages::{LoopRequest, Rejection};
 use crate::rt::stats::LoopStats;
@@ -25,6 +26,8 @@ pub struct CycleView<'a> {
     pub bus: &'a dyn Bus,
     pub stats: &'a LoopStats,
     pub body: &'a BodyEstimate,
+    /// Whether the running gait makes way (the stuck detector).
+    pub progress: ProgressReport,
 }
 
 /// Watches the loop from its thread: no method may allocate, lock or block (an

@@ -52,6 +52,8 @@ pub struct Snapshot {
     pub record_dropped: u64,
     /// The estimators' body estimate (pose, heading) this cycle.
     pub body: crate::controller_interface::BodyEstimate,
+    /// Whether the running gait makes way (the stuck detector, issue 28).
+    pub progress: crate::navigation::progress::ProgressReport,
 }
 
 impl Snapshot {
@@ -74,6 +76,7 @@ impl Snapshot {
             guard: GuardCounters::default(),
             record_dropped: 0,
             body: crate::controller_interface::BodyEstimate::default(),
+            progress: crate::navigation::progress::ProgressReport::default(),
         }
     }
 }

@@ -25,6 +25,7 @@ pub(crate) fn status(s: &Snapshot, info: &DaemonInfo, catalog: &Catalog) -> Valu
         "joints": joints_summary(s),
         "controller": telemetry_view(&s.controller, catalog),
         "body": body_view(&s.body),
+        "progress": s.progress,
         "guard": s.guard,
         "daemon": info,
     })
@@ -160,6 +161,11 @@ mod tests {
         assert_eq!(v["joints"]["max_tracking_error_rad"], 0.3);
         assert_eq!(v["joints"]["max_feedback_age_s"], Value::Null, "inf → null");
         assert_eq!(v["body"], json!({"valid": false}), "no estimate yet");
+        assert_eq!(
+            v["progress"],
+            json!({"stuck": false, "reason": "measuring", "repeat_error": null, "measuring_s": 0.0}),
+            "nothing measured: NaN → null"
+        );
         let line = serde_json::to_string(&v).unwrap();
         assert!(!line.contains("NaN") && !line.contains("inf"), "{line}");
     }

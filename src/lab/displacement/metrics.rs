@@ -214,6 +214,8 @@ mod tests {
             heights_m: Vec::new(),
             windows: Vec::new(),
             strain: Default::default(),
+            stuck_reported: Vec::new(),
+            gait_switches: 0,
         }
     }
 
@@ -266,6 +268,7 @@ mod tests {
             repeat,
             metrics: displacement_metrics(&rec, 1.024),
             strain: Default::default(),
+            stuck: Default::default(),
             plotted: None,
         }
     }

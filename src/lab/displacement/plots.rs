@@ -324,6 +324,8 @@ mod tests {
             heights_m: Vec::new(),
             windows: Vec::new(),
             strain: Default::default(),
+            stuck_reported: Vec::new(),
+            gait_switches: 0,
         }
     }
 
@@ -346,6 +348,7 @@ mod tests {
                 repeat: 0,
                 metrics: super::super::metrics::displacement_metrics(&record(), 1.0),
                 strain: Default::default(),
+                stuck: Default::default(),
                 plotted: None,
             })
             .collect();

@@ -268,6 +268,8 @@ mod tests {
             heights_m: Vec::new(),
             windows: Vec::new(),
             strain: Default::default(),
+            stuck_reported: Vec::new(),
+            gait_switches: 0,
         };
         let m = e.metrics(&Never, &rec);
         assert!((m.cycles - 2.0).abs() < 1e-9, "{m:?}");

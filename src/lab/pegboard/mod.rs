@@ -20,7 +20,6 @@ use crate::emu::world::scenario::WorldScenario;
 use crate::gait::GaitKind;
 use crate::lab::LabError;
 use crate::lab::experiment::{Defaults, Experiment, Goal};
-use crate::lab::file_stem;
 use crate::lab::layout::Layout;
 use crate::lab::metrics::MetricsConfig;
 use crate::lab::report::SummaryContext;
@@ -168,14 +167,9 @@ impl Experiment for Pegboard {
         r: &TrialResult<Self>,
         (world, board, rec): (&WorldSpec, &Board, &TrialRecord),
     ) -> Result<Vec<PathBuf>, LabError> {
-        use crate::lab::plots::{path_plot, signals_plot};
-        let stem = file_stem(&r.controller);
         let title = format!("{}: layout {}, start {}", r.controller, r.layout, r.start);
-        let path = dir.join(format!("path-{stem}.png"));
-        path_plot(&path, &title, world, Some(&board.region), rec)?;
-        let signals = dir.join(format!("signals-{stem}.png"));
-        signals_plot(&signals, &title, rec)?;
-        Ok(vec![path, signals])
+        let region = Some(&board.region);
+        crate::lab::plots::path_and_signals(dir, &r.controller, &title, world, region, rec)
     }
     fn run_plots(
         &self,

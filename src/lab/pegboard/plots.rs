@@ -115,6 +115,7 @@ mod tests {
                     progress_m: 1.0,
                 },
                 strain: Default::default(),
+                stuck: Default::default(),
                 plotted: None,
             })
             .collect();

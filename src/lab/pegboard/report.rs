@@ -122,7 +122,7 @@ pub fn summary_tables(results: &[TrialResult<Pegboard>]) -> String {
 mod tests {
     use super::*;
     use crate::lab::report::{
-        SummaryContext, csv_field, results_csv, summary_markdown, with_strain_header,
+        SummaryContext, csv_field, results_csv, summary_markdown, with_common_header,
     };
 
     fn result(controller: &str, start: usize, cpm: f64, success: bool) -> TrialResult<Pegboard> {
@@ -144,6 +144,7 @@ mod tests {
                 progress_m: if success { 2.0 } else { -0.05 },
             },
             strain: Default::default(),
+            stuck: Default::default(),
             plotted: None,
         }
     }
@@ -156,7 +157,7 @@ mod tests {
         assert_eq!(lines.len(), 3);
         assert_eq!(
             lines[0],
-            with_strain_header(&format!("controller,layout,start,repeat,{CSV_HEADER}"))
+            with_common_header(&format!("controller,layout,start,repeat,{CSV_HEADER}"))
         );
         assert!(
             lines[1].starts_with(
@@ -166,7 +167,7 @@ mod tests {
             lines[1]
         );
         assert!(lines[2].contains(",false,-0.0500,"), "{}", lines[2]);
-        assert!(lines.iter().all(|l| l.split(',').count() == 19));
+        assert!(lines.iter().all(|l| l.split(',').count() == 26));
         assert_eq!(csv_field("a,b"), "\"a,b\"");
     }
 

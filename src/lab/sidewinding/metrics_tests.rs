@@ -62,6 +62,8 @@ fn record(at: f64, through: bool, rev_s: Option<f64>) -> (Fence, TrialRecord) {
         heights_m: Vec::new(),
         windows: Vec::new(),
         strain: Default::default(),
+        stuck_reported: Vec::new(),
+        gait_switches: 0,
     };
     (fence, rec)
 }

@@ -332,6 +332,8 @@ mod tests {
             heights_m: Vec::new(),
             windows: Vec::new(),
             strain: Default::default(),
+            stuck_reported: Vec::new(),
+            gait_switches: 0,
         }
     }
 

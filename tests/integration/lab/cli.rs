@@ -59,12 +59,19 @@ fn pegboard_writes_csv_summary_and_plots() {
             "peak_joint_speed_rad_s",
             "mean_joint_speed_rad_s",
             "fast_joint_pct",
-            "torque_limit_pct"
+            "torque_limit_pct",
+            "moving_s",
+            "stuck_while_moving_pct",
+            "jammed_s",
+            "stuck_while_jammed_pct",
+            "jam_episodes",
+            "jams_reported",
+            "jam_report_delay_s"
         ]
     );
     assert_eq!(rows.len(), 3, "header + 2 layouts x 1 start:\n{csv}");
     for (row, layout) in rows[1..].iter().zip(["seed1000", "seed1001"]) {
-        assert_eq!(row.len(), 19);
+        assert_eq!(row.len(), 26);
         // 2 s of open loop from rest: the blend and the wave stay within the motors.
         let guarded: f64 = row[14].parse().unwrap();
         assert_eq!(guarded, 0.0, "{row:?}");
@@ -185,7 +192,14 @@ fn list_names_every_experiment_and_its_controllers() {
     for line in ["open_loop", "dc3d_switching", "ac_sfc", "windowed_adaptive"] {
         assert!(names.lines().any(|l| l == line), "{line}: {names}");
     }
-    for experiment in ["pegboard", "peg-array", "rock-pile", "sidewinding", "pole"] {
+    for experiment in [
+        "pegboard",
+        "peg-array",
+        "rock-pile",
+        "sidewinding",
+        "pole",
+        "crossing",
+    ] {
         assert!(
             names
                 .lines()

@@ -1,6 +1,7 @@
 //! `snake-lab` as a user runs it.
 
 mod cli;
+mod crossing;
 mod shard;
 
 use std::path::Path;

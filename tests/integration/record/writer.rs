@@ -279,9 +279,9 @@ fn status_reports_progress_and_the_cap() {
     // Closed at the cap with its summary: finished, and all of it complete.
     assert_eq!(s.file, Some(FileState::Finished));
     assert_eq!(s.complete_s, 0.010);
-    // Joints, commands, IMU, body estimate, signals a cycle over 0..=10 ms, and the 3-D
-    // pair at 0 ms.
-    assert_eq!(s.messages_written, 11 * 5 + 2);
+    // Joints, commands, IMU, body estimate, navigation, signals a cycle over 0..=10 ms,
+    // and the 3-D pair at 0 ms.
+    assert_eq!(s.messages_written, 11 * 6 + 2);
     assert!(s.bytes > 0, "the finished file has its size");
     assert_eq!((s.dropped, s.live_clients), (0, 0));
     rec.finish().expect("finish");

@@ -180,6 +180,7 @@ pub fn expected_counts_300() -> BTreeMap<String, u64> {
         ("/commands", 300),
         ("/imu", 300),
         ("/body/estimate", 300),
+        ("/navigation", 300),
         ("/controller/signals", 300),
         ("/controller/windows", 150),
         ("/controller/info", 1),

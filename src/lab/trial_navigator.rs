@@ -1,0 +1,112 @@
+//! Runs the navigator (`navigation::navigator`) in a lab trial as the daemon's control
+//! side does: every sample it reads the loop, and carries a decision out as an
+//! operator's requests through the loop's queue (`controller.set` with the controller
+//! built off the loop, `gait.set`, then `controller.heading` once the controller drives).
+
+use crossbeam_channel::Sender;
+
+use super::LabError;
+use super::compared::LabController;
+use crate::controller_interface::ControllerCommand;
+use crate::gait::{BodyLayout, GaitKind, GaitTable};
+use crate::navigation::navigator::{Choice, NavView, Navigator, NavigatorConfig};
+use crate::rt::control_loop::ControlLoop;
+use crate::rt::controller_slots::Installed;
+use crate::rt::messages::{Envelope, LoopRequest};
+use crate::safety::failsafe::Mode;
+
+/// Tickets of the navigator's requests (apart from the trial's own).
+const TICKETS: u64 = 3 << 32;
+
+/// The navigator and what it has asked the loop for.
+pub struct TrialNavigator {
+    nav: Navigator,
+    layout: BodyLayout,
+    table: GaitTable,
+    /// The choice whose controller is installed (at the start: the trial's controller).
+    installed: Choice,
+    /// A heading to send once `gait`'s controller drives.
+    pending_heading: Option<(GaitKind, f64)>,
+    ticket: u64,
+}
+
+impl TrialNavigator {
+    /// For travel `travel_rad` in the estimate's world, the trial's controller being
+    /// `first`'s.
+    pub fn new(
+        config: NavigatorConfig,
+        travel_rad: f64,
+        layout: BodyLayout,
+        table: GaitTable,
+        first: Choice,
+    ) -> Self {
+        Self {
+            nav: Navigator::new(config, travel_rad),
+            layout,
+            table,
+            installed: first,
+            pending_heading: None,
+            ticket: TICKETS,
+        }
+    }
+
+    /// What it runs now, as [`Choice::code`] (0 before its first decision).
+    pub fn choice_code(&self) -> f64 {
+        self.nav.current().map_or(0.0, |(c, _)| c.code())
+    }
+
+    pub fn switches(&self) -> u32 {
+        self.nav.switches()
+    }
+
+    fn send(&mut self, tx: &Sender<Envelope>, request: LoopRequest, c: Option<Installed>) {
+        self.ticket += 1;
+        let env = Envelope {
+            ticket: self.ticket,
+            request,
+            controller: c,
+        };
+        // The queue holds a few; a full one would be a bug in the trial's sizing.
+        let _ = tx.try_send(env);
+    }
+
+    /// One step at loop time `t_s`.
+    pub fn step(
+        &mut self,
+        t_s: f64,
+        lp: &ControlLoop,
+        tx: &Sender<Envelope>,
+    ) -> Result<(), LabError> {
+        if let Some((gait, h)) = self.pending_heading
+            && lp.controllers().engaged() == Some(gait)
+        {
+            self.pending_heading = None;
+            let command = ControllerCommand::SetHeading {
+                heading_rad: Some(h),
+            };
+            self.send(tx, LoopRequest::ControllerCommand { gait, command }, None);
+        }
+        let view = NavView {
+            running: lp.mode() == Mode::Running,
+            estimate_valid: lp.body().valid,
+            progress: lp.progress(),
+        };
+        let Some(d) = self.nav.step(t_s, &view) else {
+            return Ok(());
+        };
+        let gait = d.choice.gait();
+        if d.choice.controller() != self.installed.controller() {
+            let c = LabController::named(gait, d.choice.controller())?;
+            let built = c.build(&self.layout, self.table.get(gait))?;
+            let installed = Installed {
+                id: built.info.id,
+                controller: built.controller,
+            };
+            self.send(tx, LoopRequest::SetController { gait }, Some(installed));
+            self.send(tx, LoopRequest::SetGait { gait }, None);
+            self.installed = d.choice;
+        }
+        self.pending_heading = Some((gait, d.heading_rad));
+        Ok(())
+    }
+}
