@@ -33,6 +33,7 @@ impl LabController {
     /// or a controller named in `gait` or else in the first other gait that has it.
     pub fn named_any(gait: GaitKind, name: &str) -> Result<Self, LabError> {
         if name == NAVIGATOR {
+            // Installed first; its first decision may slither instead.
             let first = Choice::Sidewind;
             return Ok(Self {
                 navigator: Some(NavigatorConfig::DEFAULT),

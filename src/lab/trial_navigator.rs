@@ -89,6 +89,7 @@ impl TrialNavigator {
         let view = NavView {
             running: lp.mode() == Mode::Running,
             estimate_valid: lp.body().valid,
+            heading_rad: lp.body().heading_rad,
             progress: lp.progress(),
         };
         let Some(d) = self.nav.step(t_s, &view) else {

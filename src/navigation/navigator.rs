@@ -7,12 +7,12 @@
 //! takeover), `controller.heading`.
 //!
 //! The plan, from the crossing experiment's single controllers (docs/measurements.md,
-//! "Getting across"): anti-compliant sidewinding aimed across is the gait that makes way
-//! on open ground and among pegs at either skin; slithering cannot move on open ground
-//! with isotropic friction, but among pegs that hold a sidewinding body it may. So:
-//! sidewind; when stuck, back off (sidewind the other way) for a while, then slither
-//! towards the direction; when slithering is stuck too, or has had its time, sidewind
-//! again.
+//! "Getting across"): anti-compliant sidewinding aimed across is the only gait that makes
+//! way on open ground at the bare skin's friction; slithering cannot move on open ground
+//! with isotropic friction (it repeats, so the monitor says stuck) but crosses from
+//! among pegs in the sleeve. So: slither when the body already heads the way, else
+//! sidewind; when sidewinding is stuck, back off (sidewind the other way) for a while,
+//! then slither; when slithering is stuck, or has had its time, sidewind.
 
 use serde::{Deserialize, Serialize};
 
@@ -92,19 +92,29 @@ pub struct NavigatorConfig {
     pub back_off_s: f64,
     /// The longest slithering spell, s.
     pub slither_max_s: f64,
+    /// At the start, slither when the body heads within this of the direction (else
+    /// sidewind), rad.
+    pub slither_within_rad: f64,
 }
 
 impl NavigatorConfig {
     pub const DEFAULT: Self = Self {
         settle_s: 6.0,
         back_off_s: 8.0,
-        slither_max_s: 40.0,
+        slither_max_s: 90.0,
+        slither_within_rad: std::f64::consts::FRAC_PI_4,
     };
 
     pub fn check(&self) -> Result<(), ConfigError> {
         check_range("settle_s", self.settle_s, 0.0, 120.0)?;
         check_range("back_off_s", self.back_off_s, 0.0, 120.0)?;
-        check_range("slither_max_s", self.slither_max_s, 1.0, 3600.0)
+        check_range("slither_max_s", self.slither_max_s, 1.0, 3600.0)?;
+        check_range(
+            "slither_within_rad",
+            self.slither_within_rad,
+            0.0,
+            std::f64::consts::PI,
+        )
     }
 }
 
@@ -130,6 +140,8 @@ pub struct NavView {
     pub running: bool,
     /// The pose estimate is valid.
     pub estimate_valid: bool,
+    /// Its heading (the body's head-ward axis, the estimate's world), rad.
+    pub heading_rad: f64,
     pub progress: ProgressReport,
 }
 
@@ -178,6 +190,11 @@ impl Navigator {
         }
         let c = &self.config;
         let next = match self.current {
+            None if crate::num::wrap_pi(view.heading_rad - self.travel_rad).abs()
+                <= c.slither_within_rad =>
+            {
+                (Choice::Slither, Why::Start)
+            }
             None => (Choice::Sidewind, Why::Start),
             Some((now, _)) => {
                 let age = t_s - self.since_s;
@@ -221,6 +238,7 @@ mod tests {
         NavView {
             running: true,
             estimate_valid: true,
+            heading_rad: 2.0,
             progress: ProgressReport {
                 stuck,
                 reason: if stuck {
@@ -260,5 +278,26 @@ mod tests {
         assert_eq!((d.choice, d.why), (Choice::Sidewind, Why::SlitherTimeUp));
         assert_eq!(n.switches(), 3);
         assert_eq!(n.current(), Some((Choice::Sidewind, Why::SlitherTimeUp)));
+    }
+
+    #[test]
+    fn a_body_heading_the_way_slithers_first_and_sidewinds_when_stuck() {
+        let c = NavigatorConfig::DEFAULT;
+        let mut n = Navigator::new(c, 0.3);
+        let mut v = view(false);
+        v.heading_rad = 0.3 + 0.7;
+        let d = n.step(0.0, &v).unwrap();
+        assert_eq!((d.choice, d.why), (Choice::Slither, Why::Start));
+        v.progress = view(true).progress;
+        let d = n.step(c.settle_s, &v).unwrap();
+        assert_eq!((d.choice, d.why), (Choice::Sidewind, Why::Stuck));
+        assert!(
+            NavigatorConfig {
+                slither_within_rad: 4.0,
+                ..c
+            }
+            .check()
+            .is_err()
+        );
     }
 }
