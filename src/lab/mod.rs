@@ -19,6 +19,7 @@
 //!
 //! Definitions and the command line are in `docs/lab.md`.
 
+pub mod aim;
 pub mod calibration;
 pub mod cli;
 pub mod compared;

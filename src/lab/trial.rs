@@ -5,6 +5,8 @@
 //! has crossed the board or the time limit. Recorded at a fixed rate: the body centre
 //! and the controller's signals.
 
+use super::aim::Aim;
+use super::aim::PendingHeading;
 use super::trial_navigator::TrialNavigator;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU64};
@@ -59,24 +61,6 @@ pub struct TrialConfig {
     /// Aim the controller at a direction of travel (`controller.heading` at the takeover,
     /// as an operator would); `None`: its own heading.
     pub aim: Option<Aim>,
-}
-
-/// A direction of travel in the true world, which the trial turns into the body heading
-/// the controller's gait needs ([`crate::navigation::body_heading_for`]) in the estimate's
-/// world (yaw 0 along the head at the start: docs/estimation.md).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Aim {
-    pub travel_rad: f64,
-}
-
-impl Aim {
-    /// The nominal heading for `gait` in the estimate's world of a start whose head ->
-    /// tail yaw was `start_yaw_rad`; `None` for a gait that does not travel by heading.
-    pub fn nominal_heading(self, gait: GaitKind, start_yaw_rad: f64) -> Option<f64> {
-        let facing = start_yaw_rad + std::f64::consts::PI;
-        crate::navigation::body_heading_for(gait, self.travel_rad)
-            .map(|h| crate::num::wrap_pi(h - facing))
-    }
 }
 
 impl Default for TrialConfig {
@@ -360,8 +344,9 @@ pub fn run_trial(
         trial_loop(controller, plant, config, recording, &[])?;
     let mut nav = match controller.navigator {
         Some(cfg) => {
-            let facing = world.start.yaw_rad + std::f64::consts::PI;
-            let travel = config.aim.map_or(0.0, |a| a.travel_rad - facing);
+            let travel = config
+                .aim
+                .map_or(0.0, |a| a.travel_in_estimate(world.start.yaw_rad));
             let layout = BodyLayout::alternating(config.modules, Plane::Lateral, MODULE_LENGTH_M);
             let first = crate::navigation::navigator::Choice::Sidewind;
             // The controllers' signals change with its choices: only its choice is kept.
@@ -380,10 +365,11 @@ pub fn run_trial(
         .lead_in()
         .map(|(_, s)| ((s / config.dt_s).round() as usize).max(2));
 
-    let mut aim = config
+    let heading = config
         .aim
         .filter(|_| nav.is_none())
         .and_then(|a| a.nominal_heading(controller.gait, world.start.yaw_rad));
+    let mut aim = PendingHeading::new(controller.gait, heading);
     let steps = (config.limit_s / config.dt_s).round() as usize;
     let per_sample = config.steps_per_sample();
     let samples = steps / per_sample + 1;
@@ -414,16 +400,7 @@ pub fn run_trial(
             };
             let _ = requests.try_send(crate::rt::messages::Envelope::new(1 << 32, request));
         }
-        if aim.is_some() && lp.controllers().engaged() == Some(controller.gait) {
-            let command = crate::controller_interface::ControllerCommand::SetHeading {
-                heading_rad: aim.take(),
-            };
-            let request = crate::rt::messages::LoopRequest::ControllerCommand {
-                gait: controller.gait,
-                command,
-            };
-            let _ = requests.try_send(crate::rt::messages::Envelope::new(2 << 32, request));
-        }
+        aim.send_when_engaged(&lp, &requests, 2 << 32);
         let guarded = lp.guard_counters().slew_limited_cycles;
         if lp.step() == Flow::Finished {
             break;
@@ -557,89 +534,5 @@ pub fn front_half_of(links: impl ExactSizeIterator<Item = [f64; 2]>) -> [f64; 2]
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::emu::world::scenario::Region;
-    use crate::lab::pegboard::board::Board;
-
-    #[test]
-    fn nominal_patches_the_gait_as_the_daemon_checks_it() {
-        let table =
-            nominal_gaits(GaitKind::Slithering, Some(r#"{"amplitude_lat_rad":1.1}"#)).unwrap();
-        let p = table.get(GaitKind::Slithering);
-        assert_eq!(p.amplitude_lat_rad, 1.1);
-        let d = GaitTable::default();
-        assert_eq!(
-            p.spatial_freq_rad,
-            d.get(GaitKind::Slithering).spatial_freq_rad
-        );
-        assert_eq!(table.get(GaitKind::Rolling), d.get(GaitKind::Rolling));
-        assert_eq!(nominal_gaits(GaitKind::Slithering, None).unwrap(), d);
-        for bad in [
-            r#"{"amplitude_lat_rad":2.0}"#,
-            r#"{"amplitude":1.0}"#,
-            r#"{"amplitude_dor_rad":0.3}"#,
-            "not json",
-        ] {
-            let e = nominal_gaits(GaitKind::Slithering, Some(bad)).unwrap_err();
-            assert!(e.to_string().contains("--nominal"), "{bad}: {e}");
-        }
-    }
-
-    #[test]
-    fn sampling_cadence() {
-        let c = TrialConfig::default();
-        assert_eq!(c.steps_per_sample(), 50);
-        assert!((c.sample_dt_s() - 0.05).abs() < 1e-12);
-    }
-
-    #[test]
-    fn a_short_open_loop_trial_records_and_moves_the_joints() {
-        let world = WorldSpec::default();
-        let board = Board::new(
-            Region {
-                x_m: [-5.0, 5.0],
-                y_m: [-5.0, 5.0],
-            },
-            std::f64::consts::PI,
-        );
-        let config = TrialConfig {
-            limit_s: 0.5,
-            ..TrialConfig::default()
-        };
-        let open_loop = LabController::named(GaitKind::Slithering, "open_loop").unwrap();
-        let rec = run_trial(&open_loop, &world, &board, 7, &config, None).unwrap();
-        assert!(!rec.success);
-        assert!((rec.seconds - 0.5).abs() < 1e-9);
-        assert_eq!(rec.centre_m.len(), 11, "t = 0 and every 50 ms");
-        assert_eq!(rec.start_links_m.len(), 19);
-        assert_ne!(rec.start_links_m, rec.end_links_m, "the body moved");
-        assert_eq!(rec.temporal_freq_rad_s, 1.0);
-        assert_eq!(rec.signal_names.len(), rec.signals.len());
-        let again = run_trial(&open_loop, &world, &board, 7, &config, None).unwrap();
-        // Debug text: NaN (no signal before the takeover) equals itself there.
-        assert_eq!(format!("{rec:?}"), format!("{again:?}"), "deterministic");
-    }
-
-    #[test]
-    fn a_trial_ends_when_the_front_half_crosses() {
-        // A board whose far edge is just ahead of the straight body's front half: the
-        // front half starts beyond the x_max edge (entry x_min), so the first sample ends it.
-        let world = WorldSpec::default();
-        let board = Board::new(
-            Region {
-                x_m: [-3.0, -0.5],
-                y_m: [-1.0, 1.0],
-            },
-            std::f64::consts::PI,
-        );
-        let config = TrialConfig {
-            limit_s: 2.0,
-            ..TrialConfig::default()
-        };
-        let open_loop = LabController::named(GaitKind::Slithering, "open_loop").unwrap();
-        let rec = run_trial(&open_loop, &world, &board, 1, &config, None).unwrap();
-        assert!(rec.success);
-        assert!((rec.seconds - 0.05).abs() < 1e-9, "{}", rec.seconds);
-    }
-}
+#[path = "trial_tests.rs"]
+mod tests;

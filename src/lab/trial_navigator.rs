@@ -6,9 +6,9 @@
 use crossbeam_channel::Sender;
 
 use super::LabError;
+use super::aim::PendingHeading;
 use super::compared::LabController;
-use crate::controller_interface::ControllerCommand;
-use crate::gait::{BodyLayout, GaitKind, GaitTable};
+use crate::gait::{BodyLayout, GaitTable};
 use crate::navigation::navigator::{Choice, NavView, Navigator, NavigatorConfig};
 use crate::rt::control_loop::ControlLoop;
 use crate::rt::controller_slots::Installed;
@@ -25,8 +25,8 @@ pub struct TrialNavigator {
     table: GaitTable,
     /// The choice whose controller is installed (at the start: the trial's controller).
     installed: Choice,
-    /// A heading to send once `gait`'s controller drives.
-    pending_heading: Option<(GaitKind, f64)>,
+    /// A heading to send once its gait's controller drives.
+    pending_heading: PendingHeading,
     ticket: u64,
 }
 
@@ -45,7 +45,7 @@ impl TrialNavigator {
             layout,
             table,
             installed: first,
-            pending_heading: None,
+            pending_heading: PendingHeading::default(),
             ticket: TICKETS,
         }
     }
@@ -77,14 +77,11 @@ impl TrialNavigator {
         lp: &ControlLoop,
         tx: &Sender<Envelope>,
     ) -> Result<(), LabError> {
-        if let Some((gait, h)) = self.pending_heading
-            && lp.controllers().engaged() == Some(gait)
+        if self
+            .pending_heading
+            .send_when_engaged(lp, tx, self.ticket + 1)
         {
-            self.pending_heading = None;
-            let command = ControllerCommand::SetHeading {
-                heading_rad: Some(h),
-            };
-            self.send(tx, LoopRequest::ControllerCommand { gait, command }, None);
+            self.ticket += 1;
         }
         let view = NavView {
             running: lp.mode() == Mode::Running,
@@ -107,7 +104,7 @@ impl TrialNavigator {
             self.send(tx, LoopRequest::SetGait { gait }, None);
             self.installed = d.choice;
         }
-        self.pending_heading = Some((gait, d.heading_rad));
+        self.pending_heading = PendingHeading::new(gait, Some(d.heading_rad));
         Ok(())
     }
 }

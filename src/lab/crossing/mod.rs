@@ -20,12 +20,13 @@ use crate::emu::world::WorldSpec;
 use crate::emu::world::scenario::{FrictionSpec, WorldScenario};
 use crate::gait::GaitKind;
 use crate::lab::LabError;
+use crate::lab::aim::Aim;
 use crate::lab::experiment::{Defaults, Experiment, Goal};
 use crate::lab::layout::Layout;
 use crate::lab::pegboard::board::{Board, board_region};
 use crate::lab::report::SummaryContext;
 use crate::lab::runner::TrialResult;
-use crate::lab::trial::{Aim, TrialConfig, TrialRecord, front_half_centre};
+use crate::lab::trial::{TrialConfig, TrialRecord, front_half_centre};
 
 /// The generator families, built in: (name, scenario).
 pub const FAMILIES: &[(&str, &str)] = &[
