@@ -182,7 +182,6 @@ impl ControlLoop {
         self.guard.counters()
     }
 
-    /// The controller slots (which one drives, its last report).
     /// The estimators' body estimate of the last cycle.
     pub fn body(&self) -> &BodyEstimate {
         &self.body
@@ -193,6 +192,7 @@ impl ControlLoop {
         self.progress.report()
     }
 
+    /// The controller slots (which one drives, its last report).
     pub fn controllers(&self) -> &ControllerSlots {
         &self.slots
     }
