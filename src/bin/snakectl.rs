@@ -59,6 +59,15 @@ enum Cmd {
         #[command(subcommand)]
         cmd: ControllerCmd,
     },
+    /// Go that way on its own: the navigator picks and changes gaits and controllers
+    /// (docs/navigation.md). HEADING: the direction of travel, rad, in the pose
+    /// estimate's world; `off` stops it. Any command that drives the robot stops it too.
+    Navigate {
+        heading: String,
+        /// The navigator's settings as JSON, e.g. '{"slither_max_s": 60}'.
+        #[arg(long)]
+        config: Option<String>,
+    },
     /// Freeze the joints where they are.
     Hold,
     /// Stop driving the joints.
@@ -258,6 +267,7 @@ fn request(cmd: &Cmd) -> Result<(&str, Option<Value>), Failure> {
             Some(params_set(*blend_time, compliance, gait, assignments)?),
         ),
         Cmd::Controller { cmd } => controller::request(cmd).map_err(Failure::Usage)?,
+        Cmd::Navigate { heading, config } => ("navigate", Some(navigate(heading, config)?)),
         Cmd::Hold => ("hold", None),
         Cmd::Limp => ("limp", None),
         Cmd::Estop => ("estop", None),
@@ -275,6 +285,27 @@ fn request(cmd: &Cmd) -> Result<(&str, Option<Value>), Failure> {
             (method.as_str(), params)
         }
     })
+}
+
+fn navigate(heading: &str, config: &Option<String>) -> Result<Value, Failure> {
+    if heading == "off" {
+        if config.is_some() {
+            return Err(Failure::Usage("`navigate off` takes no --config".into()));
+        }
+        return Ok(json!({ "off": true }));
+    }
+    let h: f64 = heading
+        .trim()
+        .parse()
+        .ok()
+        .filter(|h: &f64| h.is_finite())
+        .ok_or_else(|| Failure::Usage(format!("heading {heading:?}: radians or `off`")))?;
+    let mut p = json!({ "heading_rad": h });
+    if let Some(c) = config {
+        p["config"] = serde_json::from_str(c)
+            .map_err(|e| Failure::Usage(format!("--config is not valid JSON: {e}")))?;
+    }
+    Ok(p)
 }
 
 fn params_set(
@@ -396,6 +427,10 @@ fn print_human(cmd: &Cmd, r: &Value) {
             r["heading_rad"]
         ),
         Cmd::Controller { .. } => controller::print_installed(r),
+        Cmd::Navigate { .. } => match r["navigating"].as_bool() {
+            Some(true) => println!("navigating towards {} rad", num(&r["travel_rad"], 3)),
+            _ => println!("navigation off"),
+        },
         Cmd::Stats => print_stats(r),
         _ => println!("ok"),
     }
@@ -452,7 +487,29 @@ fn print_status(r: &Value) {
     println!("position  {}", joined(&j["position_rad"], 2));
     println!("torque    {}", joined(&j["torque_nm"], 2));
     controller::print_status(&r["controller"]);
+    print_navigator(&r["navigator"], &r["progress"]);
     println!("daemon    snaked {}", text(&d["version"]));
+}
+
+/// The navigator's line: what it runs and why, or why it stopped; and the stuck signal.
+fn print_navigator(n: &Value, progress: &Value) {
+    let stuck = match progress["stuck"].as_bool() {
+        Some(true) => "stuck",
+        _ => "making way or measuring",
+    };
+    if n["active"] == true {
+        println!(
+            "navigate  towards {} rad: {} ({}), {} switches; {stuck}",
+            num(&n["travel_rad"], 3),
+            text(&n["choice"]),
+            text(&n["why"]),
+            n["switches"]
+        );
+    } else if !n["stopped"].is_null() {
+        println!("navigate  off (stopped: {}); {stuck}", text(&n["stopped"]));
+    } else {
+        println!("navigate  off; {stuck}");
+    }
 }
 
 fn joined(arr: &Value, digits: usize) -> String {

@@ -16,13 +16,16 @@ use crate::rt::messages::{Envelope, LoopRequest};
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Aim {
     pub travel_rad: f64,
+    /// Sidewinding's bend to the left among obstacles, made up for
+    /// ([`crate::navigation::SIDEWINDING_DRIFT_RAD`]), rad.
+    pub sidewind_drift_rad: f64,
 }
 
 impl Aim {
     /// The nominal heading for `gait` in the estimate's world of a start whose head ->
     /// tail yaw was `start_yaw_rad`; `None` for a gait that does not travel by heading.
     pub fn nominal_heading(self, gait: GaitKind, start_yaw_rad: f64) -> Option<f64> {
-        crate::navigation::body_heading_for(gait, self.travel_rad)
+        crate::navigation::body_heading_for(gait, self.travel_rad, self.sidewind_drift_rad)
             .map(|h| crate::num::wrap_pi(h - facing(start_yaw_rad)))
     }
 

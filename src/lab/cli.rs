@@ -268,11 +268,11 @@ pub fn compared<E: Experiment>(
         })
         .collect::<Result<Vec<_>, _>>()?;
     for spec in variants {
-        controllers.push(LabController::variant_on(
-            gait,
-            spec,
-            module.variant_base(),
-        )?);
+        let base = module.variant_base();
+        controllers.push(match module.any_gait() {
+            true => LabController::variant_any(gait, spec, base)?,
+            false => LabController::variant_on(gait, spec, base)?,
+        });
     }
     Ok(controllers)
 }

@@ -72,6 +72,20 @@ impl LabController {
 
     /// [`Self::variant`] over `base` when the JSON names no controller.
     pub fn variant_on(gait: GaitKind, spec: &str, base: &str) -> Result<Self, LabError> {
+        Self::variant_in(&[gait], spec, base)
+    }
+
+    /// For an experiment that compares gaits: [`Self::variant_on`] in `gait` or else in
+    /// the first other gait whose controllers the JSON's selection names.
+    pub fn variant_any(gait: GaitKind, spec: &str, base: &str) -> Result<Self, LabError> {
+        let mut gaits = vec![gait];
+        gaits.extend(GaitKind::ALL.into_iter().filter(|&g| g != gait));
+        Self::variant_in(&gaits, spec, base)
+    }
+
+    /// A variant in the first of `gaits` (not empty) that resolves its selection.
+    fn variant_in(gaits: &[GaitKind], spec: &str, base: &str) -> Result<Self, LabError> {
+        let gait = gaits[0];
         let bad = |msg: String| LabError::BadValue(format!("--variant {spec:?}: {msg}"));
         let (label, json) = spec
             .split_once('=')
@@ -111,7 +125,18 @@ impl LabController {
             preset,
             config,
         };
-        registry::resolve(REGISTRY, gait, &selection).map_err(|e| bad(e.to_string()))?;
+        let gait = gaits
+            .iter()
+            .copied()
+            .find(|&g| registry::resolve(REGISTRY, g, &selection).is_ok())
+            .map_or_else(
+                || {
+                    registry::resolve(REGISTRY, gait, &selection)
+                        .map(|_| gait)
+                        .map_err(|e| bad(e.to_string()))
+                },
+                Ok,
+            )?;
         Ok(Self {
             label: label.to_owned(),
             gait,

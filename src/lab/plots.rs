@@ -232,6 +232,19 @@ pub(crate) fn draw_path<'a, 'b>(
                 .map_err(&err)?;
         }
     }
+    draw_legend(&mut chart, path)?;
+    Ok(chart)
+}
+
+/// The path figure's legend (lower left), over whatever the chart holds so far: a
+/// caller that adds labelled series draws it again.
+pub(crate) fn draw_legend<'a, 'b>(
+    chart: &mut PathChart<'a, 'b>,
+    path: &Path,
+) -> Result<(), LabError>
+where
+    'b: 'a,
+{
     chart
         .configure_series_labels()
         .position(SeriesLabelPosition::LowerLeft)
@@ -239,8 +252,7 @@ pub(crate) fn draw_path<'a, 'b>(
         .border_style(BLACK)
         .label_font((FONT, 14))
         .draw()
-        .map_err(&err)?;
-    Ok(chart)
+        .map_err(plot_err(path))
 }
 
 /// The controller's signals over the trial, one panel per signal (at most

@@ -343,14 +343,18 @@ pub fn run_trial(
     let (mut lp, mut signal_names, recorder, requests) =
         trial_loop(controller, plant, config, recording, &[])?;
     let mut nav = match controller.navigator {
-        Some(cfg) => {
+        Some(mut cfg) => {
+            // Aimed as the single controllers are.
+            if let Some(a) = config.aim {
+                cfg.sidewind_drift_rad = a.sidewind_drift_rad;
+            }
             let travel = config
                 .aim
                 .map_or(0.0, |a| a.travel_in_estimate(world.start.yaw_rad));
             let layout = BodyLayout::alternating(config.modules, Plane::Lateral, MODULE_LENGTH_M);
             let first = crate::navigation::navigator::Choice::Sidewind;
             // The controllers' signals change with its choices: only its choice is kept.
-            signal_names = vec!["navigator_choice".into()];
+            signal_names = vec![super::trial_navigator::CHOICE_SIGNAL.into()];
             Some(TrialNavigator::new(
                 cfg,
                 travel,
@@ -461,9 +465,10 @@ fn record(lp: &ControlLoop, rec: &mut TrialRecord, nav: Option<&TrialNavigator>)
     rec.heights_m
         .extend((0..plant.link_count()).map(|k| plant.link_pose(k).position_m[2]));
     rec.stuck_reported.push(lp.progress().stuck);
-    if let Some(n) = nav {
+    if nav.is_some() {
+        // As the loop reports it (the runner tells the loop at each decision).
         if let Some(series) = rec.signals.first_mut() {
-            series.push(n.choice_code());
+            series.push(lp.navigator().choice_code());
         }
         return;
     }

@@ -10,10 +10,15 @@ use super::aim::PendingHeading;
 use super::compared::LabController;
 use crate::gait::{BodyLayout, GaitTable};
 use crate::navigation::navigator::{Choice, NavView, Navigator, NavigatorConfig};
+use crate::navigation::state::NavigatorState;
 use crate::rt::control_loop::ControlLoop;
 use crate::rt::controller_slots::Installed;
 use crate::rt::messages::{Envelope, LoopRequest};
 use crate::safety::failsafe::Mode;
+
+/// The signal of a navigator's trial: its choice as the loop reports it
+/// ([`crate::navigation::state::NavigatorState::choice_code`], 0 none).
+pub const CHOICE_SIGNAL: &str = "navigator_choice";
 
 /// Tickets of the navigator's requests (apart from the trial's own).
 const TICKETS: u64 = 3 << 32;
@@ -48,11 +53,6 @@ impl TrialNavigator {
             pending_heading: PendingHeading::default(),
             ticket: TICKETS,
         }
-    }
-
-    /// What it runs now, as [`Choice::code`] (0 before its first decision).
-    pub fn choice_code(&self) -> f64 {
-        self.nav.current().map_or(0.0, |(c, _)| c.code())
     }
 
     pub fn switches(&self) -> u32 {
@@ -105,6 +105,8 @@ impl TrialNavigator {
             self.installed = d.choice;
         }
         self.pending_heading = PendingHeading::new(gait, Some(d.heading_rad));
+        let state = NavigatorState::of(&self.nav, true, None);
+        self.send(tx, LoopRequest::Navigation { state }, None);
         Ok(())
     }
 }

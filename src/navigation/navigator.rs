@@ -95,6 +95,9 @@ pub struct NavigatorConfig {
     /// At the start, slither when the body heads within this of the direction (else
     /// sidewind), rad.
     pub slither_within_rad: f64,
+    /// Sidewinding is aimed this much to the right of its plain heading, because among
+    /// obstacles it bends left ([`super::SIDEWINDING_DRIFT_RAD`]), rad.
+    pub sidewind_drift_rad: f64,
 }
 
 impl NavigatorConfig {
@@ -103,6 +106,7 @@ impl NavigatorConfig {
         back_off_s: 8.0,
         slither_max_s: 90.0,
         slither_within_rad: std::f64::consts::FRAC_PI_4,
+        sidewind_drift_rad: super::SIDEWINDING_DRIFT_RAD,
     };
 
     pub fn check(&self) -> Result<(), ConfigError> {
@@ -114,6 +118,12 @@ impl NavigatorConfig {
             self.slither_within_rad,
             0.0,
             std::f64::consts::PI,
+        )?;
+        check_range(
+            "sidewind_drift_rad",
+            self.sidewind_drift_rad,
+            -std::f64::consts::FRAC_PI_2,
+            std::f64::consts::FRAC_PI_2,
         )
     }
 }
@@ -220,7 +230,8 @@ impl Navigator {
             Choice::BackOff => self.travel_rad + std::f64::consts::PI,
             _ => self.travel_rad,
         };
-        let heading_rad = body_heading_for(choice.gait(), travel).unwrap_or(travel);
+        let heading_rad =
+            body_heading_for(choice.gait(), travel, c.sidewind_drift_rad).unwrap_or(travel);
         Some(Decision {
             choice,
             why,

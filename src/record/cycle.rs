@@ -6,6 +6,7 @@ use crate::controller_interface::report::ControllerReport;
 use crate::emu::LinkPose;
 use crate::gait::GaitKind;
 use crate::navigation::progress::ProgressReport;
+use crate::navigation::state::NavigatorState;
 use crate::rt::messages::{LoopRequest, Rejection};
 use crate::rt::stats::LoopStats;
 use crate::safety::failsafe::{Mode, Reason};
@@ -52,6 +53,8 @@ pub struct CycleRecord {
     pub body: BodyEstimate,
     /// Whether the running gait makes way (the stuck detector).
     pub progress: ProgressReport,
+    /// What the navigator does.
+    pub navigator: NavigatorState,
     /// Ground-truth link poses (simulated runs only; 0 links otherwise), head first.
     pub links: usize,
     pub link_poses: [LinkPose; RECORD_MAX_LINKS],
@@ -85,6 +88,7 @@ impl CycleRecord {
             round: false,
         },
         progress: ProgressReport::NONE,
+        navigator: NavigatorState::OFF,
         links: 0,
         link_poses: [LinkPose {
             position_m: [0.0; 3],

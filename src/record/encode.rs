@@ -139,12 +139,14 @@ impl<'a> BodyEstimateMsg<'a> {
     }
 }
 
-/// `/navigation`: whether the running gait makes way (the stuck detector).
+/// `/navigation`: whether the running gait makes way (the stuck detector) and what
+/// the navigator does.
 #[derive(Serialize)]
 pub struct NavigationMsg<'a> {
     cycle: u64,
     t_ns: u64,
     progress: Progress<'a>,
+    navigator: &'a crate::navigation::state::NavigatorState,
 }
 
 /// The report with a NaN repeat error as `null` (JSON has no NaN).
@@ -172,6 +174,7 @@ impl<'a> NavigationMsg<'a> {
             cycle: rec.cycle,
             t_ns: rec.t_ns,
             progress: Progress(&rec.progress),
+            navigator: &rec.navigator,
         }
     }
 }

@@ -112,6 +112,7 @@ impl LoopRecorder {
         r.engaged = report.is_some();
         r.body = *v.body;
         r.progress = v.progress;
+        r.navigator = v.navigator;
         match report {
             Some((_, rep)) => r.report = *rep,
             None => r.report.clear(),

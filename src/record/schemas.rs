@@ -82,7 +82,15 @@ pub fn navigation() -> Value {
             "stuck": {"type": "boolean", "description": "the joint torques have repeated each gait cycle: jammed (docs/navigation.md)"},
             "reason": {"type": "string", "enum": ["measuring", "changing", "torques_repeat"]},
             "repeat_error": {"type": ["number", "null"], "description": "the last whole cycle's RMS(τ(t) − τ(t − T)) / RMS(τ); null until measured"},
-            "measuring_s": {"type": "number", "description": "seconds since the measurement restarted (any request, blend, hold or limp restarts it)"},
+            "measuring_s": {"type": "number", "description": "seconds since the measurement restarted (a request that changes the gait, a blend, hold or limp restarts it)"},
+        }},
+        "navigator": {"type": "object", "properties": {
+            "active": {"type": "boolean", "description": "navigating now (`navigate`)"},
+            "travel_rad": {"type": ["number", "null"], "description": "the direction of travel, the pose estimate's world, rad"},
+            "choice": {"type": ["string", "null"], "enum": ["sidewind", "back_off", "slither", null], "description": "what it runs"},
+            "why": {"type": ["string", "null"], "enum": ["start", "stuck", "backed_off", "slither_time_up", null]},
+            "switches": {"type": "integer", "description": "changes of gait or controller since it started"},
+            "stopped": {"type": ["string", "null"], "enum": ["off", "operator", "estimate_invalid", "not_running", "refused", null], "description": "why it stopped (docs/navigation.md)"},
         }}}),
     )
 }

@@ -14,6 +14,7 @@ use crate::controller_interface::{BodyEstimate, Estimator, Imu, Observation};
 use crate::gait::{GaitKind, GaitSelector, ParamPatch};
 use crate::module::Command;
 use crate::navigation::progress::{ProgressMonitor, ProgressReport};
+use crate::navigation::state::NavigatorState;
 use crate::navigation::stuck::StuckConfig;
 use crate::rt::controller_slots::{ControllerSlots, Installed};
 use crate::rt::messages::{Ack, Envelope, LoopRequest, Refusal, Rejection};
@@ -84,6 +85,8 @@ pub struct ControlLoop {
     body: BodyEstimate,
     /// Whether the running gait makes way (issue 28): restarted by every change.
     progress: ProgressMonitor,
+    /// What the navigator does, as its runner last said.
+    navigator: NavigatorState,
     slots: ControllerSlots,
     guard: SetpointGuard,
     observer: Option<Box<dyn CycleObserver>>,
@@ -121,6 +124,7 @@ impl ControlLoop {
             imu: vec![Imu::default(); n],
             body: BodyEstimate::default(),
             progress: ProgressMonitor::new(StuckConfig::DEFAULT, n),
+            navigator: NavigatorState::OFF,
             slots,
             guard,
             observer,
@@ -192,6 +196,11 @@ impl ControlLoop {
         self.progress.report()
     }
 
+    /// What the navigator does, as its runner last told the loop.
+    pub fn navigator(&self) -> NavigatorState {
+        self.navigator
+    }
+
     /// The controller slots (which one drives, its last report).
     pub fn controllers(&self) -> &ControllerSlots {
         &self.slots
@@ -231,7 +240,9 @@ impl ControlLoop {
                 o.request(c.t_ns, env.ticket, request, result);
             }
             if result.is_ok() {
-                self.progress.restart();
+                if changes_the_gait(&request) {
+                    self.progress.restart();
+                }
                 self.applied += 1;
             } else {
                 self.refused += 1;
@@ -357,6 +368,10 @@ impl ControlLoop {
             LoopRequest::Shutdown => {
                 self.stop_seen = true;
                 Ok(fs.request(now_s, Event::Shutdown)?)
+            }
+            LoopRequest::Navigation { state } => {
+                self.navigator = state;
+                Ok(())
             }
             LoopRequest::SetParams { .. } | LoopRequest::SetController { .. } => {
                 unreachable!("handled above")
@@ -501,3 +516,19 @@ mod io;
 #[cfg(test)]
 #[path = "control_loop_tests.rs"]
 mod tests;
+
+/// Whether an applied request changes what the body does, so the progress monitor must
+/// measure afresh: not a new nominal heading (steering towards it changes the torques
+/// from one cycle to the next, which the monitor reads as not stuck anyway; a
+/// navigator that re-aims would otherwise never get a whole cycle measured) and not the
+/// navigator's report.
+fn changes_the_gait(request: &LoopRequest) -> bool {
+    !matches!(
+        request,
+        LoopRequest::Navigation { .. }
+            | LoopRequest::ControllerCommand {
+                command: crate::controller_interface::ControllerCommand::SetHeading { .. },
+                ..
+            }
+    )
+}

@@ -85,6 +85,7 @@ impl ControlLoop {
             stats: &self.stats,
             body: &self.body,
             progress: self.progress.report(),
+            navigator: self.navigator,
         });
     }
 
@@ -105,7 +106,7 @@ impl ControlLoop {
         let (slots, guard) = (&self.slots, self.guard.counters());
         let record_dropped = self.observer.as_ref().map_or(0, |o| o.dropped());
         let (applied, refused, body) = (self.applied, self.refused, self.body);
-        let progress = self.progress.report();
+        let (progress, navigator) = (self.progress.report(), self.navigator);
         self.p.telemetry.write(|snap| {
             snap.cycle = c.index;
             snap.t_s = c.t_ns as f64 * 1e-9;
@@ -138,6 +139,7 @@ impl ControlLoop {
             snap.record_dropped = record_dropped;
             snap.body = body;
             snap.progress = progress;
+            snap.navigator = navigator;
         });
     }
 }

@@ -245,3 +245,54 @@ fn stop_holds_then_goes_limp_then_finishes() {
         "held for shutdown_hold_s before going limp ({cycles} cycles)"
     );
 }
+
+#[test]
+fn the_navigator_s_report_and_a_new_heading_do_not_restart_the_progress_monitor() {
+    use crate::controller_interface::ControllerCommand;
+    use crate::navigation::navigator::{Choice, Why};
+    use crate::navigation::state::NavigatorState;
+    let mut h = echo_harness(
+        18,
+        None,
+        GaitKind::Slithering,
+        false,
+        FailsafeConfig::default(),
+    );
+    steps(&mut h, 3000);
+    let measuring = |h: &Harness| h.control.progress().measuring_s;
+    let before = measuring(&h);
+    assert!(
+        before > 0.5,
+        "measuring for {before} s (since the blend ended)"
+    );
+    let state = NavigatorState {
+        active: true,
+        travel_rad: 0.4,
+        choice: Some(Choice::Slither),
+        why: Some(Why::Start),
+        switches: 0,
+        stopped: None,
+    };
+    assert_eq!(
+        request(&mut h, 1, LoopRequest::Navigation { state }),
+        Ok(())
+    );
+    assert_eq!(h.control.navigator(), state);
+    let heading = ControllerCommand::SetHeading {
+        heading_rad: Some(0.4),
+    };
+    let command = LoopRequest::ControllerCommand {
+        gait: GaitKind::Slithering,
+        command: heading,
+    };
+    assert_eq!(request(&mut h, 2, command), Ok(()));
+    steps(&mut h, 1);
+    assert!(measuring(&h) > before, "{} after {before}", measuring(&h));
+    assert_eq!(h.telemetry.latest().navigator, state);
+    // A new gait is measured afresh.
+    let gait = LoopRequest::SetGait {
+        gait: GaitKind::Sidewinding,
+    };
+    assert_eq!(request(&mut h, 3, gait), Ok(()));
+    assert!(measuring(&h) < 0.01, "{}", measuring(&h));
+}

@@ -42,6 +42,11 @@ pub enum LoopRequest {
     Arm,
     /// Safe stop for shutdown: hold, then limp, then the loop exits.
     Shutdown,
+    /// What the navigator does now (its runner tells the loop at each change), reported
+    /// with every cycle. Changes nothing the joints do.
+    Navigation {
+        state: crate::navigation::state::NavigatorState,
+    },
 }
 
 /// A request with the ticket its answer will carry.

@@ -8,6 +8,7 @@ use crate::controller_interface::BodyEstimate;
 use crate::gait::GaitKind;
 use crate::module::Command;
 use crate::navigation::progress::ProgressReport;
+use crate::navigation::state::NavigatorState;
 use crate::rt::controller_slots::ControllerSlots;
 use crate::rt::messages::{LoopRequest, Rejection};
 use crate::rt::stats::LoopStats;
@@ -28,6 +29,8 @@ pub struct CycleView<'a> {
     pub body: &'a BodyEstimate,
     /// Whether the running gait makes way (the stuck detector).
     pub progress: ProgressReport,
+    /// What the navigator does.
+    pub navigator: NavigatorState,
 }
 
 /// Watches the loop from its thread: no method may allocate, lock or block (an

@@ -54,6 +54,8 @@ pub struct Snapshot {
     pub body: crate::controller_interface::BodyEstimate,
     /// Whether the running gait makes way (the stuck detector, issue 28).
     pub progress: crate::navigation::progress::ProgressReport,
+    /// What the navigator does (issue 28).
+    pub navigator: crate::navigation::state::NavigatorState,
 }
 
 impl Snapshot {
@@ -77,6 +79,7 @@ impl Snapshot {
             record_dropped: 0,
             body: crate::controller_interface::BodyEstimate::default(),
             progress: crate::navigation::progress::ProgressReport::default(),
+            navigator: crate::navigation::state::NavigatorState::OFF,
         }
     }
 }

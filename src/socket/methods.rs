@@ -6,6 +6,7 @@ use serde_json::{Value, json};
 
 use super::api::{PATCH_FIELDS, Params, RpcError, code};
 use super::controllers;
+use super::navigate;
 use super::session::Session;
 use super::shared::Shared;
 use super::views;
@@ -14,7 +15,7 @@ use crate::gait::{GaitKind, ParamPatch};
 use crate::rt::messages::LoopRequest;
 
 /// Every method the server knows (listed in the unknown-method error).
-pub const METHODS: [&str; 19] = [
+pub const METHODS: [&str; 20] = [
     "auth",
     "status",
     "gait.list",
@@ -26,6 +27,7 @@ pub const METHODS: [&str; 19] = [
     "controller.set",
     "controller.calibrate",
     "controller.heading",
+    "navigate",
     "hold",
     "limp",
     "estop",
@@ -53,6 +55,9 @@ pub(crate) async fn dispatch(
             code::UNAUTHORIZED,
             "unauthorized: a TCP client sends `auth` with the token first",
         ));
+    }
+    if navigate::TAKES_OVER.contains(&method) {
+        navigate::operator_takes_over(shared);
     }
     match method {
         "auth" => {
@@ -148,6 +153,7 @@ pub(crate) async fn dispatch(
             };
             controllers::set_heading(shared, gait, heading).await
         }
+        "navigate" => navigate::navigate(shared, p).await,
         "hold" => act(shared, p, LoopRequest::Hold).await,
         "limp" => act(shared, p, LoopRequest::Limp).await,
         "estop" => act(shared, p, LoopRequest::EStop).await,

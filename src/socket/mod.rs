@@ -18,6 +18,7 @@
 //! - `methods`: what each method does; `views`: JSON views of a snapshot.
 //! - `controllers`: the controller methods (`controller.list/get/set`), any gait's
 //!   controller in `status` and telemetry, read from the registry.
+//! - `navigate`: the navigator's task (`navigate`), carried out as an operator's requests.
 //! - `router`: tickets and acks between connections and the loop.
 //! - [`client`]: a small blocking client (used by `snakectl` and the tests).
 
@@ -28,6 +29,7 @@ mod conn;
 mod controllers;
 mod lines;
 mod methods;
+mod navigate;
 pub mod paths;
 mod router;
 mod server;

@@ -168,6 +168,7 @@ pub fn start(cfg: ServerConfig, handle: LoopHandle) -> Result<RunningServer, Ser
         retired: handle.retired,
         catalog: handle.catalog,
         controller_change: tokio::sync::Mutex::new(()),
+        navigation: Default::default(),
     });
     let clients = Clients::new(cfg.max_clients);
     let (closing_tx, closing) = tokio::sync::watch::channel(false);

@@ -26,6 +26,7 @@ pub(crate) fn status(s: &Snapshot, info: &DaemonInfo, catalog: &Catalog) -> Valu
         "controller": telemetry_view(&s.controller, catalog),
         "body": body_view(&s.body),
         "progress": s.progress,
+        "navigator": s.navigator,
         "guard": s.guard,
         "daemon": info,
     })
@@ -124,6 +125,8 @@ pub(crate) fn telemetry(s: &Snapshot, catalog: &Catalog) -> Value {
         "joints": s.joints,
         "controller": telemetry_view(&s.controller, catalog),
         "body": body_view(&s.body),
+        "progress": s.progress,
+        "navigator": s.navigator,
     })
 }
 

@@ -38,6 +38,9 @@ pub struct CrossingMetrics {
     pub seconds: f64,
     /// The body centre's displacement along +x, first to last sample, m.
     pub progress_m: f64,
+    /// Its displacement across (along +y), first to last sample, m: which side a body
+    /// drifts to.
+    pub lateral_m: f64,
     /// Time in 2 s windows in which the centre moved under 2 cm, s.
     pub stuck_s: f64,
     pub self_contacts: u64,
@@ -58,15 +61,16 @@ pub fn crossing_metrics(goal: &CrossingGoal, rec: &TrialRecord) -> CrossingMetri
         Some(Exit::Side) => Outcome::Side,
         None => Outcome::Timeout,
     };
-    let progress_m = match (rec.centre_m.first(), rec.centre_m.last()) {
-        (Some(a), Some(b)) => b[0] - a[0],
-        _ => 0.0,
+    let (progress_m, lateral_m) = match (rec.centre_m.first(), rec.centre_m.last()) {
+        (Some(a), Some(b)) => (b[0] - a[0], b[1] - a[1]),
+        _ => (0.0, 0.0),
     };
     CrossingMetrics {
         kind: goal.kind,
         outcome,
         seconds: rec.seconds,
         progress_m,
+        lateral_m,
         stuck_s: stuck_s(&rec.centre_m, rec.sample_dt_s, 2.0, 0.02),
         self_contacts: rec.self_contacts,
         gait_switches: rec.gait_switches,

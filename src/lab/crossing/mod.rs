@@ -7,6 +7,7 @@
 //! docs/lab.md, "Crossing".
 
 pub mod metrics;
+pub mod plot;
 pub mod report;
 pub mod starts;
 
@@ -72,6 +73,8 @@ pub struct Crossing {
     /// The start kinds cycled through: start `k` is `kinds[k % kinds_len]`.
     pub kinds: [StartKind; 4],
     pub kinds_len: usize,
+    /// How sidewinding is aimed: its bend to the left made up for, rad.
+    pub sidewind_drift_rad: f64,
 }
 
 impl Crossing {
@@ -79,6 +82,7 @@ impl Crossing {
         skin: Skin::Bare,
         kinds: StartKind::ALL,
         kinds_len: 4,
+        sidewind_drift_rad: crate::navigation::SIDEWINDING_DRIFT_RAD,
     };
 
     /// The kind of start `start`.
@@ -109,6 +113,11 @@ pub struct CrossingArgs {
     /// `--starts 4` runs each once).
     #[arg(long, value_enum, value_delimiter = ',')]
     pub kinds: Vec<StartKind>,
+    /// Aim sidewinding (a single controller and the navigator's) this much to the right
+    /// of its plain heading, rad, because among obstacles it bends left (default: the
+    /// daemon's, docs/navigation.md).
+    #[arg(long, allow_hyphen_values = true)]
+    pub sidewind_drift_rad: Option<f64>,
 }
 
 /// Its default controllers: open-loop slithering, the best compliant slithering,
@@ -203,6 +212,14 @@ impl Experiment for Crossing {
             skin: args.skin,
             ..Crossing::UNCONFIGURED
         };
+        if let Some(d) = args.sidewind_drift_rad {
+            if !(d.is_finite() && d.abs() <= std::f64::consts::FRAC_PI_2) {
+                return Err(LabError::BadValue(format!(
+                    "--sidewind-drift-rad {d}: a finite angle within ±π/2"
+                )));
+            }
+            exp.sidewind_drift_rad = d;
+        }
         if !args.kinds.is_empty() {
             if args.kinds.len() > 4 {
                 return Err(LabError::BadValue("--kinds: at most four".into()));
@@ -242,7 +259,10 @@ impl Experiment for Crossing {
 
     fn trial_config(&self, base: &TrialConfig, _goal: &CrossingGoal) -> TrialConfig {
         TrialConfig {
-            aim: Some(Aim { travel_rad: 0.0 }),
+            aim: Some(Aim {
+                travel_rad: 0.0,
+                sidewind_drift_rad: self.sidewind_drift_rad,
+            }),
             ..*base
         }
     }
@@ -274,6 +294,14 @@ impl Experiment for Crossing {
             goal.kind.name()
         );
         let region = Some(&goal.board.region);
+        if rec.signal_names.iter().any(|n| n == plot::CHOICE_SIGNAL) {
+            let stem = crate::lab::file_stem(&r.controller);
+            let path = dir.join(format!("path-{stem}.png"));
+            plot::choice_path_plot(&path, &title, world, region, rec)?;
+            let signals = dir.join(format!("signals-{stem}.png"));
+            crate::lab::plots::signals_plot(&signals, &title, rec)?;
+            return Ok(vec![path, signals]);
+        }
         crate::lab::plots::path_and_signals(dir, &r.controller, &title, world, region, rec)
     }
     fn run_plots(

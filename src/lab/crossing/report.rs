@@ -10,17 +10,18 @@ use crate::lab::runner::{TrialResult, controller_names};
 
 /// The CSV header; one row per trial follows in plan order.
 pub const CSV_HEADER: &str =
-    "start_kind,outcome,seconds,progress_m,stuck_s,self_contacts,gait_switches";
+    "start_kind,outcome,seconds,progress_m,lateral_m,stuck_s,self_contacts,gait_switches";
 
 /// One trial's row.
 pub fn csv_row(r: &TrialResult<Crossing>) -> String {
     let m = &r.metrics;
     format!(
-        "{},{},{:.2},{:.4},{:.1},{},{}",
+        "{},{},{:.2},{:.4},{:.4},{:.1},{},{}",
         m.kind.name(),
         m.outcome.name(),
         m.seconds,
         m.progress_m,
+        m.lateral_m,
         m.stuck_s,
         m.self_contacts,
         m.gait_switches,

@@ -1,5 +1,7 @@
 mod controllers;
 mod lifecycle;
 mod methods;
+mod navigate;
 mod protocol;
+mod real;
 mod snakectl;

@@ -124,6 +124,7 @@ fn apply(s: &mut Snapshot, r: &LoopRequest) {
         LoopRequest::EStop => s.mode = Mode::EStop,
         LoopRequest::Arm => s.mode = Mode::Running,
         LoopRequest::SetController { .. } | LoopRequest::ControllerCommand { .. } => {}
+        LoopRequest::Navigation { state } => s.navigator = state,
     }
     s.reason = Reason::Operator;
 }
@@ -276,6 +277,12 @@ pub fn raw(c: &mut Client, line: &str) -> Value {
 }
 
 /// The error code of an answer (panics when it is a result).
+/// `method` with `params` (an object), answered as it came (result or error).
+pub fn call(c: &mut Client, method: &str, params: Value) -> Value {
+    let line = serde_json::json!({"id": 1, "method": method, "params": params}).to_string();
+    raw(c, &line)
+}
+
 pub fn error_code(answer: &Value) -> i64 {
     answer["error"]["code"]
         .as_i64()

@@ -1,0 +1,246 @@
+//! `navigate`: the navigator (`navigation::navigator`) run on the control side. A task
+//! reads the loop's snapshot every 50 ms and carries each decision out as an
+//! operator's requests would be carried out (`controller.set` built here, `gait.set`,
+//! then `controller.heading` once the chosen controller drives), so the selector's
+//! blend, the takeover, the slew limit and the failsafe apply to it as to anyone. It
+//! tells the loop what it does (`LoopRequest::Navigation`) at each change, so `status`,
+//! telemetry, the recording and the live view report it.
+//!
+//! It stops, and says why in `status.navigator.stopped`: when the operator turns it off
+//! or sends a request that drives the robot (theirs wins: [`TAKES_OVER`]), when the
+//! pose estimate stays invalid (it steers by it), when the loop stops running the gait,
+//! or when the loop refuses one of its requests.
+
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+
+use serde_json::{Value, json};
+
+use super::api::{Params, RpcError, code};
+use super::controllers;
+use super::shared::Shared;
+use crate::controller_interface::Selection;
+use crate::gait::GaitKind;
+use crate::navigation::navigator::{Decision, NavView, Navigator, NavigatorConfig};
+use crate::navigation::state::{NavigatorState, StopReason};
+use crate::rt::controller_slots::Engagement;
+use crate::rt::messages::LoopRequest;
+use crate::rt::telemetry::Snapshot;
+use crate::safety::failsafe::Mode;
+
+/// The methods after which the operator drives: navigation stops first.
+pub const TAKES_OVER: [&str; 7] = [
+    "gait.set",
+    "controller.set",
+    "controller.heading",
+    "controller.calibrate",
+    "hold",
+    "limp",
+    "estop",
+];
+
+/// How often the runner looks at the loop.
+const STEP: Duration = Duration::from_millis(50);
+
+/// How long the pose estimate may stay invalid before navigation stops, loop s.
+pub const ESTIMATE_GRACE_S: f64 = 1.0;
+
+/// The running navigation task, if any.
+#[derive(Default)]
+pub(crate) struct Navigation {
+    task: Mutex<Option<tokio::task::AbortHandle>>,
+}
+
+impl Navigation {
+    /// Aborts the task; true if one was running.
+    fn abort(&self) -> bool {
+        let mut task = self.task.lock().unwrap_or_else(|e| e.into_inner());
+        match task.take() {
+            Some(t) => {
+                let was_running = !t.is_finished();
+                t.abort();
+                was_running
+            }
+            None => false,
+        }
+    }
+
+    fn set(&self, handle: tokio::task::AbortHandle) {
+        *self.task.lock().unwrap_or_else(|e| e.into_inner()) = Some(handle);
+    }
+}
+
+/// Before a request that drives the robot: stop navigating (at once; the loop hears why
+/// in the background, so an e-stop is not delayed by it).
+pub(crate) fn operator_takes_over(shared: &Arc<Shared>) {
+    if shared.navigation.abort() {
+        let shared = shared.clone();
+        tokio::spawn(async move {
+            let mut state = shared.telemetry.latest().navigator;
+            state.active = false;
+            state.stopped = Some(StopReason::Operator);
+            let _ = report(&shared, state).await;
+        });
+    }
+}
+
+/// `navigate`: `{"heading_rad": h, "config": {..}}` starts (or restarts towards a new
+/// direction), `{"off": true}` stops.
+pub(crate) async fn navigate(shared: &Arc<Shared>, mut p: Params) -> Result<Value, RpcError> {
+    let lim = 2.0 * std::f64::consts::PI;
+    let heading = p.take_f64_in("heading_rad", -lim, lim)?;
+    let off = match p.take_json("off")? {
+        None | Some(Value::Bool(false)) => false,
+        Some(Value::Bool(true)) => true,
+        Some(_) => return Err(RpcError::invalid_params("`off` must be true or false")),
+    };
+    let config = p.take_json("config")?;
+    p.finish(&["heading_rad", "off", "config"])?;
+    match (heading, off) {
+        (None, true) if config.is_none() => stop(shared).await,
+        (Some(h), false) => start(shared, h, config).await,
+        _ => Err(RpcError::invalid_params(
+            "give `heading_rad` (the direction of travel, rad, in the pose estimate's world; \
+             optionally `config`) or `off: true`",
+        )),
+    }
+}
+
+async fn stop(shared: &Arc<Shared>) -> Result<Value, RpcError> {
+    let was = shared.navigation.abort();
+    let mut state = shared.telemetry.latest().navigator;
+    if was || state.active {
+        state.active = false;
+        state.stopped = Some(StopReason::Off);
+        report(shared, state).await?;
+    }
+    Ok(json!({ "navigating": false, "was_navigating": was }))
+}
+
+async fn start(
+    shared: &Arc<Shared>,
+    travel_rad: f64,
+    config: Option<Value>,
+) -> Result<Value, RpcError> {
+    let config: NavigatorConfig = match config {
+        None => NavigatorConfig::DEFAULT,
+        Some(v) => serde_json::from_value(v)
+            .map_err(|e| RpcError::invalid_params(format!("config: {e}")))?,
+    };
+    config
+        .check()
+        .map_err(|e| RpcError::invalid_params(format!("config: {e}")))?;
+    let s = shared.telemetry.latest();
+    if s.mode != Mode::Running {
+        return Err(RpcError::new(
+            code::REFUSED,
+            format!(
+                "refused: the loop is not running a gait (mode {}): arm it or set a gait first",
+                serde_json::to_value(s.mode)
+                    .ok()
+                    .and_then(|v| v.as_str().map(str::to_owned))
+                    .unwrap_or_default()
+            ),
+        ));
+    }
+    if !s.body.valid {
+        return Err(RpcError::new(
+            code::REFUSED,
+            "refused: the pose estimate is not valid (docs/estimation.md), and the navigator \
+             steers by it: wait until `status.body.valid` is true",
+        ));
+    }
+    shared.navigation.abort();
+    let nav = Navigator::new(config, travel_rad);
+    let travel = nav.travel_rad();
+    report(shared, NavigatorState::of(&nav, true, None)).await?;
+    let task = tokio::spawn(run(shared.clone(), nav));
+    shared.navigation.set(task.abort_handle());
+    Ok(json!({ "navigating": true, "travel_rad": travel, "config": config }))
+}
+
+/// Tells the loop what the navigator does.
+async fn report(shared: &Shared, state: NavigatorState) -> Result<(), RpcError> {
+    shared.router.call(LoopRequest::Navigation { state }).await
+}
+
+async fn run(shared: Arc<Shared>, mut nav: Navigator) {
+    let why = drive(&shared, &mut nav).await;
+    tracing::info!(reason = ?why, "navigation stopped: {}", why.explain());
+    let _ = report(&shared, NavigatorState::of(&nav, false, Some(why))).await;
+}
+
+/// Steps the navigator until something stops it; returns why.
+async fn drive(shared: &Shared, nav: &mut Navigator) -> StopReason {
+    let mut tick = tokio::time::interval(STEP);
+    tick.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
+    let mut invalid_since: Option<f64> = None;
+    let mut pending: Option<(GaitKind, f64)> = None;
+    loop {
+        tick.tick().await;
+        let s = shared.telemetry.latest();
+        if s.mode != Mode::Running {
+            return StopReason::NotRunning;
+        }
+        if !s.body.valid {
+            let since = *invalid_since.get_or_insert(s.t_s);
+            if s.t_s - since > ESTIMATE_GRACE_S {
+                return StopReason::EstimateInvalid;
+            }
+            continue;
+        }
+        invalid_since = None;
+        if let Some((gait, h)) = pending
+            && drives(&s, gait)
+        {
+            pending = None;
+            if controllers::set_heading(shared, Some(gait), Some(h))
+                .await
+                .is_err()
+            {
+                return StopReason::Refused;
+            }
+        }
+        let view = NavView {
+            running: true,
+            estimate_valid: true,
+            heading_rad: s.body.heading_rad,
+            progress: s.progress,
+        };
+        let Some(d) = nav.step(s.t_s, &view) else {
+            continue;
+        };
+        if carry_out(shared, &s, &d).await.is_err() {
+            return StopReason::Refused;
+        }
+        pending = Some((d.choice.gait(), d.heading_rad));
+        if report(shared, NavigatorState::of(nav, true, None))
+            .await
+            .is_err()
+        {
+            return StopReason::Refused;
+        }
+    }
+}
+
+/// Whether `gait`'s controller drives the joints now.
+fn drives(s: &Snapshot, gait: GaitKind) -> bool {
+    let c = &s.controller;
+    s.gait == gait
+        && c.active_id == c.installed[gait.index()]
+        && c.engagement == Engagement::Engaged
+}
+
+/// The decision's controller (when another is installed for its gait) and gait.
+async fn carry_out(shared: &Shared, s: &Snapshot, d: &Decision) -> Result<(), RpcError> {
+    let gait = d.choice.gait();
+    let name = d.choice.controller();
+    let installed = shared.catalog.get(s.controller.installed[gait.index()]);
+    if installed.is_none_or(|i| i.preset != name && i.controller != name) {
+        controllers::set(shared, gait, Selection::named(name)).await?;
+    }
+    if s.gait != gait {
+        shared.router.call(LoopRequest::SetGait { gait }).await?;
+    }
+    Ok(())
+}
