@@ -79,6 +79,22 @@ fn a_scripted_run_has_every_channel_with_its_schema_and_count() {
         joints["position_rad"].as_array().map(Vec::len),
         Some(MODULES)
     );
+    let navigation: serde_json::Value =
+        serde_json::from_slice(&file.first["/navigation"]).expect("JSON");
+    assert_eq!(navigation["navigator"]["active"], false, "{navigation}");
+    assert_eq!(
+        navigation["navigator"]["travel_rad"],
+        serde_json::Value::Null
+    );
+    assert_eq!(navigation["progress"]["stuck"], false, "{navigation}");
+    let navigation: serde_json::Value =
+        serde_json::from_slice(&file.last["/navigation"]).expect("JSON");
+    assert_eq!(navigation["navigator"]["active"], true, "{navigation}");
+    assert_eq!(
+        navigation["navigator"]["choice"], "sidewind",
+        "{navigation}"
+    );
+    assert_eq!(navigation["navigator"]["why"], "start", "{navigation}");
     let commands: serde_json::Value =
         serde_json::from_slice(&file.first["/commands"]).expect("JSON");
     assert_eq!(commands["velocity_rad_s"][0], serde_json::Value::Null);

@@ -75,6 +75,17 @@ pub fn cycle(k: u64, controller_id: u64, links: bool) -> RecordItem {
         r.controller_id = controller_id;
     }
     r.engaged = (100..250).contains(&k);
+    if k >= 200 {
+        // The navigator runs from 200 ms on.
+        r.navigator = snaked::navigation::state::NavigatorState {
+            active: true,
+            travel_rad: 0.25,
+            choice: Some(snaked::navigation::navigator::Choice::Sidewind),
+            why: Some(snaked::navigation::navigator::Why::Start),
+            switches: 0,
+            stopped: None,
+        };
+    }
     if r.engaged {
         r.report.signals[0] = 0.4;
         r.report.signals[1] = 2.0;
@@ -233,6 +244,8 @@ pub struct FileReport {
     pub summary_messages: u64,
     /// The first message of each topic.
     pub first: BTreeMap<String, Vec<u8>>,
+    /// The last message of each topic.
+    pub last: BTreeMap<String, Vec<u8>>,
 }
 
 pub fn read_mcap(path: &Path) -> FileReport {
@@ -254,12 +267,14 @@ pub fn read_mcap(path: &Path) -> FileReport {
     }
     let mut counts = BTreeMap::new();
     let mut first = BTreeMap::new();
+    let mut last = BTreeMap::new();
     for m in mcap::MessageStream::new(&bytes).expect("a message stream") {
         let m = m.expect("a valid message");
         *counts.entry(m.channel.topic.clone()).or_insert(0) += 1;
         first
             .entry(m.channel.topic.clone())
             .or_insert_with(|| m.data.to_vec());
+        last.insert(m.channel.topic.clone(), m.data.to_vec());
     }
     let metadata = summary
         .metadata_indexes
@@ -275,5 +290,6 @@ pub fn read_mcap(path: &Path) -> FileReport {
         metadata,
         summary_messages: summary.stats.map_or(0, |s| s.message_count),
         first,
+        last,
     }
 }
