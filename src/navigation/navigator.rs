@@ -31,13 +31,17 @@ pub enum Choice {
     BackOff,
     /// Compliant slithering towards the direction.
     Slither,
+    /// Open-loop slithering steered round until the body lies across the direction, to
+    /// sidewind from there: it turns in place about 20-90° a cycle where sidewinding's
+    /// taper turns 3° a cycle while it travels sideways.
+    Turn,
 }
 
 impl Choice {
     pub fn gait(self) -> GaitKind {
         match self {
             Choice::Sidewind | Choice::BackOff => GaitKind::Sidewinding,
-            Choice::Slither => GaitKind::Slithering,
+            Choice::Slither | Choice::Turn => GaitKind::Slithering,
         }
     }
 
@@ -46,6 +50,7 @@ impl Choice {
         match self {
             Choice::Sidewind | Choice::BackOff => "ac_sfc",
             Choice::Slither => "a_ws_omega",
+            Choice::Turn => "open_loop",
         }
     }
 
@@ -54,6 +59,7 @@ impl Choice {
             Choice::Sidewind => "sidewind",
             Choice::BackOff => "back_off",
             Choice::Slither => "slither",
+            Choice::Turn => "turn",
         }
     }
 
@@ -63,6 +69,7 @@ impl Choice {
             Choice::Sidewind => 1.0,
             Choice::BackOff => 2.0,
             Choice::Slither => 3.0,
+            Choice::Turn => 4.0,
         }
     }
 }
@@ -79,6 +86,11 @@ pub enum Why {
     BackedOff,
     /// Slithering had its time without getting stuck or free.
     SlitherTimeUp,
+    /// The turn is done (or had its time): the body lies across the direction.
+    Turned,
+    /// Sidewinding, the body was turned off course (by the obstacles) further than its
+    /// own heading control corrects quickly.
+    OffCourse,
 }
 
 /// The navigator's settings.
@@ -98,6 +110,21 @@ pub struct NavigatorConfig {
     /// Sidewinding is aimed this much to the right of its plain heading, because among
     /// obstacles it bends left ([`super::SIDEWINDING_DRIFT_RAD`]), rad.
     pub sidewind_drift_rad: f64,
+    /// Before sidewinding, turn in place when the body's axis is further than this from
+    /// the heading sidewinding needs (either way round: the gait reverses), rad; π/2
+    /// never turns.
+    pub turn_above_rad: f64,
+    /// The turn ends when the axis is this close, rad.
+    pub turn_done_rad: f64,
+    /// The longest turn, s.
+    pub turn_max_s: f64,
+    /// While sidewinding, turn in place when the body's axis is further than this from
+    /// where it must lie, rad (π/2: never; sidewinding's own control turns it back
+    /// slowly, 3° a cycle, while the obstacles turn it faster).
+    pub off_course_rad: f64,
+    /// A slithering spell stuck sooner than this shows slithering cannot move here (open
+    /// ground with isotropic friction): the navigator does not slither again, s.
+    pub slither_fails_within_s: f64,
 }
 
 impl NavigatorConfig {
@@ -107,6 +134,11 @@ impl NavigatorConfig {
         slither_max_s: 90.0,
         slither_within_rad: std::f64::consts::FRAC_PI_4,
         sidewind_drift_rad: super::SIDEWINDING_DRIFT_RAD,
+        turn_above_rad: 0.6,
+        turn_done_rad: 0.25,
+        turn_max_s: 40.0,
+        off_course_rad: 0.8,
+        slither_fails_within_s: 25.0,
     };
 
     pub fn check(&self) -> Result<(), ConfigError> {
@@ -124,6 +156,27 @@ impl NavigatorConfig {
             self.sidewind_drift_rad,
             -std::f64::consts::FRAC_PI_2,
             std::f64::consts::FRAC_PI_2,
+        )?;
+        let half = std::f64::consts::FRAC_PI_2;
+        check_range("turn_above_rad", self.turn_above_rad, 0.0, half)?;
+        check_range(
+            "turn_done_rad",
+            self.turn_done_rad,
+            0.0,
+            self.turn_above_rad,
+        )?;
+        check_range("turn_max_s", self.turn_max_s, 0.0, 600.0)?;
+        check_range(
+            "off_course_rad",
+            self.off_course_rad,
+            self.turn_done_rad,
+            half,
+        )?;
+        check_range(
+            "slither_fails_within_s",
+            self.slither_fails_within_s,
+            0.0,
+            3600.0,
         )
     }
 }
@@ -164,6 +217,8 @@ pub struct Navigator {
     current: Option<(Choice, Why)>,
     since_s: f64,
     switches: u32,
+    /// Slithering got stuck within `slither_fails_within_s`: it is not tried again.
+    slither_fails: bool,
 }
 
 impl Navigator {
@@ -174,6 +229,7 @@ impl Navigator {
             current: None,
             since_s: 0.0,
             switches: 0,
+            slither_fails: false,
         }
     }
 
@@ -191,6 +247,18 @@ impl Navigator {
         self.switches
     }
 
+    /// Whether slithering has shown it cannot move here (it is not tried again).
+    pub fn slither_fails(&self) -> bool {
+        self.slither_fails
+    }
+
+    /// The body heading sidewinding towards the direction needs.
+    fn sidewind_heading(&self) -> f64 {
+        let c = &self.config;
+        body_heading_for(GaitKind::Sidewinding, self.travel_rad, c.sidewind_drift_rad)
+            .unwrap_or(self.travel_rad)
+    }
+
     /// At time `t_s` with what the loop shows: a new decision, or `None` to go on.
     /// Nothing is decided while the loop does not run the gait or the pose estimate is
     /// not valid (the runner reports that and may stop navigating).
@@ -198,23 +266,45 @@ impl Navigator {
         if !view.running || !view.estimate_valid {
             return None;
         }
-        let c = &self.config;
+        let c = self.config;
+        let across = self.sidewind_heading();
+        // Sidewinding, or a turn first when the body's axis is far from where it must lie.
+        let sidewind = |why| match axis_error(view.heading_rad, across) > c.turn_above_rad {
+            true => (Choice::Turn, why),
+            false => (Choice::Sidewind, why),
+        };
         let next = match self.current {
             None if crate::num::wrap_pi(view.heading_rad - self.travel_rad).abs()
                 <= c.slither_within_rad =>
             {
                 (Choice::Slither, Why::Start)
             }
-            None => (Choice::Sidewind, Why::Start),
+            None => sidewind(Why::Start),
             Some((now, _)) => {
                 let age = t_s - self.since_s;
                 let stuck = view.progress.stuck && age >= c.settle_s;
                 match now {
                     Choice::Sidewind if stuck => (Choice::BackOff, Why::Stuck),
-                    Choice::BackOff if age >= c.back_off_s => (Choice::Slither, Why::BackedOff),
-                    Choice::Slither if stuck => (Choice::Sidewind, Why::Stuck),
-                    Choice::Slither if age >= c.slither_max_s => {
-                        (Choice::Sidewind, Why::SlitherTimeUp)
+                    Choice::Sidewind
+                        if age >= c.settle_s
+                            && axis_error(view.heading_rad, across) > c.off_course_rad =>
+                    {
+                        (Choice::Turn, Why::OffCourse)
+                    }
+                    Choice::BackOff if age >= c.back_off_s && !self.slither_fails => {
+                        (Choice::Slither, Why::BackedOff)
+                    }
+                    Choice::BackOff if age >= c.back_off_s => sidewind(Why::BackedOff),
+                    Choice::Slither if stuck => {
+                        self.slither_fails |= age < c.slither_fails_within_s;
+                        sidewind(Why::Stuck)
+                    }
+                    Choice::Slither if age >= c.slither_max_s => sidewind(Why::SlitherTimeUp),
+                    Choice::Turn
+                        if age >= c.turn_max_s
+                            || axis_error(view.heading_rad, across) <= c.turn_done_rad =>
+                    {
+                        (Choice::Sidewind, Why::Turned)
                     }
                     _ => return None,
                 }
@@ -230,13 +320,32 @@ impl Navigator {
             Choice::BackOff => self.travel_rad + std::f64::consts::PI,
             _ => self.travel_rad,
         };
-        let heading_rad =
-            body_heading_for(choice.gait(), travel, c.sidewind_drift_rad).unwrap_or(travel);
+        let heading_rad = match choice {
+            // Round to the nearer of the two ways sidewinding may lie.
+            Choice::Turn => nearer_way(view.heading_rad, across),
+            _ => body_heading_for(choice.gait(), travel, c.sidewind_drift_rad).unwrap_or(travel),
+        };
         Some(Decision {
             choice,
             why,
             heading_rad,
         })
+    }
+}
+
+/// How far the body's axis (heading `h`) is from lying along `target` either way
+/// round, 0..π/2: sidewinding reverses when it faces the other way.
+fn axis_error(h: f64, target: f64) -> f64 {
+    let e = crate::num::wrap_pi(h - target).abs();
+    e.min(std::f64::consts::PI - e)
+}
+
+/// `target` or `target + π`, whichever is nearer to `h`.
+fn nearer_way(h: f64, target: f64) -> f64 {
+    let e = crate::num::wrap_pi(h - target).abs();
+    match e <= std::f64::consts::FRAC_PI_2 {
+        true => target,
+        false => crate::num::wrap_pi(target + std::f64::consts::PI),
     }
 }
 
@@ -292,23 +401,75 @@ mod tests {
     }
 
     #[test]
-    fn a_body_heading_the_way_slithers_first_and_sidewinds_when_stuck() {
+    fn a_body_heading_the_way_slithers_first_then_turns_across_and_sidewinds() {
         let c = NavigatorConfig::DEFAULT;
         let mut n = Navigator::new(c, 0.3);
         let mut v = view(false);
         v.heading_rad = 0.3 + 0.7;
         let d = n.step(0.0, &v).unwrap();
         assert_eq!((d.choice, d.why), (Choice::Slither, Why::Start));
+        // Stuck soon: slithering cannot move here, and the body lies along the way, so
+        // it turns round (to the nearer of the two ways across) before sidewinding.
         v.progress = view(true).progress;
         let d = n.step(c.settle_s, &v).unwrap();
-        assert_eq!((d.choice, d.why), (Choice::Sidewind, Why::Stuck));
-        assert!(
+        assert_eq!((d.choice, d.why), (Choice::Turn, Why::Stuck));
+        assert!(n.slither_fails());
+        let across = 0.3 + std::f64::consts::FRAC_PI_2;
+        assert!((d.heading_rad - across).abs() < 1e-12, "{d:?}");
+        assert_eq!(d.choice.controller(), "open_loop");
+        // Not yet across: goes on turning.
+        v.progress = view(false).progress;
+        v.heading_rad = across - 0.5;
+        assert_eq!(n.step(c.settle_s + 5.0, &v), None);
+        v.heading_rad = across - 0.2;
+        let d = n.step(c.settle_s + 10.0, &v).unwrap();
+        assert_eq!((d.choice, d.why), (Choice::Sidewind, Why::Turned));
+        assert!((d.heading_rad - across).abs() < 1e-12, "{d:?}");
+        // Stuck sidewinding backs off, and then, slithering having failed, sidewinds.
+        v.progress = view(true).progress;
+        let t = c.settle_s + 10.0 + c.settle_s;
+        let d = n.step(t, &v).unwrap();
+        assert_eq!((d.choice, d.why), (Choice::BackOff, Why::Stuck));
+        let d = n.step(t + c.back_off_s, &v).unwrap();
+        assert_eq!((d.choice, d.why), (Choice::Sidewind, Why::BackedOff));
+        assert_eq!(n.switches(), 4);
+        for bad in [
             NavigatorConfig {
                 slither_within_rad: 4.0,
                 ..c
-            }
-            .check()
-            .is_err()
-        );
+            },
+            NavigatorConfig {
+                turn_done_rad: c.turn_above_rad + 0.1,
+                ..c
+            },
+            NavigatorConfig {
+                turn_above_rad: 2.0,
+                ..c
+            },
+        ] {
+            assert!(bad.check().is_err(), "{bad:?}");
+        }
+    }
+
+    #[test]
+    fn a_turn_goes_round_the_nearer_way_and_ends_when_its_time_is_up() {
+        let c = NavigatorConfig::DEFAULT;
+        let mut n = Navigator::new(c, 0.0);
+        let mut v = view(false);
+        // Facing the way back: 90° from either way across, beyond slithering's reach.
+        v.heading_rad = 3.0;
+        let d = n.step(0.0, &v).unwrap();
+        assert_eq!((d.choice, d.why), (Choice::Turn, Why::Start));
+        // Nearer: +π/2 is 1.43 rad away, −π/2 1.71.
+        assert!((d.heading_rad - std::f64::consts::FRAC_PI_2).abs() < 1e-12);
+        v.heading_rad = -2.0;
+        let d = n.step(0.0, &v);
+        assert_eq!(d, None);
+        let d = n.step(c.turn_max_s, &v).unwrap();
+        assert_eq!((d.choice, d.why), (Choice::Sidewind, Why::Turned));
+        assert!(axis_error(-2.0, std::f64::consts::FRAC_PI_2) > c.turn_done_rad);
+        assert!((axis_error(-1.5, std::f64::consts::FRAC_PI_2) - 0.0708).abs() < 1e-3);
+        let w = nearer_way(-2.0, std::f64::consts::FRAC_PI_2);
+        assert!((w + std::f64::consts::FRAC_PI_2).abs() < 1e-12);
     }
 }

@@ -87,8 +87,8 @@ pub fn navigation() -> Value {
         "navigator": {"type": "object", "properties": {
             "active": {"type": "boolean", "description": "navigating now (`navigate`)"},
             "travel_rad": {"type": ["number", "null"], "description": "the direction of travel, the pose estimate's world, rad"},
-            "choice": {"type": ["string", "null"], "enum": ["sidewind", "back_off", "slither", null], "description": "what it runs"},
-            "why": {"type": ["string", "null"], "enum": ["start", "stuck", "backed_off", "slither_time_up", null]},
+            "choice": {"type": ["string", "null"], "enum": ["sidewind", "back_off", "slither", "turn", null], "description": "what it runs"},
+            "why": {"type": ["string", "null"], "enum": ["start", "stuck", "backed_off", "slither_time_up", "turned", "off_course", null]},
             "switches": {"type": "integer", "description": "changes of gait or controller since it started"},
             "stopped": {"type": ["string", "null"], "enum": ["off", "operator", "estimate_invalid", "not_running", "refused", null], "description": "why it stopped (docs/navigation.md)"},
         }}}),

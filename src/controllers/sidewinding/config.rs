@@ -194,6 +194,8 @@ impl SidewindingConfig {
         check_range("heading.settle_rad", h.settle_rad, 0.0, h.deadband_rad)?;
         check_range("heading.trim_gain", h.trim_gain, 0.0, 100.0)?;
         check_range("heading.trim_max", h.trim_max, 0.0, h.turn_taper)?;
+        let quarter = std::f64::consts::FRAC_PI_4;
+        check_range("heading.lead_rad", h.lead_rad, -quarter, quarter)?;
         if h.turn_sign != 1.0 && h.turn_sign != -1.0 {
             return Err(ConfigError::invalid("heading.turn_sign", "must be 1 or -1"));
         }

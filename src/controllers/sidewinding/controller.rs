@@ -85,6 +85,14 @@ impl AntiCompliantSidewinding {
         self.heading.map(|[c, s]| s.atan2(c))
     }
 
+    /// How far the held heading is turned from the nominal, signed for the well β is in:
+    /// towards the travel, which lies 90° clockwise of the head in the 0 well and 90°
+    /// anticlockwise in the π well (the error is the heading less the held one).
+    fn lead(&self, well: f64) -> f64 {
+        let mirror = if well == 0.0 { 1.0 } else { -1.0 };
+        mirror * self.config.heading.lead_rad
+    }
+
     /// Heading relative to the nominal direction, wrapped.
     fn relative_heading(&self) -> Option<f64> {
         Some(wrap_pi(self.heading_rad()? - self.nominal_heading?))
@@ -151,7 +159,7 @@ impl Controller for AntiCompliantSidewinding {
         let h = self.relative_heading();
         self.reversal.step(&self.config.reversal, dt, h);
         let well = self.reversal.well();
-        let error = h.map(|h| wrap_pi(h - well));
+        let error = h.map(|h| wrap_pi(h - well + self.lead(well)));
         self.adjust.step(&self.config.heading, dt, error, well);
 
         let p = &self.nominal.params;
@@ -177,10 +185,10 @@ impl Controller for AntiCompliantSidewinding {
             self.reversal.beta_rad,
             or_nan(self.heading_rad()),
             or_nan(self.nominal_heading),
-            or_nan(
-                self.relative_heading()
-                    .map(|h| wrap_pi(h - self.reversal.well())),
-            ),
+            or_nan(self.relative_heading().map(|h| {
+                let well = self.reversal.well();
+                wrap_pi(h - well + self.lead(well))
+            })),
             self.adjust.taper,
             self.reversal.reversals as f64,
             if self.heading.is_some() { 1.0 } else { 0.0 },

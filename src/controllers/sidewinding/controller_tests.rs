@@ -252,3 +252,35 @@ fn without_a_valid_estimate_it_sidewinds_straight_and_holds_beta() {
     assert_eq!(signal(&c, 6), 0.0, "heading_valid");
     assert!(signal(&c, 1).is_nan(), "no heading to report");
 }
+
+#[test]
+fn a_leading_head_is_held_turned_towards_the_travel_either_way_round() {
+    let (l, p) = (layout(), params());
+    let mut config = SidewindingConfig::preset("ac_sfc").unwrap();
+    config.heading.lead_rad = 0.5;
+    let mut c = AntiCompliantSidewinding::new(&l, &p, config);
+    engage_at(&mut c, &l, &p, 0.0);
+    const ERROR: usize = 3;
+    // Nominal 0 (the first heading). At the nominal, the held heading (0.5 rad towards
+    // the travel, which is clockwise of the head) is behind: the error reads +0.5 and
+    // the body turns clockwise, as it does 0.5 rad anticlockwise of a plain nominal.
+    run(&mut c, 0.0, 0.5, |_| 0.0, |_| [0.0; N]);
+    assert!(
+        (signal(&c, ERROR) - 0.5).abs() < 1e-6,
+        "{}",
+        signal(&c, ERROR)
+    );
+    run(&mut c, 0.5, 6.0, |_| 0.0, |_| [0.0; N]);
+    let mut plain = preset("ac_sfc");
+    engage_at(&mut plain, &l, &p, 0.0);
+    run(&mut plain, 0.0, 0.5, |_| 0.0, |_| [0.0; N]);
+    run(&mut plain, 0.5, 6.0, |_| 0.5, |_| [0.0; N]);
+    assert!(c.taper().abs() > 0.1, "turning: {}", c.taper());
+    assert!((c.taper() - plain.taper()).abs() < 1e-9);
+    // Turned round (reversed, the π well), the travel lies anticlockwise of the head:
+    // the lead is mirrored, so the body held 0.5 rad anticlockwise of π is on course.
+    run(&mut c, 6.5, 10.0, |_| PI, |_| [0.0; N]);
+    assert_eq!(signal(&c, REVERSALS), 1.0, "β {}", c.beta_rad());
+    run(&mut c, 16.5, 5.0, |_| PI + 0.5, |_| [0.0; N]);
+    assert!(signal(&c, ERROR).abs() < 0.01, "{}", signal(&c, ERROR));
+}

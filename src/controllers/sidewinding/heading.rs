@@ -48,6 +48,14 @@ pub struct HeadingConfig {
     /// Largest |trim|, ≤ `turn_taper`.
     #[serde(default = "HeadingConfig::default_trim_max")]
     pub trim_max: f64,
+    /// The head leads: the heading held is the nominal turned this much towards the
+    /// direction of travel (mirrored when the gait is reversed), rad. Among obstacles
+    /// the lateral wave pushes on them as slithering's does and the body also goes
+    /// head first along its axis; a head turned forward makes that axial motion carry
+    /// it across instead of sideways (docs/measurements.md, "Sidewinding goes head
+    /// first among obstacles"). 0 holds the nominal itself.
+    #[serde(default)]
+    pub lead_rad: f64,
 }
 
 impl HeadingConfig {
@@ -60,6 +68,7 @@ impl HeadingConfig {
         turn_sign: -1.0,
         trim_gain: 4.5,
         trim_max: 0.25,
+        lead_rad: 0.0,
     };
 
     fn default_settle() -> f64 {

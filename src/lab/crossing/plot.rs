@@ -20,6 +20,7 @@ fn colour(c: Choice) -> RGBColor {
         Choice::Sidewind => RGBColor(230, 120, 0),
         Choice::BackOff => RGBColor(150, 40, 170),
         Choice::Slither => RGBColor(0, 150, 130),
+        Choice::Turn => RGBColor(200, 30, 90),
     }
 }
 
@@ -43,10 +44,15 @@ pub fn choice_path_plot(
         .position(|n| n == CHOICE_SIGNAL)
         .map(|k| &rec.signals[k][..])
         .unwrap_or(&[]);
-    let mut labelled = [false; 3];
-    for (k, c) in [Choice::Sidewind, Choice::BackOff, Choice::Slither]
-        .into_iter()
-        .enumerate()
+    let mut labelled = [false; 4];
+    for (k, c) in [
+        Choice::Sidewind,
+        Choice::BackOff,
+        Choice::Slither,
+        Choice::Turn,
+    ]
+    .into_iter()
+    .enumerate()
     {
         for run in runs(choices, c.code()) {
             // One sample further, so consecutive runs join.
