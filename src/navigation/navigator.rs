@@ -48,7 +48,7 @@ impl Choice {
     /// The controller (registry name) it runs.
     pub fn controller(self) -> &'static str {
         match self {
-            Choice::Sidewind | Choice::BackOff => "ac_sfc",
+            Choice::Sidewind | Choice::BackOff => "ac_sfc_lead",
             Choice::Slither => "a_ws_omega",
             Choice::Turn => "open_loop",
         }
@@ -136,8 +136,8 @@ impl NavigatorConfig {
         sidewind_drift_rad: super::SIDEWINDING_DRIFT_RAD,
         turn_above_rad: 0.6,
         turn_done_rad: 0.25,
-        turn_max_s: 40.0,
-        off_course_rad: 0.8,
+        turn_max_s: 20.0,
+        off_course_rad: std::f64::consts::FRAC_PI_2,
         slither_fails_within_s: 25.0,
     };
 
