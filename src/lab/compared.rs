@@ -27,16 +27,26 @@ pub struct LabController {
 
 /// The name that makes the navigator a compared "controller".
 pub const NAVIGATOR: &str = "navigator";
+/// The navigator that never slithers (only sidewinding, its turns and backing off).
+pub const NAVIGATOR_SIDEWIND_ONLY: &str = "navigator_sidewind_only";
 
 impl LabController {
     /// For an experiment that compares gaits (`Experiment::any_gait`): the navigator,
     /// or a controller named in `gait` or else in the first other gait that has it.
     pub fn named_any(gait: GaitKind, name: &str) -> Result<Self, LabError> {
-        if name == NAVIGATOR {
+        let navigator = match name {
+            NAVIGATOR => Some(NavigatorConfig::DEFAULT),
+            NAVIGATOR_SIDEWIND_ONLY => Some(NavigatorConfig {
+                slither: false,
+                ..NavigatorConfig::DEFAULT
+            }),
+            _ => None,
+        };
+        if navigator.is_some() {
             // Installed first; its first decision may slither instead.
             let first = Choice::Sidewind;
             return Ok(Self {
-                navigator: Some(NavigatorConfig::DEFAULT),
+                navigator,
                 label: name.to_owned(),
                 ..Self::named(first.gait(), first.controller())?
             });

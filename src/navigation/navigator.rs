@@ -125,6 +125,8 @@ pub struct NavigatorConfig {
     /// A slithering spell stuck sooner than this shows slithering cannot move here (open
     /// ground with isotropic friction): the navigator does not slither again, s.
     pub slither_fails_within_s: f64,
+    /// Slither at all (false: only sidewinding, its turns and backing off).
+    pub slither: bool,
 }
 
 impl NavigatorConfig {
@@ -139,6 +141,7 @@ impl NavigatorConfig {
         turn_max_s: 20.0,
         off_course_rad: std::f64::consts::FRAC_PI_2,
         slither_fails_within_s: 25.0,
+        slither: true,
     };
 
     pub fn check(&self) -> Result<(), ConfigError> {
@@ -229,7 +232,7 @@ impl Navigator {
             current: None,
             since_s: 0.0,
             switches: 0,
-            slither_fails: false,
+            slither_fails: !config.slither,
         }
     }
 
@@ -274,8 +277,9 @@ impl Navigator {
             false => (Choice::Sidewind, why),
         };
         let next = match self.current {
-            None if crate::num::wrap_pi(view.heading_rad - self.travel_rad).abs()
-                <= c.slither_within_rad =>
+            None if c.slither
+                && crate::num::wrap_pi(view.heading_rad - self.travel_rad).abs()
+                    <= c.slither_within_rad =>
             {
                 (Choice::Slither, Why::Start)
             }
@@ -471,5 +475,26 @@ mod tests {
         assert!((axis_error(-1.5, std::f64::consts::FRAC_PI_2) - 0.0708).abs() < 1e-3);
         let w = nearer_way(-2.0, std::f64::consts::FRAC_PI_2);
         assert!((w + std::f64::consts::FRAC_PI_2).abs() < 1e-12);
+    }
+
+    #[test]
+    fn without_slithering_it_turns_sidewinds_and_backs_off_only() {
+        let c = NavigatorConfig {
+            slither: false,
+            ..NavigatorConfig::DEFAULT
+        };
+        let mut n = Navigator::new(c, 0.0);
+        let mut v = view(false);
+        v.heading_rad = 0.1;
+        let d = n.step(0.0, &v).unwrap();
+        assert_eq!((d.choice, d.why), (Choice::Turn, Why::Start));
+        v.heading_rad = std::f64::consts::FRAC_PI_2;
+        let d = n.step(1.0, &v).unwrap();
+        assert_eq!((d.choice, d.why), (Choice::Sidewind, Why::Turned));
+        v.progress = view(true).progress;
+        let d = n.step(1.0 + c.settle_s, &v).unwrap();
+        assert_eq!(d.choice, Choice::BackOff);
+        let d = n.step(1.0 + c.settle_s + c.back_off_s, &v).unwrap();
+        assert_eq!((d.choice, d.why), (Choice::Sidewind, Why::BackedOff));
     }
 }
