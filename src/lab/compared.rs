@@ -29,6 +29,9 @@ pub struct LabController {
 pub const NAVIGATOR: &str = "navigator";
 /// The navigator that never slithers (only sidewinding, its turns and backing off).
 pub const NAVIGATOR_SIDEWIND_ONLY: &str = "navigator_sidewind_only";
+/// The navigator that only turns the body across, then sidewinds (no slithering, no
+/// backing off).
+pub const NAVIGATOR_TURN_ONLY: &str = "navigator_turn_only";
 
 impl LabController {
     /// For an experiment that compares gaits (`Experiment::any_gait`): the navigator,
@@ -38,6 +41,11 @@ impl LabController {
             NAVIGATOR => Some(NavigatorConfig::DEFAULT),
             NAVIGATOR_SIDEWIND_ONLY => Some(NavigatorConfig {
                 slither: false,
+                ..NavigatorConfig::DEFAULT
+            }),
+            NAVIGATOR_TURN_ONLY => Some(NavigatorConfig {
+                slither: false,
+                back_off: false,
                 ..NavigatorConfig::DEFAULT
             }),
             _ => None,

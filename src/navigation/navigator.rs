@@ -127,6 +127,8 @@ pub struct NavigatorConfig {
     pub slither_fails_within_s: f64,
     /// Slither at all (false: only sidewinding, its turns and backing off).
     pub slither: bool,
+    /// Back off when sidewinding is stuck (false: sidewinding goes on).
+    pub back_off: bool,
 }
 
 impl NavigatorConfig {
@@ -142,6 +144,7 @@ impl NavigatorConfig {
         off_course_rad: std::f64::consts::FRAC_PI_2,
         slither_fails_within_s: 25.0,
         slither: true,
+        back_off: true,
     };
 
     pub fn check(&self) -> Result<(), ConfigError> {
@@ -288,7 +291,7 @@ impl Navigator {
                 let age = t_s - self.since_s;
                 let stuck = view.progress.stuck && age >= c.settle_s;
                 match now {
-                    Choice::Sidewind if stuck => (Choice::BackOff, Why::Stuck),
+                    Choice::Sidewind if stuck && c.back_off => (Choice::BackOff, Why::Stuck),
                     Choice::Sidewind
                         if age >= c.settle_s
                             && axis_error(view.heading_rad, across) > c.off_course_rad =>
@@ -496,5 +499,20 @@ mod tests {
         assert_eq!(d.choice, Choice::BackOff);
         let d = n.step(1.0 + c.settle_s + c.back_off_s, &v).unwrap();
         assert_eq!((d.choice, d.why), (Choice::Sidewind, Why::BackedOff));
+    }
+
+    #[test]
+    fn without_backing_off_a_stuck_sidewinding_goes_on() {
+        let c = NavigatorConfig {
+            slither: false,
+            back_off: false,
+            ..NavigatorConfig::DEFAULT
+        };
+        let mut n = Navigator::new(c, 0.0);
+        let mut v = view(true);
+        v.heading_rad = std::f64::consts::FRAC_PI_2;
+        let d = n.step(0.0, &v).unwrap();
+        assert_eq!((d.choice, d.why), (Choice::Sidewind, Why::Start));
+        assert_eq!(n.step(100.0, &v), None);
     }
 }
