@@ -32,17 +32,31 @@ pub struct BodyEstimate {
     pub heading_rad: f64,
     /// The shape had no clear main axis (coiled): the axis is the last one kept.
     pub round: bool,
+    /// The chassis origin's ground-plane position in the estimator's world frame from
+    /// contact odometry (zero where it started), m: the links on the ground taken to
+    /// stay put (docs/estimation.md).
+    pub odometry_m: [f64; 2],
+    /// Part of the body was lifted, so `odometry_m` stood on contacts; with the whole
+    /// body down (slithering) it assumes the centroid does not drift.
+    pub odometry_lifted: bool,
+}
+
+impl BodyEstimate {
+    /// No estimate yet.
+    pub const NONE: BodyEstimate = BodyEstimate {
+        valid: false,
+        position_m: [0.0; 3],
+        orientation_wxyz: [1.0, 0.0, 0.0, 0.0],
+        heading_rad: 0.0,
+        round: false,
+        odometry_m: [0.0; 2],
+        odometry_lifted: false,
+    };
 }
 
 impl Default for BodyEstimate {
     fn default() -> Self {
-        Self {
-            valid: false,
-            position_m: [0.0; 3],
-            orientation_wxyz: [1.0, 0.0, 0.0, 0.0],
-            heading_rad: 0.0,
-            round: false,
-        }
+        Self::NONE
     }
 }
 

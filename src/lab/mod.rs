@@ -29,6 +29,7 @@ pub mod experiment;
 pub mod flat_ground;
 pub mod layout;
 pub mod metrics;
+pub mod odometry_check;
 pub mod pegboard;
 pub mod plots;
 pub mod pole;

@@ -41,6 +41,7 @@ pub(crate) fn record(signals: usize) -> TrialRecord {
         windows: Vec::new(),
         strain: Default::default(),
         stuck_reported: Vec::new(),
+        estimate: Vec::new(),
         gait_switches: 0,
     }
 }

@@ -8,14 +8,20 @@ use std::path::{Path, PathBuf};
 
 use super::LabError;
 use super::experiment::Experiment;
+use super::odometry_check::{OdometryCheck, odometry_markdown};
 use super::runner::{TrialResult, controller_names};
 use super::strain::{Strain, StrainSummary};
 use super::stuck_check::{StuckCheck, stuck_markdown};
 
 /// An experiment's CSV header with the columns every experiment appends: the
-/// strain's and the stuck check's.
+/// strain's, the stuck check's and the odometry check's.
 pub fn with_common_header(own: &str) -> String {
-    format!("{own},{},{}", Strain::CSV_HEADER, StuckCheck::CSV_HEADER)
+    format!(
+        "{own},{},{},{}",
+        Strain::CSV_HEADER,
+        StuckCheck::CSV_HEADER,
+        OdometryCheck::CSV_HEADER
+    )
 }
 
 /// The summary's section on what the controllers asked of the actuators (any
@@ -107,14 +113,15 @@ pub fn results_csv<E: Experiment>(module: &E, results: &[TrialResult<E>]) -> Str
     for r in results {
         let _ = writeln!(
             out,
-            "{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{}",
             csv_field(&r.controller),
             csv_field(&r.layout),
             r.start,
             r.repeat,
             module.csv_row(r),
             r.strain.csv_row(),
-            r.stuck.csv_row()
+            r.stuck.csv_row(),
+            r.odometry.csv_row()
         );
     }
     out
@@ -142,15 +149,13 @@ pub fn summary_markdown<E: Experiment>(
     s.push_str(&module.summary_tables(results, ctx));
     s.push_str(&calibrations_markdown(ctx));
     s.push_str(&strain_markdown(results));
-    let pooled = controller_names(results).into_iter().map(|name| {
-        let mut c = StuckCheck::default();
-        results
-            .iter()
-            .filter(|r| r.controller == name)
-            .for_each(|r| c.add(&r.stuck));
-        (name, c)
-    });
-    s.push_str(&stuck_markdown(pooled));
+    s.push_str(&stuck_markdown(pooled(results, |c: &mut StuckCheck, r| {
+        c.add(&r.stuck)
+    })));
+    s.push_str(&odometry_markdown(pooled(
+        results,
+        |c: &mut OdometryCheck, r| c.add(&r.odometry),
+    )));
     let _ = writeln!(s, "\nPer trial: `results.csv`.");
     if !ctx.plots.is_empty() {
         s.push_str("\nPlots:\n\n");
@@ -159,6 +164,21 @@ pub fn summary_markdown<E: Experiment>(
         }
     }
     s
+}
+
+/// Per controller (in order), a check pooled over its trials by `add`.
+fn pooled<'a, E: Experiment, C: Default>(
+    results: &'a [TrialResult<E>],
+    add: impl Fn(&mut C, &TrialResult<E>) + 'a,
+) -> impl Iterator<Item = (&'a str, C)> + 'a {
+    controller_names(results).into_iter().map(move |name| {
+        let mut c = C::default();
+        results
+            .iter()
+            .filter(|r| r.controller == name)
+            .for_each(|r| add(&mut c, r));
+        (name, c)
+    })
 }
 
 /// Writes `results.csv`, the experiment's plots (over every trial, then each

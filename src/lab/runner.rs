@@ -14,6 +14,7 @@ use super::compared::LabController;
 use super::experiment::Experiment;
 use super::file_stem;
 use super::layout::{Layout, noise_seed};
+use super::odometry_check::OdometryCheck;
 use super::shard::Shard;
 use super::strain::Strain;
 use super::stuck_check::StuckCheck;
@@ -65,6 +66,9 @@ pub struct TrialResult<E: Experiment> {
     /// How the loop's stuck detector did against the truth (every experiment).
     #[serde(default)]
     pub stuck: StuckCheck,
+    /// How the estimator's contact odometry did against the truth (every experiment).
+    #[serde(default)]
+    pub odometry: OdometryCheck,
     /// The world and the full record, kept for the trial the report plots (each
     /// controller's first layout and start).
     pub plotted: Option<(Arc<WorldSpec>, E::Goal, TrialRecord)>,
@@ -276,6 +280,7 @@ pub fn run_share<E: Experiment>(
             metrics,
             strain: rec.strain,
             stuck: StuckCheck::of(&rec),
+            odometry: OdometryCheck::of(&rec),
             plotted: first.then(|| (Arc::clone(&w.world), w.goal.clone(), rec)),
         })
     };

@@ -150,6 +150,10 @@ pub struct TrialRecord {
     /// Changes of gait or controller the navigator made (0 without one).
     #[serde(default)]
     pub gait_switches: u32,
+    /// The loop's body estimate at every sample: contact odometry x, y (m) and heading
+    /// (rad), in the estimate's world; NaN while it is not valid.
+    #[serde(default)]
+    pub estimate: Vec<[f64; 3]>,
 }
 
 impl TrialRecord {
@@ -395,6 +399,7 @@ pub fn run_trial(
         strain: Strain::default(),
         stuck_reported: Vec::with_capacity(samples),
         gait_switches: 0,
+        estimate: Vec::with_capacity(samples),
     };
     record(&lp, &mut rec, nav.as_ref());
     for k in 1..=steps {
@@ -465,6 +470,12 @@ fn record(lp: &ControlLoop, rec: &mut TrialRecord, nav: Option<&TrialNavigator>)
     rec.heights_m
         .extend((0..plant.link_count()).map(|k| plant.link_pose(k).position_m[2]));
     rec.stuck_reported.push(lp.progress().stuck);
+    let b = lp.body();
+    rec.estimate.push(if b.valid {
+        [b.odometry_m[0], b.odometry_m[1], b.heading_rad]
+    } else {
+        [f64::NAN; 3]
+    });
     if nav.is_some() {
         // As the loop reports it (the runner tells the loop at each decision).
         if let Some(series) = rec.signals.first_mut() {

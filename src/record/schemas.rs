@@ -70,6 +70,8 @@ pub fn body_estimate() -> Value {
             "orientation_wxyz": numbers("the virtual chassis' orientation in the estimate's world (z up, yaw 0 at the start)"),
             "heading_rad": {"type": "number", "description": "the chassis' forward (head-ward) axis in the ground plane, rad"},
             "round": {"type": "boolean", "description": "no clear main axis (coiled): the axis kept from before"},
+            "odometry_m": numbers("the chassis origin's ground-plane position from contact odometry (the links on the ground taken to stay put), estimate's world, m"),
+            "odometry_lifted": {"type": "boolean", "description": "part of the body was lifted, so odometry_m stood on contacts (false: the whole body down, it assumes no drift)"},
         }),
     )
 }

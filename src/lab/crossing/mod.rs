@@ -11,6 +11,9 @@ pub mod plot;
 pub mod report;
 pub mod starts;
 
+#[cfg(test)]
+mod drift_tests;
+
 use std::path::{Path, PathBuf};
 
 use metrics::{CrossingMetrics, crossing_metrics};

@@ -215,6 +215,7 @@ mod tests {
             windows: Vec::new(),
             strain: Default::default(),
             stuck_reported: Vec::new(),
+            estimate: Vec::new(),
             gait_switches: 0,
         }
     }
@@ -269,6 +270,7 @@ mod tests {
             metrics: displacement_metrics(&rec, 1.024),
             strain: Default::default(),
             stuck: Default::default(),
+            odometry: Default::default(),
             plotted: None,
         }
     }

@@ -325,6 +325,7 @@ mod tests {
             windows: Vec::new(),
             strain: Default::default(),
             stuck_reported: Vec::new(),
+            estimate: Vec::new(),
             gait_switches: 0,
         }
     }
@@ -349,6 +350,7 @@ mod tests {
                 metrics: super::super::metrics::displacement_metrics(&record(), 1.0),
                 strain: Default::default(),
                 stuck: Default::default(),
+                odometry: Default::default(),
                 plotted: None,
             })
             .collect();

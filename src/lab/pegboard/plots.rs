@@ -116,6 +116,7 @@ mod tests {
                 },
                 strain: Default::default(),
                 stuck: Default::default(),
+                odometry: Default::default(),
                 plotted: None,
             })
             .collect();

@@ -145,6 +145,7 @@ mod tests {
             },
             strain: Default::default(),
             stuck: Default::default(),
+            odometry: Default::default(),
             plotted: None,
         }
     }

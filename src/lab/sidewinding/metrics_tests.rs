@@ -63,6 +63,7 @@ fn record(at: f64, through: bool, rev_s: Option<f64>) -> (Fence, TrialRecord) {
         windows: Vec::new(),
         strain: Default::default(),
         stuck_reported: Vec::new(),
+        estimate: Vec::new(),
         gait_switches: 0,
     };
     (fence, rec)

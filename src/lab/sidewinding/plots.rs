@@ -333,6 +333,7 @@ mod tests {
             windows: Vec::new(),
             strain: Default::default(),
             stuck_reported: Vec::new(),
+            estimate: Vec::new(),
             gait_switches: 0,
         }
     }
