@@ -16,6 +16,7 @@ use super::runner::{RunOptions, Setup, plan_fingerprint, run_share};
 use super::shard::{self, Shard, ShardFile, ShardHead};
 use super::trial::{TrialConfig, nominal_gaits};
 use crate::emu::servo::PositionLoop;
+use crate::gait::GaitKind;
 
 /// The options of every experiment. `--starts`, `--repeats`, `--seconds` and `--out`
 /// default to the experiment's own (shown by `--help`).
@@ -67,6 +68,10 @@ pub struct CommonArgs {
     /// docs/gaits.md), e.g. '{"amplitude_lat_rad":1.1,"spatial_freq_rad":6.28}'.
     #[arg(long = "nominal", value_name = "JSON")]
     pub nominal: Option<String>,
+    /// The gait `--nominal` patches, by name (default: the experiment's; crossing runs
+    /// every gait, so e.g. `--nominal-gait sidewinding`).
+    #[arg(long, value_name = "GAIT", requires = "nominal")]
+    pub nominal_gait: Option<String>,
     /// Run only the K-th of N shares of the trials (1 <= K <= N) and write
     /// OUT/shard-K-of-N.cbor; `snake-lab merge` writes the report from all N.
     #[arg(long, value_name = "K/N")]
@@ -127,7 +132,13 @@ impl<E: Experiment> Lab for Plugin<E> {
             ..TrialConfig::default()
         };
         let (module, layouts) = self.0.configure(&own, &mut trial)?;
-        trial.gaits = nominal_gaits(module.gait(), common.nominal.as_deref())?;
+        let nominal_gait = match common.nominal_gait.as_deref() {
+            None => module.gait(),
+            Some(name) => GaitKind::from_name(name).ok_or_else(|| {
+                LabError::BadValue(format!("--nominal-gait {name:?}: not a gait"))
+            })?,
+        };
+        trial.gaits = nominal_gaits(nominal_gait, common.nominal.as_deref())?;
         let module = module.with_trial(&trial);
         let starts = common.starts.unwrap_or(d.starts);
         let repeats = common.repeats.unwrap_or(d.repeats);
