@@ -138,6 +138,20 @@ impl LabController {
             let c = config.get_or_insert_with(|| Value::Object(Default::default()));
             merge(c, &Value::Object(map));
         }
+        if controller == NAVIGATOR {
+            // The navigator's settings (docs/navigation.md), as `navigate` takes them.
+            let cfg: NavigatorConfig = match config {
+                None => NavigatorConfig::DEFAULT,
+                Some(v) => serde_json::from_value(v).map_err(|e| bad(e.to_string()))?,
+            };
+            cfg.check().map_err(|e| bad(e.to_string()))?;
+            let first = Choice::Sidewind;
+            return Ok(Self {
+                navigator: Some(cfg),
+                label: label.to_owned(),
+                ..Self::named(first.gait(), first.controller())?
+            });
+        }
         let selection = Selection {
             controller,
             preset,
@@ -225,5 +239,27 @@ mod tests {
         assert!(e.contains("outside the controller's range"), "{e}");
         assert!(LabController::named(G, "nope").is_err());
         assert!(LabController::named(G, "a_ws").is_ok());
+    }
+
+    #[test]
+    fn a_navigator_variant_takes_the_navigator_s_settings() {
+        let v = LabController::variant_any(
+            G,
+            r#"nav7={"controller":"navigator","back_off":false}"#,
+            VARIANT_BASE,
+        )
+        .unwrap();
+        let cfg = v.navigator.unwrap();
+        assert!(!cfg.back_off);
+        assert_eq!(cfg.settle_s, NavigatorConfig::DEFAULT.settle_s);
+        assert_eq!(v.label, "nav7");
+        let e = LabController::variant_any(G, r#"n={"controller":"navigator","nope":1}"#, "a")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("nope"), "{e}");
+        let e = LabController::variant_any(G, r#"n={"controller":"navigator","settle_s":-1}"#, "a")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("settle_s"), "{e}");
     }
 }
