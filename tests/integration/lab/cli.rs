@@ -66,12 +66,16 @@ fn pegboard_writes_csv_summary_and_plots() {
             "stuck_while_jammed_pct",
             "jam_episodes",
             "jams_reported",
-            "jam_report_delay_s"
+            "jam_report_delay_s",
+            "odometry_direction_err_deg",
+            "odometry_right_pct",
+            "odometry_length_ratio",
+            "odometry_false_motion_pct"
         ]
     );
     assert_eq!(rows.len(), 3, "header + 2 layouts x 1 start:\n{csv}");
     for (row, layout) in rows[1..].iter().zip(["seed1000", "seed1001"]) {
-        assert_eq!(row.len(), 26);
+        assert_eq!(row.len(), 30);
         // 2 s of open loop from rest: the blend and the wave stay within the motors.
         let guarded: f64 = row[14].parse().unwrap();
         assert_eq!(guarded, 0.0, "{row:?}");
