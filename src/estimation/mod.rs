@@ -89,6 +89,7 @@ impl Estimator for VirtualChassisEstimator {
         let n = self.layout.len();
         if !finite(obs, n) {
             // A lost or garbled module: hold the state, say the estimate is not valid.
+            self.odometry.pause();
             out.valid = false;
             return;
         }
