@@ -12,6 +12,7 @@ use nalgebra::Vector3;
 
 use super::trial::TrialRecord;
 use crate::estimation::chassis::{Chassis, chassis};
+use crate::num::wrap_pi;
 
 /// Moving: the true centre went at least this far over the gait cycle, m.
 pub const MOVING_M: f64 = 0.05;
@@ -36,24 +37,20 @@ pub struct OdometryCheck {
     pub still_read_moving: u64,
 }
 
-fn wrap(a: f64) -> f64 {
-    (a + PI).rem_euclid(TAU) - PI
-}
-
-/// The true chassis heading at sample `k` (the links' virtual chassis, as the
-/// estimator computes it from its own).
-fn true_heading(rec: &TrialRecord, k: usize, last: Option<&Chassis>) -> Option<Chassis> {
+/// The true virtual chassis at sample `k` (of the true links, as the estimator
+/// computes it from its own), continuing `last`.
+fn true_chassis(rec: &TrialRecord, k: usize, last: Option<&Chassis>) -> Option<Chassis> {
     let links = rec.links_at(k);
     let heights = rec.heights_at(k);
     if links.is_empty() || heights.len() != links.len() {
         return None;
     }
-    let mut points = [Vector3::zeros(); 64];
-    let n = links.len().min(points.len());
-    for i in 0..n {
-        points[i] = Vector3::new(links[i][0], links[i][1], heights[i]);
-    }
-    Some(chassis(&points[..n], last))
+    let points: Vec<Vector3<f64>> = links
+        .iter()
+        .zip(heights)
+        .map(|(l, &z)| Vector3::new(l[0], l[1], z))
+        .collect();
+    Some(chassis(&points, last))
 }
 
 impl OdometryCheck {
@@ -69,7 +66,7 @@ impl OdometryCheck {
         let mut truth: Vec<Option<Chassis>> = Vec::with_capacity(n);
         for k in 0..n {
             let last = truth.last().copied().flatten();
-            truth.push(true_heading(rec, k, last.as_ref()));
+            truth.push(true_chassis(rec, k, last.as_ref()));
         }
         for k in lag..n {
             let (a, b) = (rec.centre_m[k - lag], rec.centre_m[k]);
@@ -86,7 +83,7 @@ impl OdometryCheck {
             let true_len = d_true[0].hypot(d_true[1]);
             let est_len = d_est[0].hypot(d_est[1]);
             if true_len >= MOVING_M {
-                let err = wrap(d_est[1].atan2(d_est[0]) - d_true[1].atan2(d_true[0])).abs();
+                let err = wrap_pi(d_est[1].atan2(d_est[0]) - d_true[1].atan2(d_true[0])).abs();
                 c.moving += 1;
                 c.direction_err_sum_rad += err;
                 c.direction_right += u64::from(err <= RIGHT_WITHIN_RAD);
@@ -154,4 +151,54 @@ pub fn odometry_markdown<'a>(rows: impl Iterator<Item = (&'a str, OdometryCheck)
          offset at the cycle's start. Definitions: docs/lab.md, \"Odometry check\".\n"
     );
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A record at 10 Hz with a 1 s cycle: a straight body of 5 links heading +x whose
+    /// centre moves 0.1 m/s for 5 s, then stands; the estimate's world is turned by
+    /// -0.5 rad, and its odometry goes on at 0.1 m/s throughout (it slides).
+    fn record() -> TrialRecord {
+        let (dt, yaw) = (0.1, -0.5f64);
+        let (s, c) = yaw.sin_cos();
+        let mut rec = crate::lab::plots::tests::record(0);
+        rec.sample_dt_s = dt;
+        rec.temporal_freq_rad_s = TAU;
+        rec.start_links_m = vec![[0.0; 2]; 5];
+        (rec.centre_m, rec.links_m, rec.heights_m, rec.estimate) = Default::default();
+        for k in 0..100 {
+            let t = k as f64 * dt;
+            let x = 0.1 * t.min(5.0);
+            rec.centre_m.push([x, 0.0]);
+            rec.links_m
+                .extend((0..5).map(|i| [x + (2.0 - i as f64) * 0.1, 0.0]));
+            rec.heights_m.extend([0.0; 5]);
+            let odo = 0.1 * t;
+            rec.estimate.push([c * odo, s * odo, yaw]);
+        }
+        rec
+    }
+
+    #[test]
+    fn turns_the_odometry_into_the_truth_s_frame_and_counts_false_motion() {
+        let c = OdometryCheck::of(&record());
+        let (dir, right, ratio, false_motion) = c.figures();
+        // Cycles ending 1.0-5.0 s moved 0.1 m: right, in the truth's frame.
+        assert!(c.moving >= 35, "{c:?}");
+        assert!(dir < 1e-6 && right == 100.0, "{c:?}");
+        // Only the cycles ending 5-6 s, half moving, read longer than the truth.
+        assert!((1.0..1.05).contains(&ratio), "{c:?}");
+        // Cycles ending after 6 s stood still while the odometry read 0.1 m.
+        assert!(c.still >= 35 && false_motion == 100.0, "{c:?}");
+        assert_eq!(
+            c.csv_row().split(',').count(),
+            OdometryCheck::CSV_HEADER.split(',').count()
+        );
+        assert_eq!(
+            OdometryCheck::of(&crate::lab::plots::tests::record(0)).moving,
+            0
+        );
+    }
 }
