@@ -11,7 +11,7 @@ use super::sidewinding::SidewindingPegs;
 
 /// The experiments, each as its unconfigured value.
 pub static EXPERIMENTS: &[&dyn Lab] = &[
-    &Plugin(Pegboard),
+    &Plugin(Pegboard::UNCONFIGURED),
     &Plugin(Displacement::PEG_ARRAY),
     &Plugin(Displacement::ROCK_PILE),
     &Plugin(SidewindingPegs),

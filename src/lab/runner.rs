@@ -380,23 +380,31 @@ mod tests {
             )
             .unwrap(),
         );
-        assert!(matches!(plan(&Pegboard, &e), Err(LabError::BadValue(m)) if m.contains("narrow")));
+        assert!(
+            matches!(plan(&Pegboard::UNCONFIGURED, &e), Err(LabError::BadValue(m)) if m.contains("narrow"))
+        );
         assert!(matches!(
-            plan(&Pegboard, &experiment(&[], 1)),
+            plan(&Pegboard::UNCONFIGURED, &experiment(&[], 1)),
             Err(LabError::NoControllers { .. })
         ));
         assert!(matches!(
-            plan(&Pegboard, &experiment(&["open_loop"], 0)),
+            plan(&Pegboard::UNCONFIGURED, &experiment(&["open_loop"], 0)),
             Err(LabError::NoLayouts)
         ));
         assert!(matches!(
-            plan(&Pegboard, &experiment(&["open_loop", "open_loop"], 1)),
+            plan(
+                &Pegboard::UNCONFIGURED,
+                &experiment(&["open_loop", "open_loop"], 1)
+            ),
             Err(LabError::BadValue(_))
         ));
         let mut e = experiment(&["open_loop"], 1);
         e.starts = 0;
-        assert!(matches!(plan(&Pegboard, &e), Err(LabError::NoStarts)));
-        let worlds = plan(&Pegboard, &experiment(&["open_loop"], 2)).unwrap();
+        assert!(matches!(
+            plan(&Pegboard::UNCONFIGURED, &e),
+            Err(LabError::NoStarts)
+        ));
+        let worlds = plan(&Pegboard::UNCONFIGURED, &experiment(&["open_loop"], 2)).unwrap();
         assert_eq!(worlds.len(), 4);
         assert_ne!(worlds[0].world.start, worlds[1].world.start, "two starts");
         assert_ne!(worlds[0].world.pegs, worlds[2].world.pegs, "two layouts");
@@ -406,7 +414,7 @@ mod tests {
     fn results_come_in_plan_order_for_any_thread_count() {
         let e = experiment(&["open_loop"], 2);
         let one = run(
-            &Pegboard,
+            &Pegboard::UNCONFIGURED,
             &e,
             RunOptions {
                 threads: 1,
@@ -416,7 +424,7 @@ mod tests {
         )
         .unwrap();
         let two = run(
-            &Pegboard,
+            &Pegboard::UNCONFIGURED,
             &e,
             RunOptions {
                 threads: 2,

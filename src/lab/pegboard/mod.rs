@@ -19,6 +19,7 @@ use crate::emu::world::WorldSpec;
 use crate::emu::world::scenario::WorldScenario;
 use crate::gait::GaitKind;
 use crate::lab::LabError;
+use crate::lab::aim::Aim;
 use crate::lab::experiment::{Defaults, Experiment, Goal};
 use crate::lab::layout::Layout;
 use crate::lab::metrics::MetricsConfig;
@@ -28,7 +29,16 @@ use crate::lab::trial::{TrialConfig, TrialRecord, front_half_centre, front_half_
 
 /// The experiment.
 #[derive(Debug, Clone, Copy, serde::Serialize, serde::Deserialize)]
-pub struct Pegboard;
+pub struct Pegboard {
+    /// Every controller aimed across the board (`controller.heading`), as an operator
+    /// would; off: each holds what its own configuration says.
+    pub aim: bool,
+}
+
+impl Pegboard {
+    /// As registered: not aimed until `--aim` says so.
+    pub const UNCONFIGURED: Pegboard = Pegboard { aim: false };
+}
 
 /// Its own options: which boards.
 #[derive(Debug, Clone, clap::Args)]
@@ -47,6 +57,11 @@ pub struct PegboardArgs {
     /// An explicit layout: a world scenario file, run as is (repeatable).
     #[arg(long = "scenario", value_name = "FILE")]
     pub scenarios: Vec<PathBuf>,
+    /// Aim every controller across the board, as an operator would (`controller.heading`
+    /// at the takeover: the controllers that steer hold that heading; the others
+    /// refuse it and run as they are).
+    #[arg(long)]
+    pub aim: bool,
 }
 
 /// Its controllers, in report order: open loop, the ablations (each adds a compliant
@@ -110,7 +125,7 @@ impl Experiment for Pegboard {
         for path in &args.scenarios {
             layouts.push(Layout::from_file(path)?);
         }
-        Ok((Pegboard, layouts))
+        Ok((Pegboard { aim: args.aim }, layouts))
     }
 
     fn world(
@@ -120,6 +135,17 @@ impl Experiment for Pegboard {
         start: u64,
     ) -> Result<(WorldSpec, Board), LabError> {
         board_world(layout, modules, start)
+    }
+
+    fn trial_config(&self, base: &TrialConfig, board: &Board) -> TrialConfig {
+        let f = board.forward();
+        TrialConfig {
+            aim: self.aim.then(|| Aim {
+                travel_rad: f[1].atan2(f[0]),
+                sidewind_drift_rad: 0.0,
+            }),
+            ..*base
+        }
     }
 
     fn metrics(&self, board: &Board, rec: &TrialRecord) -> TrialMetrics {
@@ -186,5 +212,33 @@ impl Experiment for Pegboard {
 impl Goal for Board {
     fn reached(&self, plant: &dyn Plant) -> bool {
         self.crossed(front_half_centre(plant))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::emu::world::scenario::Region;
+
+    #[test]
+    fn aimed_trials_travel_across_the_board_from_their_entry_edge() {
+        let region = Region {
+            x_m: [0.0, 2.0],
+            y_m: [-0.6, 0.6],
+        };
+        let base = TrialConfig::default();
+        // Tail towards −x: entered by x_min, across is +x; tail towards +x: across is −x.
+        for (tail_yaw, travel) in [(std::f64::consts::PI, 0.0), (0.0, std::f64::consts::PI)] {
+            let board = Board::new(region, tail_yaw);
+            let aimed = Pegboard { aim: true }.trial_config(&base, &board);
+            let a = aimed.aim.expect("aimed");
+            assert!((crate::num::wrap_pi(a.travel_rad - travel)).abs() < 1e-12);
+            assert_eq!(a.sidewind_drift_rad, 0.0);
+            // The start's head faces across, so slithering's nominal heading is 0.
+            let h = a.nominal_heading(GaitKind::Slithering, tail_yaw).unwrap();
+            assert!(h.abs() < 1e-12, "{h}");
+            let plain = Pegboard::UNCONFIGURED.trial_config(&base, &board);
+            assert!(plain.aim.is_none());
+        }
     }
 }

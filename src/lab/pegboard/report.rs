@@ -153,7 +153,7 @@ mod tests {
     #[test]
     fn csv_has_a_row_per_trial_with_every_column() {
         let rs = [result("a", 0, 10.0, true), result("b", 1, 20.0, false)];
-        let csv = results_csv(&Pegboard, &rs);
+        let csv = results_csv(&Pegboard::UNCONFIGURED, &rs);
         let lines: Vec<_> = csv.lines().collect();
         assert_eq!(lines.len(), 3);
         assert_eq!(
@@ -189,7 +189,7 @@ mod tests {
         assert_eq!(sum[0].cycles_per_m.0, 30.0);
         assert_eq!(sum[0].cycles_per_m.2, 20.0);
         let md = summary_markdown(
-            &Pegboard,
+            &Pegboard::UNCONFIGURED,
             &rs,
             &SummaryContext {
                 command: "snake-lab pegboard --layouts 1".into(),
