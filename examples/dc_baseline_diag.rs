@@ -10,7 +10,9 @@
 //! Environment: CONTROLLER (dc_nc), NOMINAL (the gait's JSON, default
 //! `{"amplitude_lat_rad":1.2,"spatial_freq_rad":6.283185307179586}`), SECS (120),
 //! THREADS (2), PLANE (`lat` or `dor`), ROCKS (any value: the 3-D rock pile's
-//! `dc3d_nc` by default and 16 modules' odd/even layout as the lab's).
+//! `dc3d_nc` by default and 16 modules' odd/even layout as the lab's), FULL_TIME (any
+//! value: run every trial its full time; by default a trial ends, as the lab's do, when
+//! the body's centre leaves the obstacles' bounding box).
 use std::io::Write;
 
 use snaked::emu::world::scenario::{MODULE_LENGTH_M, WorldScenario};
@@ -120,6 +122,7 @@ fn main() {
     let arg = |i: usize, d: u64| args.get(i).and_then(|v| v.parse().ok()).unwrap_or(d);
     let (seed_base, layouts, starts) = (arg(2, 500), arg(3, 10), arg(4, 2));
     let rocks = std::env::var("ROCKS").is_ok();
+    let full_time = std::env::var("FULL_TIME").is_ok();
     let name =
         std::env::var("CONTROLLER").unwrap_or(if rocks { "dc3d_nc" } else { "dc_nc" }.into());
     let nominal = std::env::var("NOMINAL")
@@ -177,15 +180,15 @@ fn main() {
                         let layout = &layouts[l];
                         let world = layout.scenario.generate_trial(16, start).expect("world");
                         let seed = noise_seed(layout.identity, start as usize, 0);
-                        let rec = run_trial(
-                            &controller,
-                            &world,
-                            &FieldEdge::FULL_TIME,
-                            seed,
-                            &config,
-                            None,
-                        )
-                        .expect("trial");
+                        // As the lab: a trial ends when the body's centre leaves the
+                        // obstacles (open ground after them would count as progressing).
+                        let edge = if full_time {
+                            FieldEdge::FULL_TIME
+                        } else {
+                            FieldEdge::of(&world)
+                        };
+                        let rec = run_trial(&controller, &world, &edge, seed, &config, None)
+                            .expect("trial");
                         let label = format!("{}-s{start}", layout.name);
                         eprintln!("{label} done");
                         mine.extend(rows(&label, &rec, body_m));
