@@ -277,8 +277,12 @@ impl DirectionalComplianceConfig {
                 ramp_s: 2.0,
                 gains: amplitude(0.0, 0.7),
             },
+            // The reference's compliance acts on the amplitude alone; planar, that
+            // measures best here too; in 3-D the compliant phase keeps the body from
+            // colliding with itself (docs/measurements.md, "Directional compliance on
+            // the corrected friction").
             phase: PhaseCompliance {
-                enabled: true,
+                enabled: three_d,
                 gains: AdmittanceGains {
                     mass: 1.0,
                     damping: 6.0,
@@ -305,13 +309,16 @@ impl DirectionalComplianceConfig {
                 count: 3,
                 mean_cycles: 1.0,
             },
-            // Measured on peg-array layouts 500-519, chosen on those and rock-pile
-            // layouts 500-519 (docs/compliance.md, "Held or helped"); it only
-            // changes what the fixed strategies report.
+            // The reference's plain integral: on the corrected friction a section
+            // carried past obstacles sits at the open-ground level and a held one
+            // below it (docs/compliance.md, "Held or helped"). In 3-D a longest stay
+            // of 3 cycles in PDC/NDC; planar the reference's return rule alone.
+            // Chosen on peg-array and rock-pile layouts 500-519; it only changes
+            // what the fixed strategies report.
             hold: HoldConfig {
-                still_rad: 0.04,
+                still_rad: 0.0,
                 leak_s: 5.0,
-                max_dwell_cycles: 3.0,
+                max_dwell_cycles: if three_d { 3.0 } else { 0.0 },
             },
             friction_offset: None,
             torque_cutoff_hz: 5.0,
