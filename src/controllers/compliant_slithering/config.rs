@@ -65,6 +65,18 @@ pub struct CompliantSlitheringConfig {
 }
 
 /// Range every amplitude bound must lie in, rad.
+/// The windowed spatial frequency's admittance (range 2π to 4π, the thesis's); also
+/// directional compliance's when its spatial frequency complies.
+pub const SPATIAL_FREQ_GAINS: AdmittanceGains = AdmittanceGains {
+    mass: 0.05,
+    damping: 0.3,
+    stiffness: 0.3,
+    min: 2.0 * PI,
+    max: 4.0 * PI,
+    bias_force: 0.0,
+    max_rate: f64::INFINITY,
+};
+
 const AMPLITUDE_RANGE: (f64, f64) = (0.0, JOINT_LIMIT_RAD);
 /// Range every spatial-frequency bound must lie in, rad per body length (up to four
 /// waves on the body; the window manager keeps at most 16 windows).
@@ -93,15 +105,7 @@ impl CompliantSlitheringConfig {
             spatial_freq: ParamConfig {
                 enabled: true,
                 centralization: Centralization::Windowed,
-                gains: AdmittanceGains {
-                    mass: 0.05,
-                    damping: 0.3,
-                    stiffness: 0.3,
-                    min: 2.0 * PI,
-                    max: 4.0 * PI,
-                    bias_force: 0.0,
-                    max_rate: f64::INFINITY,
-                },
+                gains: SPATIAL_FREQ_GAINS,
             },
             phase: ParamConfig {
                 enabled: true,

@@ -4,7 +4,7 @@
 mod config;
 mod controller;
 
-pub use config::{Centralization, CompliantSlitheringConfig, ParamConfig};
+pub use config::{Centralization, CompliantSlitheringConfig, ParamConfig, SPATIAL_FREQ_GAINS};
 pub use controller::CompliantSlithering;
 
 use crate::controller_interface::report::{FieldSpec, ReportSpec, SignalSpec};

@@ -7,6 +7,7 @@ use std::f64::consts::{FRAC_PI_2, PI};
 use serde::{Deserialize, Serialize};
 
 use crate::controller_interface::config::{ConfigError, check_range};
+use crate::controllers::compliant_slithering::SPATIAL_FREQ_GAINS;
 use crate::controllers::steering::SteeringConfig;
 use crate::gait::JOINT_LIMIT_RAD;
 use crate::shape::admittance::AdmittanceGains;
@@ -95,6 +96,34 @@ pub struct DorsalWave {
 pub struct PhaseCompliance {
     pub enabled: bool,
     pub gains: AdmittanceGains,
+}
+
+/// The windowed spatial frequency's compliance (compliant slithering's `ωS`, thesis
+/// §4.1; not in reference 001, whose compliance acts on the amplitude alone): where a
+/// window is squeezed it takes more waves. It complies in every mode (the directional
+/// filters act on the amplitude), on the lateral wave only (a dorsal wave keeps the
+/// nominal spatial frequency).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SpatialFreqCompliance {
+    pub enabled: bool,
+    /// Admittance of each window's spatial frequency, rad per body length (absolute
+    /// range).
+    pub gains: AdmittanceGains,
+}
+
+impl SpatialFreqCompliance {
+    /// Off, with compliant slithering's gains (range 2π to 4π).
+    pub const OFF: SpatialFreqCompliance = SpatialFreqCompliance {
+        enabled: false,
+        gains: SPATIAL_FREQ_GAINS,
+    };
+}
+
+impl Default for SpatialFreqCompliance {
+    fn default() -> Self {
+        Self::OFF
+    }
 }
 
 /// The body sections whose absitions choose the windows' modes (reference 001, Fig. 2:
@@ -224,6 +253,9 @@ pub struct DirectionalComplianceConfig {
     pub lateral: AdmittanceGains,
     pub dorsal: DorsalWave,
     pub phase: PhaseCompliance,
+    /// The lateral windows' spatial frequency (off: the reference's amplitude alone).
+    #[serde(default)]
+    pub spatial_freq: SpatialFreqCompliance,
     pub thresholds: Thresholds,
     /// The body sections that keep the absitions and set the windows' modes.
     pub sections: SectionsConfig,
@@ -243,6 +275,10 @@ pub struct DirectionalComplianceConfig {
     #[serde(default)]
     pub steering: SteeringConfig,
 }
+
+/// The spatial frequencies the controller takes, rad per body length (a wave running
+/// head to tail, at most four on the body).
+pub const SPATIAL_FREQ_RANGE: (f64, f64) = (0.25 * PI, 8.0 * PI);
 
 /// Largest friction offset a calibration may hold, rad.
 const OFFSET_MAX_RAD: f64 = 0.5;
@@ -280,7 +316,7 @@ impl DirectionalComplianceConfig {
             // The reference's compliance acts on the amplitude alone; planar, that
             // measures best here too; in 3-D the compliant phase keeps the body from
             // colliding with itself (docs/measurements.md, "Directional compliance on
-            // the corrected friction").
+            // the corrected friction"). [`Self::over_full_compliance`] adds the rest.
             phase: PhaseCompliance {
                 enabled: three_d,
                 gains: AdmittanceGains {
@@ -293,6 +329,7 @@ impl DirectionalComplianceConfig {
                     max_rate: f64::INFINITY,
                 },
             },
+            spatial_freq: SpatialFreqCompliance::OFF,
             // Tuned on peg-array layouts 500-519 (docs/measurements.md); the fixed
             // strategies are the reference's bare filters.
             thresholds: Thresholds {
@@ -328,6 +365,16 @@ impl DirectionalComplianceConfig {
         }
     }
 
+    /// The same directional amplitude over the thesis's full compliance: the phase and
+    /// the windows' spatial frequency comply too (the `dc_full_*` presets; planar,
+    /// 0.1 self-contacts a trial among pegs instead of 14 and as fast; docs/
+    /// measurements.md, "Directional compliance over the full compliance").
+    pub fn over_full_compliance(mut self) -> Self {
+        self.phase.enabled = true;
+        self.spatial_freq.enabled = true;
+        self
+    }
+
     /// Every bound (field paths relative to the configuration).
     pub fn check(&self) -> Result<(), ConfigError> {
         let (lo, hi) = (0.0, JOINT_LIMIT_RAD);
@@ -359,6 +406,10 @@ impl DirectionalComplianceConfig {
             .gains
             .check(f64::NEG_INFINITY, f64::INFINITY, PI)
             .map_err(|e| e.under("phase.gains"))?;
+        self.spatial_freq
+            .gains
+            .check(SPATIAL_FREQ_RANGE.0, SPATIAL_FREQ_RANGE.1, 0.0)
+            .map_err(|e| e.under("spatial_freq.gains"))?;
         let t = &self.thresholds;
         check_range("thresholds.low_rad_s", t.low_rad_s, -100.0, -1e-3)?;
         check_range("thresholds.high_rad_s", t.high_rad_s, 1e-3, 100.0)?;

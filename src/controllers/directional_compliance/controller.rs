@@ -2,11 +2,12 @@
 //! a dorsal one on the other joints, eq. 10) whose amplitudes are windowed per plane
 //! on travelling half-wave windows, each following shape-space admittance through the
 //! filter (NC, PDC, NDC) of the body section its centre is in, the sections keeping
-//! the absitions; the temporal phase compliant and central.
+//! the absitions; the temporal phase compliant and central; optionally the windows'
+//! spatial frequency compliant too (compliant slithering's, in every mode).
 
 use super::absition::{AmplitudeState, Mode};
 use super::calibration::Calibration;
-use super::config::{DirectionalComplianceConfig, MAX_SECTIONS, Strategy};
+use super::config::{DirectionalComplianceConfig, MAX_SECTIONS, SPATIAL_FREQ_RANGE, Strategy};
 use super::sections::Sections;
 use crate::controller_interface::nominal::{Nominal, lateral_room, within};
 use crate::controller_interface::report::{
@@ -19,7 +20,7 @@ use crate::controllers::steering::HeadingHold;
 use crate::gait::{BodyLayout, GaitParams, JOINT_LIMIT_RAD, Plane};
 use crate::shape::admittance::{AdmittanceSign, ParamState};
 use crate::shape::torque::TorqueFilter;
-use crate::shape::window::steepness_for_width;
+use crate::shape::window::{Window, steepness_for_width};
 use crate::shape::window_manager::{Slope, WindowEvents, WindowManager};
 
 /// Most travelling windows on the body.
@@ -30,8 +31,16 @@ pub(super) const DOR: usize = 1;
 /// Signals reported before the per-section ones (names in `super::report_spec`).
 pub(super) const FIXED_SIGNALS: usize = 18;
 
-/// A travelling window's state: its amplitude in each plane.
-type Payload = [AmplitudeState; 2];
+/// A travelling window's state.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct WindowState {
+    /// Its amplitude in each plane (lateral, dorsal).
+    pub amplitude: [AmplitudeState; 2],
+    /// Its lateral spatial frequency's deviation from nominal (0 unless it complies).
+    pub spatial_freq: ParamState,
+}
+
+type Payload = WindowState;
 
 /// The controller. Construction allocates; nothing else does.
 pub struct DirectionalCompliance {
@@ -47,7 +56,12 @@ pub struct DirectionalCompliance {
     tau_ext: Vec<f64>,
     /// `w_j(s_i)`, window-major (`MAX_WINDOWS × joints`).
     weights: Vec<f64>,
+    /// `∫₀^{s_i} w_j`, the same layout (where window `j`'s spatial frequency moves the
+    /// phase of joint `i`).
+    integrals: Vec<f64>,
     forces: [[f64; MAX_WINDOWS]; 2],
+    /// Each window's force on its spatial frequency.
+    spatial_forces: [f64; MAX_WINDOWS],
     phase_force: f64,
     calibration: Calibration,
     sections: Sections,
@@ -81,7 +95,9 @@ impl DirectionalCompliance {
             filter: TorqueFilter::new(n, config.torque_cutoff_hz, config.torque_deadband_nm),
             tau_ext: vec![0.0; n],
             weights: vec![0.0; MAX_WINDOWS * n],
+            integrals: vec![0.0; MAX_WINDOWS * n],
             forces: [[0.0; MAX_WINDOWS]; 2],
+            spatial_forces: [0.0; MAX_WINDOWS],
             phase_force: 0.0,
             calibration: Calibration::new(config.friction_offset, config.sections.count),
             sections: Sections::new(config.sections.count, 1.0, Mode::Nc),
@@ -102,7 +118,7 @@ impl DirectionalCompliance {
 
     /// What a window is born with: the nominal amplitudes.
     fn born(&self) -> Payload {
-        [AmplitudeState::default(); 2]
+        WindowState::default()
     }
 
     /// The mode a section starts in (and the fixed strategies' for good).
@@ -131,6 +147,7 @@ impl DirectionalCompliance {
         self.phase = ParamState::default();
         self.filter.reset();
         self.forces = [[0.0; MAX_WINDOWS]; 2];
+        self.spatial_forces = [0.0; MAX_WINDOWS];
         self.phase_force = 0.0;
         self.switches = 0;
         self.ramp = 0.0;
@@ -168,17 +185,33 @@ impl DirectionalCompliance {
         if self.config.dorsal.enabled { 2 } else { 1 }
     }
 
-    /// Re-anchors the windows to the lateral wave `φ(s) = ωS·s − Ω` and samples their
-    /// weights at the joints.
+    /// Re-anchors the windows to the lateral wave `φ(s) = ωS·s + Σ_j δωS_j·∫₀^s w_j − Ω`
+    /// (the windows' spatial frequencies as they were) and samples their weights and
+    /// integrals at the joints. The phase rises along the body: every window's spatial
+    /// frequency stays in a positive range.
     fn anchor_windows(&mut self) {
-        let (ws, omega, born) = (self.spatial_freq(), self.omega(), self.born());
-        self.last_events = self
-            .manager
-            .update(|s| ws * s - omega, born, Slope::Increasing);
+        let (ws, omega, born, m) = (self.spatial_freq(), self.omega(), self.born(), self.m);
+        let mut old = [(Window::EVERYWHERE, 0.0); MAX_WINDOWS];
+        let mut count = 0;
+        for (slot, w) in old.iter_mut().zip(self.manager.windows()) {
+            *slot = (w.window, w.payload.spatial_freq.deviation);
+            count += 1;
+        }
+        let old = &old[..count];
+        let phase = |s: f64| {
+            let shift: f64 = old
+                .iter()
+                .filter(|(_, d)| *d != 0.0)
+                .map(|(w, d)| d * w.integral(s, m))
+                .sum();
+            ws * s + shift - omega
+        };
+        self.last_events = self.manager.update(phase, born, Slope::Increasing);
         let n = self.layout.len();
         for (j, w) in self.manager.windows().enumerate() {
             for (i, &s) in self.layout.s.iter().enumerate() {
                 self.weights[j * n + i] = w.window.weight(s, self.m);
+                self.integrals[j * n + i] = w.window.integral(s, self.m);
             }
         }
     }
@@ -190,7 +223,13 @@ impl DirectionalCompliance {
         let s = self.layout.s[i];
         let omega = self.omega();
         let (plane, phi, gain) = match self.layout.planes[i] {
-            Plane::Lateral => (LAT, self.spatial_freq() * s - omega, 1.0),
+            Plane::Lateral => {
+                let mut shift = 0.0;
+                for (j, w) in self.manager.windows().enumerate() {
+                    shift += self.integrals[j * n + i] * w.payload.spatial_freq.deviation;
+                }
+                (LAT, self.spatial_freq() * s + shift - omega, 1.0)
+            }
             Plane::Dorsal => {
                 let d = &self.config.dorsal;
                 let phi = d.spatial_ratio * self.spatial_freq() * s - d.temporal_ratio * omega
@@ -200,17 +239,21 @@ impl DirectionalCompliance {
         };
         let mut deviation = 0.0;
         for (j, w) in self.manager.windows().enumerate() {
-            deviation += self.weights[j * n + i] * w.payload[plane].deviation;
+            deviation += self.weights[j * n + i] * w.payload.amplitude[plane].deviation;
         }
         (plane, phi, self.amplitude0(plane) + deviation, gain)
     }
 
     /// Shape forces from the external torques: per window and plane
-    /// `F = Σ_i w_j(s_i)·∂θ_i/∂A·τ_i`, and on the phase `Σ_i ∂θ_i/∂Ω·τ_i`.
+    /// `F = Σ_i w_j(s_i)·∂θ_i/∂A·τ_i`, on the phase `Σ_i ∂θ_i/∂Ω·τ_i`, and on a
+    /// window's spatial frequency the window-local `Σ_i w_j(s_i)·A_i·cos φ_i·∫₀^{s_i} w_j·τ_i`
+    /// (compliant slithering's: a window collects the torques of the joints it covers).
     fn compute_forces(&mut self) {
         let n = self.layout.len();
         self.forces = [[0.0; MAX_WINDOWS]; 2];
+        self.spatial_forces = [0.0; MAX_WINDOWS];
         self.phase_force = 0.0;
+        let spatial = self.config.spatial_freq.enabled;
         let windows = self.manager.len();
         for i in 0..n {
             let (plane, phi, amplitude, gain) = self.joint_wave(i);
@@ -220,7 +263,11 @@ impl DirectionalCompliance {
             }
             let (sin, cos) = phi.sin_cos();
             for j in 0..windows {
-                self.forces[plane][j] += self.weights[j * n + i] * gain * sin * tau;
+                let w = self.weights[j * n + i];
+                self.forces[plane][j] += w * gain * sin * tau;
+                if spatial && plane == LAT {
+                    self.spatial_forces[j] += w * amplitude * cos * self.integrals[j * n + i] * tau;
+                }
             }
             let dphi_domega = if plane == LAT {
                 -1.0
@@ -238,6 +285,8 @@ impl DirectionalCompliance {
         let nominal = [self.amplitude0(LAT), self.amplitude0(DOR)];
         let shift = self.config.thresholds.shift_rad;
         let sections = &self.sections;
+        let spatial = &self.config.spatial_freq;
+        let ws0 = self.nominal.params.spatial_freq_rad;
         for (j, w) in self.manager.windows_mut().enumerate() {
             let centre = centre_of(w.window.a, w.window.b);
             for p in 0..planes {
@@ -246,7 +295,18 @@ impl DirectionalCompliance {
                 } else {
                     sections.mode_at(centre, p)
                 };
-                w.payload[p].step(&gains[p], mode, self.forces[p][j], nominal[p], shift, dt);
+                let force = self.forces[p][j];
+                w.payload.amplitude[p].step(&gains[p], mode, force, nominal[p], shift, dt);
+            }
+            if spatial.enabled {
+                let force = self.spatial_forces[j];
+                w.payload.spatial_freq.step(
+                    &spatial.gains,
+                    AdmittanceSign::Compliant,
+                    force,
+                    ws0,
+                    dt,
+                );
             }
         }
         if self.config.phase.enabled {
@@ -270,7 +330,7 @@ impl DirectionalCompliance {
             let k = self.sections.index_of(self.layout.s[i]);
             let mut deviation = 0.0;
             for (j, w) in self.manager.windows().enumerate() {
-                deviation += self.weights[j * n + i] * w.payload[plane].deviation;
+                deviation += self.weights[j * n + i] * w.payload.amplitude[plane].deviation;
             }
             sum[plane][k] += deviation;
             count[plane][k] += 1;
@@ -385,10 +445,15 @@ impl DirectionalCompliance {
             let centre = centre_of(w.window.a, w.window.b);
             out.a[k] = w.window.a;
             out.b[k] = w.window.b;
-            out.columns[0][k] = self.amplitude0(plane) + w.payload[plane].deviation;
+            out.columns[0][k] = self.amplitude0(plane) + w.payload.amplitude[plane].deviation;
             out.columns[1][k] = self.sections.index_of(centre) as f64;
             out.columns[2][k] = self.sections.mode_at(centre, plane).code();
             out.columns[3][k] = self.forces[plane][k];
+            out.columns[4][k] = if plane == LAT {
+                self.spatial_freq() + w.payload.spatial_freq.deviation
+            } else {
+                self.spatial_freq()
+            };
         }
     }
 
@@ -426,12 +491,13 @@ impl Controller for DirectionalCompliance {
     fn accepts(&self, params: &GaitParams) -> Result<(), NominalMismatch> {
         let g = &self.config.lateral;
         within("amplitude_lat_rad", params.amplitude_lat_rad, g.min, g.max)?;
-        within(
-            "spatial_freq_rad",
-            params.spatial_freq_rad,
-            0.25 * std::f64::consts::PI,
-            8.0 * std::f64::consts::PI,
-        )?;
+        let (lo, hi) = if self.config.spatial_freq.enabled {
+            let g = &self.config.spatial_freq.gains;
+            (g.min, g.max)
+        } else {
+            SPATIAL_FREQ_RANGE
+        };
+        within("spatial_freq_rad", params.spatial_freq_rad, lo, hi)?;
         lateral_room(params, g.max)?;
         if self.config.dorsal.enabled {
             let room = JOINT_LIMIT_RAD - self.config.dorsal.gains.max;

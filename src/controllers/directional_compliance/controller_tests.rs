@@ -65,10 +65,24 @@ fn bend_further(sp: &[f64]) -> [f64; N] {
     tau
 }
 
+/// `name`'s preset with the windows' spatial frequency complying.
+fn with_spatial_freq(name: &str) -> DirectionalCompliance {
+    let (layout, params) = setup();
+    let mut config = preset(name);
+    config.spatial_freq.enabled = true;
+    config.check().unwrap();
+    let mut c = DirectionalCompliance::new(&layout, &params, config);
+    engage_at(&mut c, &layout, &params, 0.0);
+    c
+}
+
 #[test]
 fn without_torque_the_planar_controllers_are_open_loop_slithering() {
-    for name in ["dc_switching", "dc_nc", "dc_pdc", "dc_ndc"] {
-        let (mut c, layout, params) = engaged(name);
+    let presets = ["dc_switching", "dc_nc", "dc_pdc", "dc_ndc"];
+    let spatial = presets.map(|name| (name, with_spatial_freq(name)));
+    let plain = presets.map(|name| (name, engaged(name).0));
+    for (name, mut c) in plain.into_iter().chain(spatial) {
+        let (layout, params) = setup();
         let mut open = OpenLoop::new(GaitKind::Slithering, &layout, &params);
         engage_at(&mut open, &layout, &params, 0.0);
         let buf = ObservationBuf::new(N);
@@ -85,6 +99,62 @@ fn without_torque_the_planar_controllers_are_open_loop_slithering() {
         }
         assert_eq!(c.switches(), 0);
     }
+}
+
+/// Joint speeds never exceed what the wave itself asks, rad per 1 ms step.
+const NO_JUMP_RAD: f64 = 0.01;
+
+#[test]
+fn a_push_along_the_phase_gradient_adds_waves_where_the_spatial_frequency_complies() {
+    // The environment pushes each lateral joint along ∂θ/∂ωS (`+A·cos φ`, reported with
+    // the spring's opposite sign), then against it: the windows take more waves, then
+    // fewer, within the range, and the joints never jump.
+    let ws0 = GaitParams::default_for(GaitKind::Slithering).spatial_freq_rad;
+    for (sign, more) in [(1.0, true), (-1.0, false)] {
+        let mut c = with_spatial_freq("dc_nc");
+        let buf = ObservationBuf::new(N);
+        let (pos, mut tau) = ([0.0; N], [0.0; N]);
+        let (mut out, mut last) = (vec![0.0; N], vec![0.0; N]);
+        let mut clock = TickClock::default();
+        let g = c.config().spatial_freq.gains;
+        for k in 0..4000 {
+            let t = k as f64 * 1e-3;
+            c.step(clock.tick(t), &buf.observe(&pos, &tau), &mut out);
+            if k > 0 {
+                for (x, y) in out.iter().zip(&last) {
+                    assert!((x - y).abs() < NO_JUMP_RAD, "a jump at {t}: {y} to {x}");
+                }
+            }
+            last.copy_from_slice(&out);
+            for (i, t) in tau.iter_mut().enumerate() {
+                let (plane, phi, a, _) = c.joint_wave(i);
+                *t = if plane == LAT {
+                    -3.0 * sign * a * phi.cos()
+                } else {
+                    0.0
+                };
+            }
+            for (_, w) in c.windows() {
+                let ws = ws0 + w.spatial_freq.deviation;
+                assert!((g.min - 1e-9..=g.max + 1e-9).contains(&ws), "{ws}");
+            }
+        }
+        let body: Vec<f64> = c.windows().map(|(_, w)| w.spatial_freq.deviation).collect();
+        let mean = body.iter().sum::<f64>() / body.len() as f64;
+        if more {
+            assert!(mean > 0.3, "more waves: {body:?}");
+        } else {
+            assert!(mean < -0.3, "fewer waves: {body:?}");
+        }
+    }
+    // Off (all presets but `dc_full_*`), the spatial frequency stays nominal.
+    let (mut c, ..) = engaged("dc_nc");
+    assert!(!c.config().spatial_freq.enabled);
+    run(&mut c, 0.0, 2.0, |_, sp| bend_further(sp), |_| {});
+    assert!(
+        c.windows()
+            .all(|(_, w)| w.spatial_freq == ParamState::default())
+    );
 }
 
 #[test]
@@ -121,8 +191,8 @@ fn windows_are_born_at_the_head_at_nominal_and_the_held_section_switches() {
         if c.window_events().born_at_head > 0 {
             born += 1;
             let (_, head) = c.windows().next().unwrap();
-            for p in head {
-                assert_eq!(*p, AmplitudeState::default(), "a new head window");
+            for p in head.amplitude {
+                assert_eq!(p, AmplitudeState::default(), "a new head window");
             }
         }
         switched = c.switches();
@@ -337,6 +407,20 @@ fn the_configuration_is_checked_field_by_field() {
     params.amplitude_lat_rad = 1.2;
     params.offset_lat_rad = 0.1;
     assert_eq!(c.accepts(&params).unwrap_err().field, "offset_lat_rad");
+    // With a complying spatial frequency (`dc_full_*`), the nominal must lie in its
+    // range (2π..4π); without, anything from π/4 to 8π.
+    params.offset_lat_rad = 0.0;
+    params.spatial_freq_rad = 1.5 * std::f64::consts::PI;
+    c.accepts(&params).unwrap();
+    let (c, ..) = engaged("dc_full_nc");
+    assert_eq!(c.accepts(&params).unwrap_err().field, "spatial_freq_rad");
+    params.spatial_freq_rad = 2.0 * std::f64::consts::PI;
+    c.accepts(&params).unwrap();
+    // Its gains are checked as the others' are.
+    let mut config = preset("dc_switching");
+    config.spatial_freq.gains.max = 30.0;
+    let e = config.check().unwrap_err().to_string();
+    assert!(e.contains("spatial_freq.gains.max"), "{e}");
 }
 
 /// Issue 25: the dorsal wave's nominal amplitude is checked while the wave is off too
@@ -350,5 +434,21 @@ fn the_dorsal_amplitude_is_checked_while_the_dorsal_wave_is_off() {
         let e = c.check().unwrap_err().to_string();
         assert!(e.contains("dorsal.amplitude_rad"), "{bad}: {e}");
         assert!(e.len() < 120, "{bad}: a readable message: {e}");
+    }
+}
+
+/// The `dc_full_*` presets are the planar ones with the phase and the windows' spatial
+/// frequency complying (what the lab measured as variants of them).
+#[test]
+fn the_full_presets_are_the_planar_ones_with_phase_and_spatial_frequency_complying() {
+    for (full, base) in [
+        ("dc_full_switching", "dc_switching"),
+        ("dc_full_nc", "dc_nc"),
+    ] {
+        let mut b = preset(base);
+        assert!(!b.phase.enabled && !b.spatial_freq.enabled, "{base}");
+        b.phase.enabled = true;
+        b.spatial_freq.enabled = true;
+        assert_eq!(preset(full), b, "{full}");
     }
 }

@@ -13,9 +13,9 @@ pub use absition::{Absition, AmplitudeState, Mode};
 pub use calibration::Calibration;
 pub use config::{
     DirectionalComplianceConfig, DorsalWave, FrictionOffset, MAX_SECTIONS, PhaseCompliance,
-    Reference, SectionValues, SectionsConfig, Strategy, Thresholds,
+    Reference, SectionValues, SectionsConfig, SpatialFreqCompliance, Strategy, Thresholds,
 };
-pub use controller::DirectionalCompliance;
+pub use controller::{DirectionalCompliance, WindowState};
 pub use sections::{Boxcar, Sections};
 
 use crate::controller_interface::report::{FieldSpec, ReportSpec, SignalSpec};
@@ -26,16 +26,18 @@ use crate::gait::GaitKind;
 /// The registry's entry.
 pub struct DirectionalComplianceKind;
 
-/// Presets: (name, strategy, 3-D).
-const PRESETS: [(&str, Strategy, bool); 8] = [
-    ("dc_switching", Strategy::Switching, false),
-    ("dc_nc", Strategy::Nc, false),
-    ("dc_pdc", Strategy::Pdc, false),
-    ("dc_ndc", Strategy::Ndc, false),
-    ("dc3d_switching", Strategy::Switching, true),
-    ("dc3d_nc", Strategy::Nc, true),
-    ("dc3d_pdc", Strategy::Pdc, true),
-    ("dc3d_ndc", Strategy::Ndc, true),
+/// Presets: (name, strategy, 3-D, over the full compliance).
+const PRESETS: [(&str, Strategy, bool, bool); 10] = [
+    ("dc_switching", Strategy::Switching, false, false),
+    ("dc_nc", Strategy::Nc, false, false),
+    ("dc_pdc", Strategy::Pdc, false, false),
+    ("dc_ndc", Strategy::Ndc, false, false),
+    ("dc3d_switching", Strategy::Switching, true, false),
+    ("dc3d_nc", Strategy::Nc, true, false),
+    ("dc3d_pdc", Strategy::Pdc, true, false),
+    ("dc3d_ndc", Strategy::Ndc, true, false),
+    ("dc_full_switching", Strategy::Switching, false, true),
+    ("dc_full_nc", Strategy::Nc, false, true),
 ];
 
 impl ControllerKind for DirectionalComplianceKind {
@@ -68,13 +70,24 @@ impl ControllerKind for DirectionalComplianceKind {
         ("dc3d_nc", "3-D; nominal compliance in each plane"),
         ("dc3d_pdc", "3-D; amplitudes only grow"),
         ("dc3d_ndc", "3-D; amplitudes only shrink"),
+        (
+            "dc_full_switching",
+            "planar switching with the phase and spatial frequency compliant too",
+        ),
+        (
+            "dc_full_nc",
+            "planar nominal compliance of amplitude, spatial frequency and phase",
+        ),
     ];
 
     fn preset(name: &str) -> Option<Self::Config> {
         PRESETS
             .iter()
             .find(|(n, ..)| *n == name)
-            .map(|&(_, strategy, three_d)| DirectionalComplianceConfig::preset(strategy, three_d))
+            .map(|&(_, strategy, three_d, full)| {
+                let c = DirectionalComplianceConfig::preset(strategy, three_d);
+                if full { c.over_full_compliance() } else { c }
+            })
     }
 
     fn check(config: &Self::Config, _ctx: &BuildContext<'_>) -> Result<(), ConfigError> {
@@ -113,6 +126,7 @@ impl ControllerKind for DirectionalComplianceKind {
             s("section", "index"),
             s("mode", ""),
             s("force", "N·m"),
+            s("spatial_freq", "rad/body length"),
         ];
         let sections = vec![
             s("mean_deviation", "rad"),
