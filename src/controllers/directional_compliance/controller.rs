@@ -208,10 +208,15 @@ impl DirectionalCompliance {
         };
         self.last_events = self.manager.update(phase, born, Slope::Increasing);
         let n = self.layout.len();
+        // The integrals only matter while the spatial frequency complies (else they
+        // stay 0 and every deviation is 0): no softplus on the hot path otherwise.
+        let spatial = self.config.spatial_freq.enabled;
         for (j, w) in self.manager.windows().enumerate() {
             for (i, &s) in self.layout.s.iter().enumerate() {
                 self.weights[j * n + i] = w.window.weight(s, self.m);
-                self.integrals[j * n + i] = w.window.integral(s, self.m);
+                if spatial {
+                    self.integrals[j * n + i] = w.window.integral(s, self.m);
+                }
             }
         }
     }
