@@ -8,11 +8,10 @@
 use super::absition::{AmplitudeState, Mode};
 use super::calibration::Calibration;
 use super::config::{DirectionalComplianceConfig, MAX_SECTIONS, SPATIAL_FREQ_RANGE, Strategy};
+use super::report::centre_of;
 use super::sections::Sections;
 use crate::controller_interface::nominal::{Nominal, lateral_room, within};
-use crate::controller_interface::report::{
-    ControllerReport, MAX_WINDOWS as REPORT_WINDOWS, WindowField,
-};
+use crate::controller_interface::report::ControllerReport;
 use crate::controller_interface::{
     CommandRefused, Controller, ControllerCommand, Handover, NominalMismatch, Observation, Tick,
 };
@@ -44,35 +43,35 @@ type Payload = WindowState;
 
 /// The controller. Construction allocates; nothing else does.
 pub struct DirectionalCompliance {
-    config: DirectionalComplianceConfig,
-    layout: BodyLayout,
-    nominal: Nominal,
+    pub(super) config: DirectionalComplianceConfig,
+    pub(super) layout: BodyLayout,
+    pub(super) nominal: Nominal,
     /// Windows anchored to the lateral wave's zero crossings; both planes share them.
-    manager: WindowManager<Payload>,
+    pub(super) manager: WindowManager<Payload>,
     /// Edge steepness of the windows.
-    m: f64,
-    phase: ParamState,
-    filter: TorqueFilter,
-    tau_ext: Vec<f64>,
+    pub(super) m: f64,
+    pub(super) phase: ParamState,
+    pub(super) filter: TorqueFilter,
+    pub(super) tau_ext: Vec<f64>,
     /// `w_j(s_i)`, window-major (`MAX_WINDOWS × joints`).
-    weights: Vec<f64>,
+    pub(super) weights: Vec<f64>,
     /// `∫₀^{s_i} w_j`, the same layout (where window `j`'s spatial frequency moves the
     /// phase of joint `i`).
-    integrals: Vec<f64>,
-    forces: [[f64; MAX_WINDOWS]; 2],
+    pub(super) integrals: Vec<f64>,
+    pub(super) forces: [[f64; MAX_WINDOWS]; 2],
     /// Each window's force on its spatial frequency.
-    spatial_forces: [f64; MAX_WINDOWS],
-    phase_force: f64,
-    calibration: Calibration,
-    sections: Sections,
+    pub(super) spatial_forces: [f64; MAX_WINDOWS],
+    pub(super) phase_force: f64,
+    pub(super) calibration: Calibration,
+    pub(super) sections: Sections,
     /// Each section's amplitude deviation this step, per plane (mean over its joints).
-    section_deviation: [[f64; MAX_SECTIONS]; 2],
-    switches: u64,
+    pub(super) section_deviation: [[f64; MAX_SECTIONS]; 2],
+    pub(super) switches: u64,
     /// Dorsal fade-in factor now (0..1).
-    ramp: f64,
-    t: f64,
-    last_events: WindowEvents,
-    heading: HeadingHold,
+    pub(super) ramp: f64,
+    pub(super) t: f64,
+    pub(super) last_events: WindowEvents,
+    pub(super) heading: HeadingHold,
 }
 
 impl DirectionalCompliance {
@@ -167,12 +166,12 @@ impl DirectionalCompliance {
         self.nominal.phase_at(self.t) + self.phase.deviation
     }
 
-    fn spatial_freq(&self) -> f64 {
+    pub(super) fn spatial_freq(&self) -> f64 {
         self.nominal.params.spatial_freq_rad
     }
 
     /// Nominal amplitude of a plane.
-    fn amplitude0(&self, plane: usize) -> f64 {
+    pub(super) fn amplitude0(&self, plane: usize) -> f64 {
         if plane == LAT {
             self.nominal.params.amplitude_lat_rad
         } else {
@@ -181,7 +180,7 @@ impl DirectionalCompliance {
     }
 
     /// Planes that comply: lateral, and dorsal in 3-D.
-    fn planes(&self) -> usize {
+    pub(super) fn planes(&self) -> usize {
         if self.config.dorsal.enabled { 2 } else { 1 }
     }
 
@@ -443,50 +442,6 @@ impl DirectionalCompliance {
     pub fn sections(&self) -> &Sections {
         &self.sections
     }
-
-    fn fill_field(&self, plane: usize, out: &mut WindowField) {
-        out.count = self.manager.len();
-        for (k, w) in self.manager.windows().take(REPORT_WINDOWS).enumerate() {
-            let centre = centre_of(w.window.a, w.window.b);
-            out.a[k] = w.window.a;
-            out.b[k] = w.window.b;
-            out.columns[0][k] = self.amplitude0(plane) + w.payload.amplitude[plane].deviation;
-            out.columns[1][k] = self.sections.index_of(centre) as f64;
-            out.columns[2][k] = self.sections.mode_at(centre, plane).code();
-            out.columns[3][k] = self.forces[plane][k];
-            out.columns[4][k] = if plane == LAT {
-                self.spatial_freq() + w.payload.spatial_freq.deviation
-            } else {
-                self.spatial_freq()
-            };
-        }
-    }
-
-    /// The sections of `plane` as a field: edges, mean deviation, absition, mode, offset.
-    fn fill_sections(&self, plane: usize, out: &mut WindowField) {
-        let offsets = self.calibration.offsets();
-        let offsets = if plane == LAT {
-            offsets.lateral_rad
-        } else {
-            offsets.dorsal_rad
-        };
-        out.count = self.sections.count();
-        for k in 0..self.sections.count() {
-            let sp = self.sections.get(k, plane);
-            (out.a[k], out.b[k]) = self.sections.edges(k);
-            out.columns[0][k] = sp.mean.mean();
-            out.columns[1][k] = sp.absition.absition;
-            out.columns[2][k] = sp.absition.mode.code();
-            out.columns[3][k] = offsets.get(k);
-            out.columns[4][k] = sp.change.mean();
-            out.columns[5][k] = sp.still(&self.config.hold);
-        }
-    }
-}
-
-/// A window's centre in normalised arc length (open ends clipped to the body).
-fn centre_of(a: f64, b: f64) -> f64 {
-    0.5 * (a.max(0.0) + b.min(1.0))
 }
 
 impl Controller for DirectionalCompliance {
@@ -546,59 +501,7 @@ impl Controller for DirectionalCompliance {
     }
 
     fn report(&self, out: &mut ControllerReport) {
-        out.clear();
-        let planes = self.planes();
-        let windows_in = |mode: Mode| {
-            let mut n = 0;
-            for w in self.manager.windows() {
-                let centre = centre_of(w.window.a, w.window.b);
-                n += (0..planes)
-                    .filter(|&p| self.sections.mode_at(centre, p) == mode)
-                    .count();
-            }
-            n as f64
-        };
-        let sections_in = |mode: Mode| {
-            (0..planes)
-                .map(|p| self.sections.count_in(p, mode))
-                .sum::<usize>() as f64
-        };
-        let t = &self.config.thresholds;
-        let s = &mut out.signals;
-        s[0] = self.mean_amplitude(LAT);
-        s[1] = self.mean_amplitude(DOR);
-        s[2] = self.phase.deviation;
-        s[3] = self.manager.len() as f64;
-        s[4] = t.low_rad_s;
-        s[5] = t.high_rad_s;
-        s[6] = self.calibration.state_code();
-        s[7] = self.calibration.progress();
-        s[8] = windows_in(Mode::Pdc);
-        s[9] = windows_in(Mode::Ndc);
-        s[10] = sections_in(Mode::Pdc);
-        s[11] = sections_in(Mode::Ndc);
-        s[12] = self.switches as f64;
-        s[13] = if planes > 1 { self.ramp } else { f64::NAN };
-        s[14..FIXED_SIGNALS].copy_from_slice(&self.heading.signals());
-        // Per section, per plane: absition then mode (`super::report_spec`).
-        let mut at = FIXED_SIGNALS;
-        for p in 0..2 {
-            for k in 0..self.sections.count() {
-                let sp = self.sections.get(k, p);
-                let (absition, mode) = if p < planes {
-                    (sp.absition.absition, sp.absition.mode.code())
-                } else {
-                    (f64::NAN, f64::NAN)
-                };
-                s[at] = absition;
-                s[at + 1] = mode;
-                at += 2;
-            }
-        }
-        for p in 0..planes {
-            self.fill_field(p, &mut out.fields[p]);
-            self.fill_sections(p, &mut out.fields[planes + p]);
-        }
+        self.fill_report(out);
     }
 
     fn command(&mut self, command: ControllerCommand) -> Result<(), CommandRefused> {

@@ -7,6 +7,7 @@ mod absition;
 mod calibration;
 mod config;
 mod controller;
+mod report;
 mod sections;
 
 pub use absition::{Absition, AmplitudeState, Mode};
