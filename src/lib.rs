@@ -36,3 +36,4 @@ pub mod rt;
 pub mod safety;
 pub mod shape;
 pub mod socket;
+pub mod station;

@@ -187,6 +187,41 @@ impl Config {
             }
         };
         range("loop.rate_hz", self.loop_.rate_hz, 1.0, 10_000.0)?;
+        let fx = &self.foxglove;
+        range("foxglove.teleop_timeout_s", fx.teleop_timeout_s, 0.05, 10.0)?;
+        range(
+            "foxglove.teleop_hold_after_s",
+            fx.teleop_hold_after_s,
+            0.05,
+            60.0,
+        )?;
+        range(
+            "foxglove.teleop_speed_rad_s",
+            fx.teleop_speed_rad_s,
+            0.01,
+            10.0,
+        )?;
+        range(
+            "foxglove.teleop_max_speed_rad_s",
+            fx.teleop_max_speed_rad_s,
+            0.01,
+            10.0,
+        )?;
+        if !fx.teleop_topic.starts_with('/') {
+            let why = "a channel's topic, starting with '/'";
+            return Err(bad(
+                "foxglove.teleop_topic",
+                format!("{:?}", fx.teleop_topic),
+                why,
+            ));
+        }
+        // Operating is a privilege: off loopback, only with a token clients must give.
+        if fx.operate && !fx.host.is_loopback() && fx.token_file.as_os_str().is_empty() {
+            let why = "operating from Foxglove on an address other than loopback needs \
+                       foxglove.token_file (clients give the token to the `auth` service): \
+                       without it anyone on the network could drive the robot";
+            return Err(bad("foxglove.operate", "true".into(), why));
+        }
         range(
             "loop.lockstep_timeout_s",
             self.loop_.lockstep_timeout_s,

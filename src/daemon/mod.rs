@@ -29,6 +29,7 @@ use crate::rt::sys;
 use crate::rt::telemetry::{self, Snapshot, TelemetryReader};
 use crate::safety::failsafe::{Failsafe, FailsafeConfig};
 use crate::socket::{self, DaemonInfo, LoopHandle, ServerConfig};
+use crate::station::{Station, StationConfig};
 use config::{Config, Pacing, StartMode};
 
 /// What the command line chose, over the configuration file.
@@ -65,6 +66,8 @@ pub fn apply_overrides(cfg: &mut Config, o: &Overrides) {
         cfg.record.path = r.clone();
     }
     cfg.foxglove.enabled |= o.foxglove;
+    // Operating needs the server it operates through.
+    cfg.foxglove.enabled |= cfg.foxglove.operate;
     cfg.gait.start = match (o.start, o.emulated) {
         (Some(s), _) => s,
         (None, true) => StartMode::Run,
@@ -168,7 +171,8 @@ pub fn run(cfg: Config, emulated: bool) -> Result<()> {
     let catalog = Catalog::default();
     let controllers = build_controllers(&cfg, &layout, &table, &catalog)?;
     let estimators = crate::estimation::standard_estimators(&layout);
-    let recorder = start_recorder(&cfg, &built, &layout, &catalog)?;
+    let station = operator_station(&cfg)?;
+    let recorder = start_recorder(&cfg, &built, &layout, &catalog, station.as_ref())?;
     let selector = GaitSelector::new(
         layout.clone(),
         table,
@@ -240,6 +244,18 @@ pub fn run(cfg: Config, emulated: bool) -> Result<()> {
         },
     )
     .context("starting the control socket")?;
+    if let Some(station) = &station {
+        station.bind(server.operator());
+        let auth = if station.config.token.is_some() {
+            "token required"
+        } else {
+            "loopback, no token"
+        };
+        tracing::info!(
+            "operating from Foxglove: services and teleop on {} ({auth})",
+            station.config.teleop.topic
+        );
+    }
 
     let parts = LoopParts {
         bus: built.bus,
@@ -309,6 +325,7 @@ fn start_recorder(
     built: &bus_setup::BuiltBus,
     layout: &BodyLayout,
     catalog: &Catalog,
+    station: Option<&Station>,
 ) -> Result<Option<(RecordTx, Recorder)>> {
     let rec = &cfg.record;
     let path = (!rec.path.as_os_str().is_empty()).then(|| record_path(&rec.path));
@@ -324,6 +341,7 @@ fn start_recorder(
         }),
         live: cfg.foxglove.enabled.then(|| LiveOptions {
             addr: std::net::SocketAddr::new(cfg.foxglove.host, cfg.foxglove.port),
+            station: station.cloned(),
         }),
         ring_capacity: rec.ring_capacity,
         scene_rate_hz: rec.scene_rate_hz,
@@ -345,6 +363,27 @@ fn start_recorder(
         tracing::info!("live view (Foxglove WebSocket) on ws://{addr}");
     }
     Ok(Some((tx, recorder)))
+}
+
+/// The operator's station the configuration asks for (`[foxglove] operate`), with its
+/// token read from `token_file`.
+fn operator_station(cfg: &Config) -> Result<Option<Station>> {
+    let fx = &cfg.foxglove;
+    if !(fx.enabled && fx.operate) {
+        return Ok(None);
+    }
+    let token = if fx.token_file.as_os_str().is_empty() {
+        None
+    } else {
+        let t = token::read_token(&fx.token_file)
+            .with_context(|| format!("foxglove.token_file {}", fx.token_file.display()))?;
+        Some(t)
+    };
+    let teleop = fx.teleop();
+    teleop
+        .check()
+        .map_err(|e| anyhow::anyhow!("bad configuration: foxglove: {e}"))?;
+    Ok(Some(Station::new(StationConfig { token, teleop })))
 }
 
 /// `path` with `{time}` replaced by the start time, s since the Unix epoch.

@@ -11,11 +11,16 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
 use std::time::Duration;
 
-use foxglove::websocket::{ChannelView, Client, ServerListener};
+use foxglove::websocket::{Capability, ChannelView, Client, ClientChannel, ServerListener};
 use foxglove::{ChannelId, Context, PartialMetadata, RawChannel, WebSocketServerHandle};
 
 use super::error::RecordError;
 use super::options::LiveOptions;
+use crate::station::access::Access;
+use crate::station::actions::Actions;
+use crate::station::drive::Drive;
+use crate::station::parameters::Parameters;
+use crate::station::services::{Operating, services};
 
 /// A latched message: its channel, a key (a newer message of the same key replaces
 /// it), the payload and its log time.
@@ -86,6 +91,32 @@ impl ServerListener for Latch {
     }
 }
 
+/// The server's listener: the latch, and the teleop channel when operating.
+struct Listener {
+    latch: Arc<Latch>,
+    drive: Option<Drive>,
+}
+
+impl ServerListener for Listener {
+    fn on_subscribe(&self, client: Client, channel: ChannelView) {
+        self.latch.on_subscribe(client, channel);
+    }
+
+    fn on_message_data(&self, client: Client, channel: &ClientChannel, payload: &[u8]) {
+        if let Some(d) = &self.drive {
+            d.on_message(&client, &channel.topic, payload);
+        }
+    }
+
+    fn on_client_connect(&self) {
+        self.latch.on_client_connect();
+    }
+
+    fn on_client_disconnect(&self) {
+        self.latch.on_client_disconnect();
+    }
+}
+
 /// A running live server.
 pub struct Live {
     runtime: Option<tokio::runtime::Runtime>,
@@ -112,11 +143,38 @@ impl Live {
             IpAddr::V4(ip) => ip.to_string(),
             IpAddr::V6(ip) => format!("[{ip}]"),
         };
-        let server = ctx
+        let mut server = ctx
             .websocket_server()
             .name(source)
-            .bind(host, opts.addr.port())
-            .listener(latch.clone());
+            .bind(host, opts.addr.port());
+        let mut drive = None;
+        if let Some(station) = &opts.station {
+            // Operating: services and the teleop channel, through the control socket.
+            let operating = Arc::new(Operating {
+                access: Access::new(station.config.token.clone()),
+                actions: Actions::new(ctx),
+                station: station.clone(),
+            });
+            drive = Some({
+                let _enter = runtime.enter();
+                Drive::start(operating.clone())
+            });
+            server = server
+                .capabilities([
+                    Capability::ClientPublish,
+                    Capability::Services,
+                    Capability::Parameters,
+                ])
+                .supported_encodings(["json"])
+                .services(services(&operating))
+                .parameter_handler(Arc::new(Parameters {
+                    operating: operating.clone(),
+                }));
+        }
+        let server = server.listener(Arc::new(Listener {
+            latch: latch.clone(),
+            drive,
+        }));
         // Inside `block_on` the server finds this runtime as the current one.
         let handle = runtime
             .block_on(server.start())

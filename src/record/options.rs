@@ -69,17 +69,21 @@ impl McapOptions {
 }
 
 /// Where the live view listens.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct LiveOptions {
-    /// Default `127.0.0.1:8765` (loopback: the live view has no authentication). Port 0
+    /// Default `127.0.0.1:8765` (loopback: watching needs no authentication). Port 0
     /// picks a free port ([`super::Recorder::live_addr`] tells which).
     pub addr: SocketAddr,
+    /// Operating from Foxglove (services, teleop; `[foxglove] operate`): `None`, the
+    /// view is for watching only.
+    pub station: Option<crate::station::Station>,
 }
 
 impl Default for LiveOptions {
     fn default() -> Self {
         Self {
             addr: SocketAddr::from((Ipv4Addr::LOCALHOST, DEFAULT_LIVE_PORT)),
+            station: None,
         }
     }
 }

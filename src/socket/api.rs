@@ -196,6 +196,16 @@ pub struct Params {
 }
 
 impl Params {
+    /// From a JSON value that must be an object (an operator's call from elsewhere).
+    pub fn from_value(v: &Value) -> Result<Params, RpcError> {
+        if !v.is_object() {
+            return Err(RpcError::invalid_params("`params` must be an object"));
+        }
+        let fields: RawMap = serde_json::from_str(&v.to_string())
+            .map_err(|e| RpcError::invalid_params(format!("`params`: {e}")))?;
+        Ok(Params { fields })
+    }
+
     pub fn is_empty(&self) -> bool {
         self.fields.is_empty()
     }

@@ -30,6 +30,7 @@ mod controllers;
 mod lines;
 mod methods;
 mod navigate;
+mod operator;
 pub mod paths;
 mod router;
 mod server;

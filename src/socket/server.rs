@@ -73,12 +73,22 @@ pub struct RunningServer {
     stop: Option<tokio::sync::oneshot::Sender<()>>,
     thread: Option<JoinHandle<()>>,
     shared: Arc<Shared>,
+    /// The runtime the connections run on (operators from elsewhere call on it too).
+    runtime: tokio::runtime::Handle,
 }
 
 impl RunningServer {
     /// The Unix socket's path, if one is bound.
     pub fn unix_path(&self) -> Option<&Path> {
         self.unix_path.as_deref()
+    }
+
+    /// The methods for an operator that is not a connection (the Foxglove station).
+    pub fn operator(&self) -> Arc<dyn crate::station::Operator> {
+        Arc::new(super::operator::SocketOperator::new(
+            self.shared.clone(),
+            self.runtime.clone(),
+        ))
     }
 
     /// The TCP listener's address (useful with `tcp_port: Some(0)`).
@@ -201,6 +211,7 @@ pub fn start(cfg: ServerConfig, handle: LoopHandle) -> Result<RunningServer, Ser
         }
     }
     let (stop_tx, stop_rx) = tokio::sync::oneshot::channel::<()>();
+    let runtime = rt.handle().clone();
     let thread = std::thread::Builder::new()
         .name("snaked-ctl".into())
         .spawn(move || {
@@ -231,6 +242,7 @@ pub fn start(cfg: ServerConfig, handle: LoopHandle) -> Result<RunningServer, Ser
         stop: Some(stop_tx),
         thread: Some(thread),
         shared,
+        runtime,
     })
 }
 

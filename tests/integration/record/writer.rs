@@ -416,7 +416,10 @@ fn a_port_in_use_is_a_clear_error() {
     let addr = taken.local_addr().expect("addr");
     let (catalog, _) = catalog();
     let opts = RecordOptions {
-        live: Some(LiveOptions { addr }),
+        live: Some(LiveOptions {
+            addr,
+            station: None,
+        }),
         ..RecordOptions::default()
     };
     let err = start(opts, info(catalog, false)).err().expect("an error");

@@ -8,6 +8,8 @@ pub mod counting_alloc;
 pub mod emu_client;
 /// Least-squares sinusoid fit (the gait tests).
 pub mod fit;
+/// A Foxglove WebSocket client (service calls, client publishing).
+pub mod foxglove_ws;
 /// Synthetic recordings and an independent reader (the recorder's tests).
 pub mod record_fixture;
 /// Hardware-in-loop rig: free ports, child processes, a line-JSON client.

@@ -1,0 +1,120 @@
+//! The teleop channel's worker: twists from authorised clients, in order, become the
+//! active gait's speed and steering ([`super::teleop`]); every 50 ms the dead-man looks
+//! at how old the last twist is. It runs as one task on the live view's runtime; the
+//! WebSocket callbacks only parse and queue (a full queue drops the twist: the next
+//! one says the same).
+
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use foxglove::websocket::{Client, Status};
+use serde_json::{Value, json};
+use tokio::sync::mpsc;
+
+use super::services::Operating;
+use super::teleop::{Teleop, TeleopRequest, Twist};
+use crate::gait::GaitKind;
+
+/// Twists queued at most (a few of the panel's messages).
+const QUEUE: usize = 16;
+/// How often the dead-man looks.
+const TICK: Duration = Duration::from_millis(50);
+
+/// A twist from a client.
+struct Sent {
+    client: u32,
+    twist: Twist,
+}
+
+/// The WebSocket side of the teleop channel.
+pub struct Drive {
+    operating: Arc<Operating>,
+    tx: mpsc::Sender<Sent>,
+}
+
+impl Drive {
+    /// Starts the worker on the current runtime.
+    pub fn start(operating: Arc<Operating>) -> Self {
+        let (tx, rx) = mpsc::channel(QUEUE);
+        tokio::spawn(work(operating.clone(), rx));
+        Self { operating, tx }
+    }
+
+    pub fn topic(&self) -> &str {
+        &self.operating.station.config.teleop.topic
+    }
+
+    /// A message on a client channel (any topic; only the teleop one is read).
+    pub fn on_message(&self, client: &Client, topic: &str, payload: &[u8]) {
+        if topic != self.topic() {
+            return;
+        }
+        let id = u32::from(client.id());
+        if !self.operating.access.may_operate(id) {
+            client.send_status(
+                Status::error("teleop refused: call the `auth` service with the token first")
+                    .with_id("snaked.teleop"),
+            );
+            return;
+        }
+        match Twist::parse(payload) {
+            Ok(twist) => {
+                // Full: the worker is behind; the next twist says the same.
+                let _ = self.tx.try_send(Sent { client: id, twist });
+            }
+            Err(e) => {
+                client.send_status(Status::error(format!("teleop: {e}")).with_id("snaked.teleop"))
+            }
+        }
+    }
+}
+
+/// The active gait, from `status`.
+async fn active_gait(op: &Operating) -> Option<GaitKind> {
+    let s = op.station.call("status", json!({})).await.ok()?;
+    serde_json::from_value(s.get("gait")?.clone()).ok()
+}
+
+async fn send(op: &Operating, who: &str, r: &TeleopRequest) -> bool {
+    let answer = op.station.call(r.method, r.params.clone()).await;
+    let logged: Result<Value, String> = answer.clone().map_err(|e| e.to_string());
+    op.actions.log(who, r.method, &r.params, &logged);
+    if let Err(e) = &answer {
+        tracing::warn!("station: teleop {} refused: {e}", r.method);
+    }
+    answer.is_ok()
+}
+
+async fn work(op: Arc<Operating>, mut rx: mpsc::Receiver<Sent>) {
+    let t0 = Instant::now();
+    let mut teleop = Teleop::default();
+    let mut last_client = 0u32;
+    let mut gait = GaitKind::Slithering;
+    let config = op.station.config.teleop.clone();
+    let mut tick = tokio::time::interval(TICK);
+    loop {
+        tokio::select! {
+            sent = rx.recv() => {
+                let Some(Sent { client, twist }) = sent else { return };
+                last_client = client;
+                if let Some(g) = active_gait(&op).await {
+                    gait = g;
+                }
+                let now = t0.elapsed().as_secs_f64();
+                if let Some(r) = teleop.on_twist(now, gait, twist, &config) {
+                    send(&op, &Operating::client_name(client), &r).await;
+                }
+            }
+            _ = tick.tick() => {
+                let now = t0.elapsed().as_secs_f64();
+                if let Some(r) = teleop.tick(now, gait, &config) {
+                    let who = format!("dead-man ({})", Operating::client_name(last_client));
+                    if !send(&op, &who, &r).await && r.method == "params.set" {
+                        let hold = teleop.zero_speed_refused();
+                        send(&op, &who, &hold).await;
+                    }
+                }
+            }
+        }
+    }
+}

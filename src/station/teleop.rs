@@ -1,0 +1,394 @@
+//! Teleop (pure, time as an argument): a twist in the shape Foxglove's Teleop panel
+//! publishes (`geometry_msgs/Twist`: `linear.x` forward, `angular.z` turn left) becomes
+//! the active gait's speed (its temporal frequency) and steering (slithering's lateral
+//! offset, sidewinding's taper), as `params.set` requests; and a **dead-man**: when
+//! twists stop coming for `timeout_s` the gait goes on at zero speed, and after
+//! `hold_after_s` more the robot holds (`arm` resumes).
+
+use serde_json::{Value, json};
+
+use crate::gait::GaitKind;
+
+/// The teleop settings (`[foxglove]` `teleop_*`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct TeleopConfig {
+    /// The channel a client publishes twists on.
+    pub topic: String,
+    /// Twists expire after this long, s: the gait then runs at zero speed.
+    pub timeout_s: f64,
+    /// After that, the robot holds this much later, s.
+    pub hold_after_s: f64,
+    /// Temporal frequency per unit of `linear.x`, rad/s.
+    pub speed_rad_s: f64,
+    /// Largest |temporal frequency| a twist asks for, rad/s.
+    pub max_speed_rad_s: f64,
+    /// Slithering's lateral offset per unit of `angular.z`, rad (at most `max_offset_rad`).
+    pub offset_rad: f64,
+    pub max_offset_rad: f64,
+    /// Sidewinding's taper per unit of `angular.z` (at most `max_taper`).
+    pub taper: f64,
+    pub max_taper: f64,
+    /// A twist equal to the last one sent is re-sent no more often than this, s (the
+    /// panel publishes at a fixed rate; the loop need not hear each).
+    pub resend_s: f64,
+}
+
+impl Default for TeleopConfig {
+    fn default() -> Self {
+        Self {
+            topic: "/cmd_vel".into(),
+            timeout_s: 0.5,
+            hold_after_s: 2.0,
+            speed_rad_s: 1.0,
+            max_speed_rad_s: 2.0,
+            // The steering controller's limit: −4 to −15° a cycle on open ground.
+            offset_rad: 0.2,
+            max_offset_rad: 0.25,
+            // ±0.4 turns sidewinding about 0.05 rad/s (docs/compliance.md).
+            taper: 0.4,
+            max_taper: 0.4,
+            resend_s: 1.0,
+        }
+    }
+}
+
+impl TeleopConfig {
+    pub fn check(&self) -> Result<(), String> {
+        let pos = |name: &str, v: f64, max: f64| {
+            if v.is_finite() && v > 0.0 && v <= max {
+                Ok(())
+            } else {
+                Err(format!("teleop {name} must be in (0, {max}], not {v}"))
+            }
+        };
+        pos("timeout_s", self.timeout_s, 10.0)?;
+        pos("hold_after_s", self.hold_after_s, 60.0)?;
+        pos("speed_rad_s", self.speed_rad_s, 10.0)?;
+        pos("max_speed_rad_s", self.max_speed_rad_s, 10.0)?;
+        pos("offset_rad", self.offset_rad, 1.0)?;
+        pos("max_offset_rad", self.max_offset_rad, 1.0)?;
+        pos("taper", self.taper, 0.8)?;
+        pos("max_taper", self.max_taper, 0.8)?;
+        pos("resend_s", self.resend_s, 60.0)?;
+        if !self.topic.starts_with('/') {
+            return Err(format!(
+                "teleop topic must start with '/', not {:?}",
+                self.topic
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// What a twist asks: forward speed and turn rate, in the panel's units.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Twist {
+    pub forward: f64,
+    pub turn: f64,
+}
+
+impl Twist {
+    /// From a JSON `geometry_msgs/Twist` (`{"linear": {"x": ..}, "angular": {"z": ..}}`;
+    /// absent members are 0). Refused: not JSON, not an object, non-finite numbers.
+    pub fn parse(payload: &[u8]) -> Result<Twist, String> {
+        let v: Value =
+            serde_json::from_slice(payload).map_err(|e| format!("a twist is JSON: {e}"))?;
+        if !v.is_object() {
+            return Err("a twist is an object {linear: {x}, angular: {z}}".into());
+        }
+        let get = |part: &str, axis: &str| -> Result<f64, String> {
+            match v.get(part).and_then(|p| p.get(axis)) {
+                None | Some(Value::Null) => Ok(0.0),
+                Some(x) => x
+                    .as_f64()
+                    .filter(|x| x.is_finite())
+                    .ok_or_else(|| format!("twist {part}.{axis} must be a finite number, not {x}")),
+            }
+        };
+        Ok(Twist {
+            forward: get("linear", "x")?,
+            turn: get("angular", "z")?,
+        })
+    }
+}
+
+/// A request teleop wants made.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TeleopRequest {
+    pub method: &'static str,
+    pub params: Value,
+}
+
+/// What teleop is doing.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TeleopState {
+    /// No twist yet, or held by the dead-man (an operator's `arm` resumes).
+    Idle,
+    /// Twists arrive.
+    Driving,
+    /// They stopped: the gait runs at zero speed until the hold.
+    Stopped,
+}
+
+/// The teleop state machine.
+#[derive(Debug, Clone)]
+pub struct Teleop {
+    state: TeleopState,
+    last_twist_s: f64,
+    /// What was last sent, and when.
+    sent: Option<(GaitKind, [f64; 2], f64)>,
+}
+
+impl Default for Teleop {
+    fn default() -> Self {
+        Self {
+            state: TeleopState::Idle,
+            last_twist_s: f64::NEG_INFINITY,
+            sent: None,
+        }
+    }
+}
+
+/// The gait's steering parameter and how much of it a unit turn asks for.
+fn steering(gait: GaitKind, c: &TeleopConfig) -> Option<(&'static str, f64, f64)> {
+    match gait {
+        // A positive offset or taper turns the body clockwise going forwards (measured:
+        // controllers/steering, controllers/sidewinding/heading): left is negative.
+        GaitKind::Slithering => Some(("offset_lat_rad", -c.offset_rad, c.max_offset_rad)),
+        GaitKind::Sidewinding => Some(("taper", -c.taper, c.max_taper)),
+        _ => None,
+    }
+}
+
+impl Teleop {
+    pub fn state(&self) -> TeleopState {
+        self.state
+    }
+
+    /// A twist at `now_s` while `gait` is active: the `params.set` to send, if any (a
+    /// twist like the last one sent is re-sent every `resend_s` only).
+    pub fn on_twist(
+        &mut self,
+        now_s: f64,
+        gait: GaitKind,
+        twist: Twist,
+        c: &TeleopConfig,
+    ) -> Option<TeleopRequest> {
+        self.last_twist_s = now_s;
+        self.state = TeleopState::Driving;
+        let speed = (twist.forward * c.speed_rad_s).clamp(-c.max_speed_rad_s, c.max_speed_rad_s);
+        let mut params = json!({ "gait": gait, "temporal_freq_rad_s": speed });
+        let mut steer = 0.0;
+        if let Some((name, per_unit, max)) = steering(gait, c) {
+            // Backing along an arc turns the other way: keep "left" left.
+            let dir = if speed < 0.0 { -1.0 } else { 1.0 };
+            steer = (dir * twist.turn * per_unit).clamp(-max, max);
+            params[name] = json!(steer);
+        }
+        let now = [speed, steer];
+        let fresh = match self.sent {
+            Some((g, was, at)) => {
+                g != gait
+                    || (was[0] - now[0]).abs() > 1e-6
+                    || (was[1] - now[1]).abs() > 1e-6
+                    || now_s - at >= c.resend_s
+            }
+            None => true,
+        };
+        if !fresh {
+            return None;
+        }
+        self.sent = Some((gait, now, now_s));
+        Some(TeleopRequest {
+            method: "params.set",
+            params,
+        })
+    }
+
+    /// The dead-man at `now_s`: zero speed once the twists are `timeout_s` old, hold
+    /// `hold_after_s` later.
+    pub fn tick(&mut self, now_s: f64, gait: GaitKind, c: &TeleopConfig) -> Option<TeleopRequest> {
+        let age = now_s - self.last_twist_s;
+        match self.state {
+            TeleopState::Driving if age >= c.timeout_s => {
+                self.state = TeleopState::Stopped;
+                self.sent = None;
+                Some(TeleopRequest {
+                    method: "params.set",
+                    params: json!({ "gait": gait, "temporal_freq_rad_s": 0.0 }),
+                })
+            }
+            TeleopState::Stopped if age >= c.timeout_s + c.hold_after_s => {
+                self.state = TeleopState::Idle;
+                Some(hold())
+            }
+            _ => None,
+        }
+    }
+
+    /// The zero-speed request was refused (a controller that cannot run at zero
+    /// speed): hold at once.
+    pub fn zero_speed_refused(&mut self) -> TeleopRequest {
+        self.state = TeleopState::Idle;
+        hold()
+    }
+}
+
+fn hold() -> TeleopRequest {
+    TeleopRequest {
+        method: "hold",
+        params: json!({}),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn twist(forward: f64, turn: f64) -> Twist {
+        Twist { forward, turn }
+    }
+
+    #[test]
+    fn a_twist_sets_speed_and_steering_within_limits() {
+        let c = TeleopConfig::default();
+        let mut t = Teleop::default();
+        let r = t
+            .on_twist(0.0, GaitKind::Slithering, twist(0.8, 1.0), &c)
+            .unwrap();
+        assert_eq!(r.method, "params.set");
+        assert_eq!(r.params["gait"], "slithering");
+        assert!((r.params["temporal_freq_rad_s"].as_f64().unwrap() - 0.8).abs() < 1e-12);
+        assert!(
+            (r.params["offset_lat_rad"].as_f64().unwrap() + 0.2).abs() < 1e-12,
+            "left is negative"
+        );
+        let r = t
+            .on_twist(0.1, GaitKind::Slithering, twist(9.0, -9.0), &c)
+            .unwrap();
+        assert_eq!(
+            r.params["temporal_freq_rad_s"], 2.0,
+            "clamped to max_speed_rad_s"
+        );
+        assert_eq!(
+            r.params["offset_lat_rad"], 0.25,
+            "clamped to max_offset_rad"
+        );
+        // Backing: the turn keeps its sense.
+        let r = t
+            .on_twist(0.2, GaitKind::Slithering, twist(-1.0, 1.0), &c)
+            .unwrap();
+        assert!(r.params["offset_lat_rad"].as_f64().unwrap() > 0.0);
+        let r = t
+            .on_twist(0.3, GaitKind::Sidewinding, twist(1.0, 1.0), &c)
+            .unwrap();
+        assert!((r.params["taper"].as_f64().unwrap() + 0.4).abs() < 1e-12);
+        let r = t
+            .on_twist(0.4, GaitKind::Rolling, twist(1.0, 1.0), &c)
+            .unwrap();
+        assert_eq!(
+            r.params.as_object().unwrap().len(),
+            2,
+            "rolling: no steering: {}",
+            r.params
+        );
+    }
+
+    #[test]
+    fn a_repeated_twist_is_resent_only_now_and_then() {
+        let c = TeleopConfig::default();
+        let mut t = Teleop::default();
+        assert!(
+            t.on_twist(0.0, GaitKind::Slithering, twist(1.0, 0.0), &c)
+                .is_some()
+        );
+        assert!(
+            t.on_twist(0.2, GaitKind::Slithering, twist(1.0, 0.0), &c)
+                .is_none()
+        );
+        assert!(
+            t.on_twist(0.5, GaitKind::Slithering, twist(0.5, 0.0), &c)
+                .is_some()
+        );
+        assert!(
+            t.on_twist(1.25, GaitKind::Slithering, twist(0.5, 0.0), &c)
+                .is_none()
+        );
+        assert!(
+            t.on_twist(0.5 + c.resend_s, GaitKind::Slithering, twist(0.5, 0.0), &c)
+                .is_some()
+        );
+    }
+
+    #[test]
+    fn the_dead_man_stops_then_holds_and_a_twist_drives_again() {
+        let c = TeleopConfig::default();
+        let mut t = Teleop::default();
+        assert_eq!(
+            t.tick(100.0, GaitKind::Slithering, &c),
+            None,
+            "never driven: nothing"
+        );
+        t.on_twist(0.0, GaitKind::Slithering, twist(1.0, 0.0), &c);
+        assert_eq!(t.tick(0.4, GaitKind::Slithering, &c), None);
+        let r = t.tick(0.5, GaitKind::Slithering, &c).unwrap();
+        assert_eq!(
+            (r.method, r.params["temporal_freq_rad_s"].as_f64()),
+            ("params.set", Some(0.0))
+        );
+        assert_eq!(t.state(), TeleopState::Stopped);
+        assert_eq!(t.tick(2.0, GaitKind::Slithering, &c), None);
+        let r = t.tick(2.5, GaitKind::Slithering, &c).unwrap();
+        assert_eq!(r.method, "hold");
+        assert_eq!(t.state(), TeleopState::Idle);
+        assert_eq!(t.tick(9.0, GaitKind::Slithering, &c), None, "holds once");
+        // A twist after the stop is sent even if equal to the last one.
+        let r = t.on_twist(10.0, GaitKind::Slithering, twist(1.0, 0.0), &c);
+        assert!(r.is_some());
+    }
+
+    #[test]
+    fn twists_are_parsed_and_bad_ones_refused() {
+        let t = Twist::parse(br#"{"linear":{"x":0.5,"y":0,"z":0},"angular":{"x":0,"y":0,"z":-1}}"#)
+            .unwrap();
+        assert_eq!(t, twist(0.5, -1.0));
+        assert_eq!(Twist::parse(b"{}").unwrap(), twist(0.0, 0.0));
+        for bad in [
+            &b"nope"[..],
+            b"[1]",
+            br#"{"linear":{"x":"fast"}}"#,
+            br#"{"linear":{"x":1e999}}"#,
+        ] {
+            assert!(
+                Twist::parse(bad).is_err(),
+                "{}",
+                String::from_utf8_lossy(bad)
+            );
+        }
+    }
+
+    #[test]
+    fn bad_settings_are_refused() {
+        assert!(TeleopConfig::default().check().is_ok());
+        for bad in [
+            TeleopConfig {
+                timeout_s: 0.0,
+                ..Default::default()
+            },
+            TeleopConfig {
+                speed_rad_s: f64::NAN,
+                ..Default::default()
+            },
+            TeleopConfig {
+                max_taper: 2.0,
+                ..Default::default()
+            },
+            TeleopConfig {
+                topic: "cmd_vel".into(),
+                ..Default::default()
+            },
+        ] {
+            assert!(bad.check().is_err(), "{bad:?}");
+        }
+    }
+}

@@ -1,0 +1,316 @@
+//! Operating from Foxglove (`[foxglove] operate`): a WebSocket client calls the
+//! station's services and gets what the control socket answers, drives by publishing
+//! twists as the Teleop panel does, and the dead-man stops then holds the robot when
+//! the twists stop; with a token configured nothing but `auth`, `status` and `estop`
+//! works until the client gave it; every action is an `/operator` event in the
+//! recording naming the client.
+use crate::support::{foxglove_ws, rig};
+
+use std::net::SocketAddr;
+use std::time::{Duration, Instant};
+
+use foxglove_ws::{FoxgloveClient, twist};
+use rig::{Client, Proc, exe};
+use serde_json::{Value, json};
+
+fn free_tcp_port() -> u16 {
+    std::net::TcpListener::bind("127.0.0.1:0")
+        .and_then(|l| l.local_addr())
+        .expect("a free port")
+        .port()
+}
+
+struct Daemon {
+    proc: Proc,
+    sock: Client,
+    fox: SocketAddr,
+    dir: tempfile::TempDir,
+}
+
+/// `snaked --emulated` on flat ground, operating from Foxglove with `extra` config.
+fn daemon(extra: &str) -> Daemon {
+    let dir = tempfile::tempdir().unwrap();
+    let port = free_tcp_port();
+    let config = dir.path().join("snaked.toml");
+    std::fs::write(
+        &config,
+        format!("[foxglove]\noperate = true\nport = {port}\n{extra}\n"),
+    )
+    .unwrap();
+    let sock = dir.path().join("s.sock");
+    let world = concat!(env!("CARGO_MANIFEST_DIR"), "/scenarios/flat.toml");
+    let proc = Proc::spawn(
+        "snaked",
+        &exe("snaked"),
+        &[
+            "--emulated".into(),
+            "--world".into(),
+            world.into(),
+            "--config".into(),
+            config.display().to_string(),
+            "--socket".into(),
+            sock.display().to_string(),
+            "--record".into(),
+            dir.path().join("run.mcap").display().to_string(),
+        ],
+    );
+    let mut c = Client::connect(&sock, Duration::from_secs(30));
+    c.wait_status(Duration::from_secs(30), "running", |s| {
+        s["mode"] == "running"
+    });
+    Daemon {
+        proc,
+        sock: c,
+        fox: SocketAddr::from(([127, 0, 0, 1], port)),
+        dir,
+    }
+}
+
+impl Daemon {
+    /// SIGTERM, exit 0, and the `/operator` events of the recording.
+    fn stop(mut self) -> Vec<Value> {
+        self.proc.signal(libc::SIGTERM);
+        assert!(self.proc.wait(Duration::from_secs(30)).success(), "exit 0");
+        let bytes = std::fs::read(self.dir.path().join("run.mcap")).expect("recording");
+        mcap::MessageStream::new(&bytes)
+            .expect("MCAP")
+            .map(|m| m.expect("a message"))
+            .filter(|m| m.channel.topic == "/operator")
+            .map(|m| serde_json::from_slice(&m.data).expect("JSON"))
+            .collect()
+    }
+}
+
+fn slithering_speed(c: &mut Client) -> f64 {
+    let p = c.call("params.get", json!({"gait": "slithering"}));
+    p["params"]["temporal_freq_rad_s"]
+        .as_f64()
+        .expect("a speed")
+}
+
+#[test]
+fn foxglove_drives_the_robot_and_the_dead_man_stops_then_holds_it() {
+    let mut d = daemon("");
+    let mut fx = FoxgloveClient::connect(d.fox, Duration::from_secs(30));
+    for s in [
+        "gait.set",
+        "params.set",
+        "controller.set",
+        "navigate",
+        "hold",
+        "limp",
+        "arm",
+        "estop",
+        "auth",
+        "status",
+    ] {
+        assert!(
+            fx.services.contains_key(s),
+            "service {s} advertised: {:?}",
+            fx.services
+        );
+    }
+    // A service answers what the socket answers, results and errors alike.
+    let via_fox = fx
+        .call("gait.set", json!({"gait": "slithering"}))
+        .expect("gait.set");
+    assert_eq!(
+        via_fox,
+        d.sock.call("gait.set", json!({"gait": "slithering"}))
+    );
+    let bad = json!({"gait": "slithering", "amplitude_lat_rad": 99.0});
+    let fox_err = fx.call("params.set", bad.clone()).expect_err("refused");
+    let sock_err = d.sock.call_raw("params.set", bad);
+    let msg = sock_err["error"]["message"].as_str().expect("an error");
+    assert!(
+        fox_err.contains(msg),
+        "{fox_err:?} carries the socket's {msg:?}"
+    );
+    assert!(fx.call("gait.set", json!({"gait": "nope"})).is_err());
+    let status = fx.call("status", json!({})).expect("status");
+    assert_eq!(status["gait"], "slithering");
+
+    // Drive: twists at 10 Hz set the speed (linear.x 0.8 → 0.8 rad/s) and the steering.
+    fx.advertise(1, "/cmd_vel");
+    let start = Instant::now();
+    while start.elapsed() < Duration::from_secs(2) {
+        fx.publish(1, &twist(0.8, 0.5));
+        fx.drain(Duration::from_millis(100));
+    }
+    let p = d.sock.call("params.get", json!({"gait": "slithering"}));
+    assert!(
+        (p["params"]["temporal_freq_rad_s"].as_f64().unwrap() - 0.8).abs() < 1e-9,
+        "{p}"
+    );
+    assert!(
+        (p["params"]["offset_lat_rad"].as_f64().unwrap() + 0.1).abs() < 1e-9,
+        "{p}"
+    );
+    assert_eq!(d.sock.call("status", json!({}))["mode"], "running");
+
+    // The dead-man: the twists stop; the gait goes to zero speed (or, where the
+    // controller refuses it, straight to the hold), then the robot holds.
+    let stopped = Instant::now();
+    let s = d
+        .sock
+        .wait_status(Duration::from_secs(10), "the dead-man's hold", |s| {
+            s["mode"] == "hold"
+        });
+    let after = stopped.elapsed().as_secs_f64();
+    assert!(
+        after >= 0.5,
+        "not before the twists expired: {after} s ({s})"
+    );
+    assert_eq!(
+        slithering_speed(&mut d.sock),
+        0.0,
+        "zero speed before the hold"
+    );
+    // E-stop from Foxglove, and arming again.
+    fx.call("estop", json!({})).expect("estop");
+    d.sock
+        .wait_status(Duration::from_secs(5), "e-stopped", |s| {
+            s["mode"] == "e_stop"
+        });
+    fx.call("arm", json!({})).expect("arm");
+    d.sock
+        .wait_status(Duration::from_secs(10), "running again", |s| {
+            s["mode"] == "running"
+        });
+
+    let events = d.stop();
+    let actions: Vec<&str> = events.iter().filter_map(|e| e["action"].as_str()).collect();
+    for a in ["gait.set", "params.set", "hold", "estop", "arm"] {
+        assert!(actions.contains(&a), "{a} recorded: {actions:?}");
+    }
+    assert!(events.iter().all(|e| {
+        e["client"]
+            .as_str()
+            .is_some_and(|c| c.contains("foxglove client"))
+    }));
+    let dead_man: Vec<&Value> = events
+        .iter()
+        .filter(|e| e["client"].as_str().unwrap().starts_with("dead-man"))
+        .collect();
+    eprintln!("the dead-man's actions: {dead_man:?}");
+    assert!(
+        dead_man
+            .iter()
+            .any(|e| e["action"] == "hold" && e["ok"] == true),
+        "{dead_man:?}"
+    );
+    assert!(
+        events.iter().any(|e| e["ok"] == false),
+        "refusals recorded too"
+    );
+}
+
+#[test]
+fn with_a_token_a_client_operates_only_after_giving_it_and_estop_is_always_reachable() {
+    let dir = tempfile::tempdir().unwrap();
+    let token = dir.path().join("token");
+    std::fs::write(&token, "correct-horse\n").unwrap();
+    std::fs::set_permissions(&token, std::os::unix::fs::PermissionsExt::from_mode(0o600)).unwrap();
+    let mut d = daemon(&format!("token_file = {:?}", token.display().to_string()));
+    let mut fx = FoxgloveClient::connect(d.fox, Duration::from_secs(30));
+    let e = fx
+        .call("gait.set", json!({"gait": "rolling"}))
+        .expect_err("refused");
+    assert!(e.contains("unauthorized"), "{e}");
+    // Teleop without the token: refused with a status, nothing changes.
+    let before = slithering_speed(&mut d.sock);
+    fx.advertise(1, "/cmd_vel");
+    for _ in 0..10 {
+        fx.publish(1, &twist(1.7, 0.0));
+        fx.drain(Duration::from_millis(50));
+    }
+    assert_eq!(slithering_speed(&mut d.sock), before);
+    assert!(
+        fx.statuses
+            .iter()
+            .any(|s| s["message"].as_str().is_some_and(|m| m.contains("auth"))),
+        "{:?}",
+        fx.statuses
+    );
+    assert!(fx.call("auth", json!({"token": "wrong"})).is_err());
+    assert!(fx.call("gait.set", json!({"gait": "rolling"})).is_err());
+    // E-stop needs no token.
+    fx.call("estop", json!({})).expect("estop without a token");
+    d.sock
+        .wait_status(Duration::from_secs(5), "e-stopped", |s| {
+            s["mode"] == "e_stop"
+        });
+    fx.call("auth", json!({"token": "correct-horse"}))
+        .expect("the right token");
+    fx.call("arm", json!({})).expect("arm once authorised");
+    assert_eq!(
+        fx.call("gait.set", json!({"gait": "rolling"})).unwrap(),
+        json!({"gait": "rolling"})
+    );
+    // A second client is not authorised by the first one's token.
+    let mut other = FoxgloveClient::connect(d.fox, Duration::from_secs(10));
+    assert!(other.call("hold", json!({})).is_err());
+    let events = d.stop();
+    let auth: Vec<&Value> = events.iter().filter(|e| e["action"] == "auth").collect();
+    assert!(
+        auth.len() >= 2 && auth.iter().all(|e| e["params"] == json!({})),
+        "tokens never recorded: {auth:?}"
+    );
+}
+
+#[test]
+fn operating_off_loopback_without_a_token_is_refused_at_start() {
+    let dir = tempfile::tempdir().unwrap();
+    let config = dir.path().join("snaked.toml");
+    std::fs::write(&config, "[foxglove]\noperate = true\nhost = \"0.0.0.0\"\n").unwrap();
+    let out = std::process::Command::new(exe("snaked"))
+        .args(["--check-config", "--config"])
+        .arg(&config)
+        .output()
+        .expect("run snaked");
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("foxglove.token_file"), "{err}");
+}
+
+#[test]
+fn the_parameters_panel_reads_live_values_and_sets_them_with_the_sockets_checks() {
+    let mut d = daemon("");
+    let mut fx = FoxgloveClient::connect(d.fox, Duration::from_secs(30));
+    d.sock.call("gait.set", json!({"gait": "slithering"}));
+    let all = fx.get_parameters(&[]);
+    assert_eq!(all["gait"], "slithering");
+    assert_eq!(
+        all["params.temporal_freq_rad_s"],
+        json!(slithering_speed(&mut d.sock))
+    );
+    assert!(all.contains_key("controller.name"), "{all:?}");
+    let now = fx.set_parameters(&[("params.temporal_freq_rad_s", json!(0.6))]);
+    assert_eq!(now["params.temporal_freq_rad_s"], json!(0.6));
+    assert_eq!(slithering_speed(&mut d.sock), 0.6, "set through params.set");
+    // Refused as the socket refuses it: the panel gets an error status and the live value.
+    let now = fx.set_parameters(&[("params.amplitude_lat_rad", json!(99.0))]);
+    assert!(
+        now["params.amplitude_lat_rad"].as_f64().unwrap() < 2.0,
+        "{now:?}"
+    );
+    fx.drain(Duration::from_millis(300));
+    assert!(
+        fx.statuses.iter().any(|s| s["message"]
+            .as_str()
+            .is_some_and(|m| m.contains("amplitude_lat_rad"))),
+        "{:?}",
+        fx.statuses
+    );
+    // The controller: its name and configuration, set through controller.set.
+    let now = fx.set_parameters(&[("controller.name", json!("compliant_slithering"))]);
+    assert_eq!(now["controller.name"], "compliant_slithering");
+    let c = d.sock.call("controller.get", json!({"gait": "slithering"}));
+    assert_eq!(c["controller"]["controller"], "compliant_slithering");
+    let events = d.stop();
+    assert!(
+        events
+            .iter()
+            .any(|e| e["action"] == "controller.set" && e["ok"] == true)
+    );
+}

@@ -1,0 +1,210 @@
+//! A Foxglove WebSocket client for the tests (tungstenite, subprotocol
+//! `foxglove.sdk.v1`): what Foxglove's panels send — service calls (Service Call
+//! panel), a client channel and its messages (Teleop panel) — and what they read back.
+
+use std::collections::BTreeMap;
+use std::net::{SocketAddr, TcpStream};
+use std::time::{Duration, Instant};
+
+use serde_json::{Value, json};
+use tungstenite::client::IntoClientRequest;
+use tungstenite::stream::MaybeTlsStream;
+use tungstenite::{Message, WebSocket};
+
+const SUBPROTOCOL: &str = "foxglove.sdk.v1";
+
+pub struct FoxgloveClient {
+    ws: WebSocket<MaybeTlsStream<TcpStream>>,
+    /// Service name → id, from `advertiseServices`.
+    pub services: BTreeMap<String, u32>,
+    /// Status messages the server sent this client.
+    pub statuses: Vec<Value>,
+    next_call: u32,
+}
+
+impl FoxgloveClient {
+    /// Connects (retrying until the server listens) and reads the advertisements.
+    pub fn connect(addr: SocketAddr, timeout: Duration) -> Self {
+        let deadline = Instant::now() + timeout;
+        let ws = loop {
+            let mut req = format!("ws://{addr}")
+                .into_client_request()
+                .expect("request");
+            req.headers_mut().insert(
+                "Sec-WebSocket-Protocol",
+                SUBPROTOCOL.parse().expect("header"),
+            );
+            match tungstenite::connect(req) {
+                Ok((ws, _)) => break ws,
+                Err(e) => {
+                    assert!(Instant::now() < deadline, "connecting to ws://{addr}: {e}");
+                    std::thread::sleep(Duration::from_millis(100));
+                }
+            }
+        };
+        if let MaybeTlsStream::Plain(s) = ws.get_ref() {
+            s.set_read_timeout(Some(Duration::from_millis(100)))
+                .expect("timeout");
+        }
+        let mut c = Self {
+            ws,
+            services: BTreeMap::new(),
+            statuses: Vec::new(),
+            next_call: 1,
+        };
+        let deadline = Instant::now() + Duration::from_secs(10);
+        while c.services.is_empty() && Instant::now() < deadline {
+            c.read_one();
+        }
+        c
+    }
+
+    /// Reads one message (None on a read timeout); notes services and statuses.
+    fn read_one(&mut self) -> Option<Message> {
+        let m = match self.ws.read() {
+            Ok(m) => m,
+            Err(tungstenite::Error::Io(e))
+                if matches!(
+                    e.kind(),
+                    std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
+                ) =>
+            {
+                return None;
+            }
+            Err(e) => panic!("foxglove connection failed: {e}"),
+        };
+        if let Message::Text(t) = &m {
+            let v: Value = serde_json::from_str(t).expect("JSON control message");
+            match v["op"].as_str() {
+                Some("advertiseServices") => {
+                    for s in v["services"].as_array().expect("services") {
+                        let name = s["name"].as_str().expect("name").to_owned();
+                        self.services
+                            .insert(name, s["id"].as_u64().expect("id") as u32);
+                    }
+                }
+                Some("status") => self.statuses.push(v.clone()),
+                _ => {}
+            }
+        }
+        Some(m)
+    }
+
+    /// Calls service `name` with `params` (JSON): its answer, or the failure's message.
+    pub fn call(&mut self, name: &str, params: Value) -> Result<Value, String> {
+        let id = *self
+            .services
+            .get(name)
+            .unwrap_or_else(|| panic!("no service {name}"));
+        let call = self.next_call;
+        self.next_call += 1;
+        let payload = params.to_string();
+        let mut b = vec![0x02];
+        b.extend_from_slice(&id.to_le_bytes());
+        b.extend_from_slice(&call.to_le_bytes());
+        b.extend_from_slice(&4u32.to_le_bytes());
+        b.extend_from_slice(b"json");
+        b.extend_from_slice(payload.as_bytes());
+        self.ws.send(Message::Binary(b.into())).expect("send call");
+        let deadline = Instant::now() + Duration::from_secs(20);
+        while Instant::now() < deadline {
+            match self.read_one() {
+                Some(Message::Binary(b)) if b.first() == Some(&0x03) && b.len() >= 13 => {
+                    let got = u32::from_le_bytes(b[5..9].try_into().unwrap());
+                    if got != call {
+                        continue;
+                    }
+                    let n = u32::from_le_bytes(b[9..13].try_into().unwrap()) as usize;
+                    let v = serde_json::from_slice(&b[13 + n..]).expect("a JSON answer");
+                    return Ok(v);
+                }
+                Some(Message::Text(t)) => {
+                    let v: Value = serde_json::from_str(&t).unwrap();
+                    if v["op"] == "serviceCallFailure" && v["callId"] == json!(call) {
+                        return Err(v["message"].as_str().unwrap_or_default().to_owned());
+                    }
+                }
+                _ => {}
+            }
+        }
+        panic!("no answer to {name}");
+    }
+
+    /// Advertises a client channel (as the Teleop panel does).
+    pub fn advertise(&mut self, id: u32, topic: &str) {
+        let m = json!({"op": "advertise", "channels": [
+            {"id": id, "topic": topic, "encoding": "json", "schemaName": "geometry_msgs/Twist"}
+        ]});
+        self.ws
+            .send(Message::Text(m.to_string().into()))
+            .expect("advertise");
+    }
+
+    /// Publishes `msg` on client channel `id`.
+    pub fn publish(&mut self, id: u32, msg: &Value) {
+        let mut b = vec![0x01];
+        b.extend_from_slice(&id.to_le_bytes());
+        b.extend_from_slice(msg.to_string().as_bytes());
+        self.ws.send(Message::Binary(b.into())).expect("publish");
+    }
+
+    /// Reads whatever arrives for `d` (statuses are kept).
+    pub fn drain(&mut self, d: Duration) {
+        let end = Instant::now() + d;
+        while Instant::now() < end {
+            self.read_one();
+        }
+    }
+}
+
+/// A twist as the Teleop panel publishes it.
+pub fn twist(forward: f64, turn: f64) -> Value {
+    json!({"linear": {"x": forward, "y": 0.0, "z": 0.0}, "angular": {"x": 0.0, "y": 0.0, "z": turn}})
+}
+
+impl FoxgloveClient {
+    /// Sends a parameters request (`getParameters` / `setParameters`) and waits for the
+    /// `parameterValues` with its id: name → value.
+    fn parameters(&mut self, msg: Value, id: &str) -> BTreeMap<String, Value> {
+        self.ws
+            .send(Message::Text(msg.to_string().into()))
+            .expect("send");
+        let deadline = Instant::now() + Duration::from_secs(20);
+        while Instant::now() < deadline {
+            if let Some(Message::Text(t)) = self.read_one() {
+                let v: Value = serde_json::from_str(&t).unwrap();
+                if v["op"] == "parameterValues" && v["id"] == id {
+                    return v["parameters"]
+                        .as_array()
+                        .expect("parameters")
+                        .iter()
+                        .map(|p| (p["name"].as_str().unwrap().to_owned(), p["value"].clone()))
+                        .collect();
+                }
+            }
+        }
+        panic!("no parameterValues {id}");
+    }
+
+    pub fn get_parameters(&mut self, names: &[&str]) -> BTreeMap<String, Value> {
+        let id = format!("get{}", self.next_call);
+        self.next_call += 1;
+        self.parameters(
+            json!({"op": "getParameters", "parameterNames": names, "id": id}),
+            &id,
+        )
+    }
+
+    pub fn set_parameters(&mut self, params: &[(&str, Value)]) -> BTreeMap<String, Value> {
+        let id = format!("set{}", self.next_call);
+        self.next_call += 1;
+        let ps: Vec<Value> = params
+            .iter()
+            .map(|(n, v)| json!({"name": n, "value": v}))
+            .collect();
+        self.parameters(
+            json!({"op": "setParameters", "parameters": ps, "id": id}),
+            &id,
+        )
+    }
+}
