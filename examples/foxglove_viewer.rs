@@ -1,9 +1,10 @@
 //! A headless stand-in for Foxglove: connects to a live view (`snaked --foxglove`),
 //! subscribes to every advertised channel and, after SECONDS, prints the messages
-//! received per topic and their rate. Used by `scripts/record-timing.sh` to measure the
-//! loop with a viewer connected.
+//! received per topic and their rate. With SLOW_MS it is a viewer that cannot keep up:
+//! it sleeps that long after each message it reads. Used by `scripts/record-timing.sh`
+//! and `scripts/live-load.sh` to measure the loop with viewers connected.
 //!
-//!     cargo run --release --example foxglove_viewer -- ws://127.0.0.1:8765 60
+//!     cargo run --release --example foxglove_viewer -- ws://127.0.0.1:8765 60 [SLOW_MS]
 use std::collections::BTreeMap;
 use std::net::TcpStream;
 use std::time::{Duration, Instant};
@@ -16,6 +17,7 @@ fn main() {
     let mut args = std::env::args().skip(1);
     let url = args.next().unwrap_or_else(|| "ws://127.0.0.1:8765".into());
     let secs: f64 = args.next().map_or(10.0, |s| s.parse().expect("SECONDS"));
+    let slow = Duration::from_millis(args.next().map_or(0, |s| s.parse().expect("SLOW_MS")));
     let mut req = url.as_str().into_client_request().expect("a ws:// URL");
     req.headers_mut().insert(
         "Sec-WebSocket-Protocol",
@@ -40,8 +42,15 @@ fn main() {
             {
                 continue;
             }
-            Err(e) => panic!("connection failed: {e}"),
+            Err(e) => {
+                // A slow viewer may be cut off by the server: that is what it measures.
+                println!("connection ended after {:.1} s: {e}", start.elapsed().as_secs_f64());
+                break;
+            }
         };
+        if !slow.is_zero() {
+            std::thread::sleep(slow);
+        }
         match msg {
             Message::Text(t) => {
                 let v: serde_json::Value = serde_json::from_str(&t).expect("JSON");

@@ -434,13 +434,25 @@ pub struct Stats {
     t_ns: u64,
     #[serde(flatten)]
     report: crate::rt::stats::StatsReport,
+    recorder: RecorderHealth,
+}
+
+/// What the recorder itself lost and serves, with each `/stats` message: a viewer sees
+/// drops as they happen.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
+pub struct RecorderHealth {
+    /// Items the loop could not push because the ring was full, since the start.
+    pub dropped: u64,
+    /// Live-view clients connected now.
+    pub live_clients: usize,
 }
 
 impl Stats {
-    pub fn new(t_ns: u64, stats: &LoopStats) -> Self {
+    pub fn new(t_ns: u64, stats: &LoopStats, recorder: RecorderHealth) -> Self {
         Self {
             t_ns,
             report: stats.report(),
+            recorder,
         }
     }
 }

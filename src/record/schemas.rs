@@ -189,6 +189,9 @@ pub fn stats() -> Value {
             "skipped_periods": {"type": "integer"},
             "late_feedback": {"type": "integer"},
             "bus_errors": {"type": "integer"},
+            "recorder": {"type": "object", "properties": {
+                "dropped": {"type": "integer", "description": "items the ring could not take, since the start"},
+                "live_clients": {"type": "integer"}}},
         }),
     )
 }

@@ -15,7 +15,7 @@ use super::channels::{Channels, Topic};
 use super::cycle::{CycleRecord, RecordEvent, RecordItem};
 use super::encode::{
     BodyEstimateMsg, Commands, ControllerSignals, ControllerWindows, Imu, Joints, NavigationMsg,
-    Stats,
+    RecorderHealth, Stats,
 };
 use super::error::RecordError;
 use super::file::McapFile;
@@ -317,8 +317,12 @@ impl Writer {
 
     fn stats(&mut self, t_ns: u64, stats: &LoopStats) {
         let t = self.log_time(t_ns);
+        let health = RecorderHealth {
+            dropped: self.shared.ring.dropped(),
+            live_clients: self.live.as_ref().map_or(0, |l| l.latch.clients()),
+        };
         self.channels.log_json(Topic::Stats, t, |b| {
-            serde_json::to_writer(b, &Stats::new(t_ns, stats))
+            serde_json::to_writer(b, &Stats::new(t_ns, stats, health))
         });
     }
 

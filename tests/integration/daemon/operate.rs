@@ -68,16 +68,23 @@ fn daemon(extra: &str) -> Daemon {
 
 impl Daemon {
     /// SIGTERM, exit 0, and the `/operator` events of the recording.
-    fn stop(mut self) -> Vec<Value> {
+    fn stop(self) -> Vec<Value> {
+        self.stop_with(&["/operator"]).remove(0)
+    }
+
+    /// SIGTERM, exit 0, and the recording's messages on each of `topics`.
+    fn stop_with(mut self, topics: &[&str]) -> Vec<Vec<Value>> {
         self.proc.signal(libc::SIGTERM);
         assert!(self.proc.wait(Duration::from_secs(30)).success(), "exit 0");
         let bytes = std::fs::read(self.dir.path().join("run.mcap")).expect("recording");
-        mcap::MessageStream::new(&bytes)
-            .expect("MCAP")
-            .map(|m| m.expect("a message"))
-            .filter(|m| m.channel.topic == "/operator")
-            .map(|m| serde_json::from_slice(&m.data).expect("JSON"))
-            .collect()
+        let mut out = vec![Vec::new(); topics.len()];
+        for m in mcap::MessageStream::new(&bytes).expect("MCAP") {
+            let m = m.expect("a message");
+            if let Some(k) = topics.iter().position(|t| *t == m.channel.topic) {
+                out[k].push(serde_json::from_slice(&m.data).expect("JSON"));
+            }
+        }
+        out
     }
 }
 
@@ -307,10 +314,27 @@ fn the_parameters_panel_reads_live_values_and_sets_them_with_the_sockets_checks(
     assert_eq!(now["controller.name"], "compliant_slithering");
     let c = d.sock.call("controller.get", json!({"gait": "slithering"}));
     assert_eq!(c["controller"]["controller"], "compliant_slithering");
-    let events = d.stop();
+    // /stats is pushed once a second of loop time.
+    d.sock
+        .wait_status(Duration::from_secs(20), "two seconds of loop", |s| {
+            s["t_s"].as_f64().is_some_and(|t| t > 2.1)
+        });
+    let [events, stats]: [Vec<Value>; 2] =
+        d.stop_with(&["/operator", "/stats"]).try_into().unwrap();
     assert!(
         events
             .iter()
             .any(|e| e["action"] == "controller.set" && e["ok"] == true)
+    );
+    // The recorder's own health rides on /stats: its drops and the viewers connected.
+    assert!(
+        stats.iter().all(|s| s["recorder"]["dropped"].is_u64()),
+        "{:?}",
+        stats.last()
+    );
+    assert!(
+        stats.iter().any(|s| s["recorder"]["live_clients"] == 1),
+        "{:?}",
+        stats.last()
     );
 }
