@@ -44,7 +44,10 @@ fn main() {
             }
             Err(e) => {
                 // A slow viewer may be cut off by the server: that is what it measures.
-                println!("connection ended after {:.1} s: {e}", start.elapsed().as_secs_f64());
+                println!(
+                    "connection ended after {:.1} s: {e}",
+                    start.elapsed().as_secs_f64()
+                );
                 break;
             }
         };

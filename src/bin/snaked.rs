@@ -48,6 +48,11 @@ struct Args {
     /// NAME.recovered.mcap beside it; never overwritten), and exit.
     #[arg(long, num_args = 1..=2, value_names = ["FILE.mcap", "OUT.mcap"])]
     recover: Option<Vec<PathBuf>>,
+    /// Print the robot's model as a URDF for this many modules (the configuration's
+    /// body: module length, first joint's plane; module names as discovery gives them)
+    /// and exit. The live view serves the same as an asset.
+    #[arg(long, value_name = "MODULES")]
+    urdf: Option<usize>,
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -104,6 +109,20 @@ fn main() -> ExitCode {
     }
     if args.check_config {
         println!("{cfg:#?}");
+        return ExitCode::SUCCESS;
+    }
+    if let Some(n) = args.urdf {
+        if !(1..=64).contains(&n) {
+            eprintln!("snaked: --urdf takes 1 to 64 modules, not {n}");
+            return ExitCode::from(2);
+        }
+        let layout = snaked::gait::BodyLayout::alternating(
+            n,
+            cfg.body.first_joint_plane,
+            cfg.body.module_length_m,
+        );
+        let names: Vec<String> = (1..=n).map(|k| format!("module-{k:02}")).collect();
+        print!("{}", snaked::record::urdf::urdf(&layout, &names));
         return ExitCode::SUCCESS;
     }
     match daemon::run(cfg, args.emulated) {

@@ -15,7 +15,8 @@ use foxglove::websocket::{Capability, ChannelView, Client, ClientChannel, Server
 use foxglove::{ChannelId, Context, PartialMetadata, RawChannel, WebSocketServerHandle};
 
 use super::error::RecordError;
-use super::options::LiveOptions;
+use super::options::{LiveOptions, RecordingInfo};
+use super::urdf::{URDF_URI, urdf};
 use crate::station::access::Access;
 use crate::station::actions::Actions;
 use crate::station::drive::Drive;
@@ -130,7 +131,7 @@ impl Live {
     pub fn start(
         opts: &LiveOptions,
         ctx: &Arc<Context>,
-        source: &str,
+        info: &RecordingInfo,
     ) -> Result<Self, RecordError> {
         let runtime = tokio::runtime::Builder::new_multi_thread()
             .worker_threads(1)
@@ -143,10 +144,19 @@ impl Live {
             IpAddr::V4(ip) => ip.to_string(),
             IpAddr::V6(ip) => format!("[{ip}]"),
         };
+        // The robot's model, for the 3-D panel's URDF layer (and anything that fetches it).
+        let model = urdf(&info.layout, &info.module_names);
         let mut server = ctx
             .websocket_server()
-            .name(source)
-            .bind(host, opts.addr.port());
+            .name(info.source.clone())
+            .bind(host, opts.addr.port())
+            .fetch_asset_handler_blocking_fn(move |_client, uri: String| {
+                if uri == URDF_URI {
+                    Ok(model.clone().into_bytes())
+                } else {
+                    Err(format!("no asset {uri:?} (this server has {URDF_URI})"))
+                }
+            });
         let mut drive = None;
         if let Some(station) = &opts.station {
             // Operating: services and the teleop channel, through the control socket.

@@ -63,6 +63,7 @@ mod recover;
 mod ring;
 mod scene;
 mod schemas;
+pub mod urdf;
 mod writer;
 
 pub use channels::Topic;

@@ -149,7 +149,7 @@ impl Writer {
         let live = opts
             .live
             .as_ref()
-            .map(|l| Live::start(l, &ctx, &info.source))
+            .map(|l| Live::start(l, &ctx, &info))
             .transpose()?;
         let file = opts
             .mcap

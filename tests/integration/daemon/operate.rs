@@ -285,6 +285,13 @@ fn the_parameters_panel_reads_live_values_and_sets_them_with_the_sockets_checks(
     let mut d = daemon("");
     let mut fx = FoxgloveClient::connect(d.fox, Duration::from_secs(30));
     d.sock.call("gait.set", json!({"gait": "slithering"}));
+    // The robot's model is served as an asset: a URDF of the 18 modules.
+    let urdf = fx
+        .fetch_asset(snaked::record::urdf::URDF_URI)
+        .expect("the URDF");
+    let urdf = String::from_utf8(urdf).expect("text");
+    assert_eq!(urdf.matches("type=\"revolute\"").count(), 18, "{urdf}");
+    assert!(fx.fetch_asset("package://snaked/nope.stl").is_err());
     let all = fx.get_parameters(&[]);
     assert_eq!(all["gait"], "slithering");
     assert_eq!(

@@ -1,3 +1,4 @@
+mod layout;
 mod live;
 mod no_alloc;
 mod python;

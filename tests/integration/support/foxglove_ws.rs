@@ -208,3 +208,31 @@ impl FoxgloveClient {
         )
     }
 }
+
+impl FoxgloveClient {
+    /// Fetches asset `uri` (`fetchAsset`): its bytes, or the server's error message.
+    pub fn fetch_asset(&mut self, uri: &str) -> Result<Vec<u8>, String> {
+        let id = self.next_call;
+        self.next_call += 1;
+        let m = json!({"op": "fetchAsset", "uri": uri, "requestId": id});
+        self.ws
+            .send(Message::Text(m.to_string().into()))
+            .expect("fetchAsset");
+        let deadline = Instant::now() + Duration::from_secs(20);
+        while Instant::now() < deadline {
+            // FetchAssetResponse: op 4, request id, status (0 ok), error length, error, data.
+            if let Some(Message::Binary(b)) = self.read_one()
+                && b.first() == Some(&0x04)
+                && b.len() >= 10
+                && u32::from_le_bytes(b[1..5].try_into().unwrap()) == id
+            {
+                let n = u32::from_le_bytes(b[6..10].try_into().unwrap()) as usize;
+                return match b[5] {
+                    0 => Ok(b[10 + n..].to_vec()),
+                    _ => Err(String::from_utf8_lossy(&b[10..10 + n]).into_owned()),
+                };
+            }
+        }
+        panic!("no answer to fetchAsset {uri}");
+    }
+}
