@@ -12,7 +12,7 @@ use serde_json::{Value, json};
 use tokio::sync::mpsc;
 
 use super::services::Operating;
-use super::teleop::{Teleop, TeleopRequest, Twist};
+use super::teleop::{Steer, Teleop, TeleopRequest, Twist};
 use crate::gait::GaitKind;
 
 /// Twists queued at most (a few of the panel's messages).
@@ -69,10 +69,35 @@ impl Drive {
     }
 }
 
-/// The active gait, from `status`.
-async fn active_gait(op: &Operating) -> Option<GaitKind> {
+/// The active gait, from `status`, and how a turn steers it: by the nominal heading
+/// where its controller steers by one (anti-compliant sidewinding), else by its knob.
+async fn active_gait(op: &Operating) -> Option<(GaitKind, Steer)> {
     let s = op.station.call("status", json!({})).await.ok()?;
-    serde_json::from_value(s.get("gait")?.clone()).ok()
+    let gait: GaitKind = serde_json::from_value(s.get("gait")?.clone()).ok()?;
+    let by_heading = s["controller"]["controller"] == "anti_compliant_sidewinding";
+    let steer = match (by_heading, s["body"]["heading_rad"].as_f64()) {
+        (false, _) => Steer::Knob,
+        (true, Some(h)) if s["body"]["valid"] == true => Steer::Heading(h),
+        (true, _) => Steer::NoEstimate,
+    };
+    Some((gait, steer))
+}
+
+/// `r` without the parameters that already have their values (`None`: nothing left).
+async fn changed_only(op: &Operating, mut r: TeleopRequest) -> Option<TeleopRequest> {
+    if r.method != "params.set" {
+        return Some(r);
+    }
+    let gait = r.params["gait"].clone();
+    let Ok(live) = op.station.call("params.get", json!({ "gait": gait })).await else {
+        return Some(r);
+    };
+    let fields = r.params.as_object_mut()?;
+    fields.retain(|k, v| {
+        k == "gait"
+            || !matches!((live["params"][k].as_f64(), v.as_f64()), (Some(a), Some(b)) if (a - b).abs() < 1e-9)
+    });
+    (fields.len() > 1).then_some(r)
 }
 
 async fn send(op: &Operating, who: &str, r: &TeleopRequest) -> bool {
@@ -97,12 +122,17 @@ async fn work(op: Arc<Operating>, mut rx: mpsc::Receiver<Sent>) {
             sent = rx.recv() => {
                 let Some(Sent { client, twist }) = sent else { return };
                 last_client = client;
-                if let Some(g) = active_gait(&op).await {
-                    gait = g;
+                let mut steer = Steer::Knob;
+                if let Some((g, s)) = active_gait(&op).await {
+                    (gait, steer) = (g, s);
                 }
                 let now = t0.elapsed().as_secs_f64();
-                if let Some(r) = teleop.on_twist(now, gait, twist, &config) {
-                    send(&op, &Operating::client_name(client), &r).await;
+                for r in teleop.on_twist(now, gait, twist, steer, &config) {
+                    // A parameter change hands the joints back to the selector until
+                    // its blend is done: send only what differs from what is live.
+                    if let Some(r) = changed_only(&op, r).await {
+                        send(&op, &Operating::client_name(client), &r).await;
+                    }
                 }
             }
             _ = tick.tick() => {

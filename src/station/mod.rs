@@ -25,7 +25,7 @@ use std::sync::{Arc, OnceLock};
 use serde_json::Value;
 
 pub use access::Access;
-pub use teleop::{Teleop, TeleopConfig, Twist};
+pub use teleop::{Steer, Teleop, TeleopConfig, Twist};
 
 /// An error an operator's call answers with: the control socket's code and message.
 #[derive(Debug, Clone, PartialEq, Eq)]

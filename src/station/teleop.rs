@@ -1,7 +1,10 @@
 //! Teleop (pure, time as an argument): a twist in the shape Foxglove's Teleop panel
 //! publishes (`geometry_msgs/Twist`: `linear.x` forward, `angular.z` turn left) becomes
 //! the active gait's speed (its temporal frequency) and steering (slithering's lateral
-//! offset, sidewinding's taper), as `params.set` requests; and a **dead-man**: when
+//! offset, conical sidewinding's taper), as `params.set` requests — or, where the gait's
+//! controller steers by a nominal heading (anti-compliant sidewinding), the nominal
+//! heading led `heading_lead_rad` per unit of turn ahead of the body's, as
+//! `controller.heading`; and a **dead-man**: when
 //! twists stop coming for `timeout_s` the gait goes on at zero speed, and after
 //! `hold_after_s` more the robot holds (`arm` resumes).
 
@@ -28,6 +31,11 @@ pub struct TeleopConfig {
     /// Sidewinding's taper per unit of `angular.z` (at most `max_taper`).
     pub taper: f64,
     pub max_taper: f64,
+    /// Where the controller steers by a nominal heading: the nominal is the body's
+    /// heading plus this per unit of `angular.z` (so holding "left" keeps it turning),
+    /// rad, at most `max_heading_lead_rad`.
+    pub heading_lead_rad: f64,
+    pub max_heading_lead_rad: f64,
     /// A twist equal to the last one sent is re-sent no more often than this, s (the
     /// panel publishes at a fixed rate; the loop need not hear each).
     pub resend_s: f64,
@@ -47,6 +55,9 @@ impl Default for TeleopConfig {
             // ±0.4 turns sidewinding about 0.05 rad/s (docs/compliance.md).
             taper: 0.4,
             max_taper: 0.4,
+            // Sidewinding turns back outside a 0.35 rad dead-band: lead past it.
+            heading_lead_rad: 0.6,
+            max_heading_lead_rad: 1.0,
             resend_s: 1.0,
         }
     }
@@ -69,6 +80,8 @@ impl TeleopConfig {
         pos("max_offset_rad", self.max_offset_rad, 1.0)?;
         pos("taper", self.taper, 0.8)?;
         pos("max_taper", self.max_taper, 0.8)?;
+        pos("heading_lead_rad", self.heading_lead_rad, 1.5)?;
+        pos("max_heading_lead_rad", self.max_heading_lead_rad, 1.5)?;
         pos("resend_s", self.resend_s, 60.0)?;
         if !self.topic.starts_with('/') {
             return Err(format!(
@@ -112,6 +125,18 @@ impl Twist {
     }
 }
 
+/// How a twist's turn steers.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Steer {
+    /// By the gait's steering parameter (slithering's offset, conical sidewinding's
+    /// taper; other gaits take the speed only).
+    Knob,
+    /// The gait's controller steers by a nominal heading; the body heads this way now.
+    Heading(f64),
+    /// It does, but the pose estimate is not valid now: the turn waits.
+    NoEstimate,
+}
+
 /// A request teleop wants made.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TeleopRequest {
@@ -136,7 +161,7 @@ pub struct Teleop {
     state: TeleopState,
     last_twist_s: f64,
     /// What was last sent, and when.
-    sent: Option<(GaitKind, [f64; 2], f64)>,
+    sent: Option<(GaitKind, [f64; 3], f64)>,
 }
 
 impl Default for Teleop {
@@ -155,7 +180,8 @@ fn steering(gait: GaitKind, c: &TeleopConfig) -> Option<(&'static str, f64, f64)
         // A positive offset or taper turns the body clockwise going forwards (measured:
         // controllers/steering, controllers/sidewinding/heading): left is negative.
         GaitKind::Slithering => Some(("offset_lat_rad", -c.offset_rad, c.max_offset_rad)),
-        GaitKind::Sidewinding => Some(("taper", -c.taper, c.max_taper)),
+        // Conical sidewinding is the turning one; the plain gait has no knob.
+        GaitKind::ConicalSidewinding => Some(("taper", -c.taper, c.max_taper)),
         _ => None,
     }
 }
@@ -165,44 +191,67 @@ impl Teleop {
         self.state
     }
 
-    /// A twist at `now_s` while `gait` is active: the `params.set` to send, if any (a
-    /// twist like the last one sent is re-sent every `resend_s` only).
+    /// A twist at `now_s` while `gait` is active: the requests to send (none if it
+    /// asks what was last sent, re-sent every `resend_s` only), the turn steering as
+    /// `steer` says.
     pub fn on_twist(
         &mut self,
         now_s: f64,
         gait: GaitKind,
         twist: Twist,
+        steer: Steer,
         c: &TeleopConfig,
-    ) -> Option<TeleopRequest> {
+    ) -> Vec<TeleopRequest> {
+        let steer_heading = match steer {
+            Steer::Heading(h) => Some(h),
+            _ => None,
+        };
         self.last_twist_s = now_s;
         self.state = TeleopState::Driving;
         let speed = (twist.forward * c.speed_rad_s).clamp(-c.max_speed_rad_s, c.max_speed_rad_s);
         let mut params = json!({ "gait": gait, "temporal_freq_rad_s": speed });
-        let mut steer = 0.0;
-        if let Some((name, per_unit, max)) = steering(gait, c) {
+        let mut knob_value = 0.0;
+        let knob = steering(gait, c).filter(|_| steer == Steer::Knob);
+        if let Some((name, per_unit, max)) = knob {
             // Backing along an arc turns the other way: keep "left" left.
             let dir = if speed < 0.0 { -1.0 } else { 1.0 };
-            steer = (dir * twist.turn * per_unit).clamp(-max, max);
-            params[name] = json!(steer);
+            knob_value = (dir * twist.turn * per_unit).clamp(-max, max);
+            params[name] = json!(knob_value);
         }
-        let now = [speed, steer];
+        let lead = (twist.turn * c.heading_lead_rad)
+            .clamp(-c.max_heading_lead_rad, c.max_heading_lead_rad);
+        let now = [
+            speed,
+            knob_value,
+            if steer_heading.is_some() { lead } else { 0.0 },
+        ];
         let fresh = match self.sent {
             Some((g, was, at)) => {
                 g != gait
-                    || (was[0] - now[0]).abs() > 1e-6
-                    || (was[1] - now[1]).abs() > 1e-6
+                    || was.iter().zip(&now).any(|(a, b)| (a - b).abs() > 1e-6)
                     || now_s - at >= c.resend_s
             }
             None => true,
         };
-        if !fresh {
-            return None;
+        let mut out = Vec::new();
+        if fresh {
+            self.sent = Some((gait, now, now_s));
+            out.push(TeleopRequest {
+                method: "params.set",
+                params,
+            });
         }
-        self.sent = Some((gait, now, now_s));
-        Some(TeleopRequest {
-            method: "params.set",
-            params,
-        })
+        // A turn follows the body (each twist); a straight twist holds the heading once.
+        if let Some(h) = steer_heading
+            && (lead != 0.0 || fresh)
+        {
+            let nominal = crate::num::wrap_pi(h + lead);
+            out.push(TeleopRequest {
+                method: "controller.heading",
+                params: json!({ "gait": gait, "heading_rad": nominal }),
+            });
+        }
+        out
     }
 
     /// The dead-man at `now_s`: zero speed once the twists are `timeout_s` old, hold
@@ -254,7 +303,8 @@ mod tests {
         let c = TeleopConfig::default();
         let mut t = Teleop::default();
         let r = t
-            .on_twist(0.0, GaitKind::Slithering, twist(0.8, 1.0), &c)
+            .on_twist(0.0, GaitKind::Slithering, twist(0.8, 1.0), Steer::Knob, &c)
+            .pop()
             .unwrap();
         assert_eq!(r.method, "params.set");
         assert_eq!(r.params["gait"], "slithering");
@@ -264,7 +314,8 @@ mod tests {
             "left is negative"
         );
         let r = t
-            .on_twist(0.1, GaitKind::Slithering, twist(9.0, -9.0), &c)
+            .on_twist(0.1, GaitKind::Slithering, twist(9.0, -9.0), Steer::Knob, &c)
+            .pop()
             .unwrap();
         assert_eq!(
             r.params["temporal_freq_rad_s"], 2.0,
@@ -276,15 +327,36 @@ mod tests {
         );
         // Backing: the turn keeps its sense.
         let r = t
-            .on_twist(0.2, GaitKind::Slithering, twist(-1.0, 1.0), &c)
+            .on_twist(0.2, GaitKind::Slithering, twist(-1.0, 1.0), Steer::Knob, &c)
+            .pop()
             .unwrap();
         assert!(r.params["offset_lat_rad"].as_f64().unwrap() > 0.0);
         let r = t
-            .on_twist(0.3, GaitKind::Sidewinding, twist(1.0, 1.0), &c)
+            .on_twist(
+                0.3,
+                GaitKind::ConicalSidewinding,
+                twist(1.0, 1.0),
+                Steer::Knob,
+                &c,
+            )
+            .pop()
             .unwrap();
         assert!((r.params["taper"].as_f64().unwrap() + 0.4).abs() < 1e-12);
+        let r = t.on_twist(
+            0.35,
+            GaitKind::Sidewinding,
+            twist(1.0, 1.0),
+            Steer::Knob,
+            &c,
+        );
+        assert_eq!(
+            r[0].params.as_object().unwrap().len(),
+            2,
+            "plain sidewinding: speed only"
+        );
         let r = t
-            .on_twist(0.4, GaitKind::Rolling, twist(1.0, 1.0), &c)
+            .on_twist(0.4, GaitKind::Rolling, twist(1.0, 1.0), Steer::Knob, &c)
+            .pop()
             .unwrap();
         assert_eq!(
             r.params.as_object().unwrap().len(),
@@ -299,24 +371,33 @@ mod tests {
         let c = TeleopConfig::default();
         let mut t = Teleop::default();
         assert!(
-            t.on_twist(0.0, GaitKind::Slithering, twist(1.0, 0.0), &c)
-                .is_some()
+            t.on_twist(0.0, GaitKind::Slithering, twist(1.0, 0.0), Steer::Knob, &c)
+                .len()
+                == 1
         );
         assert!(
-            t.on_twist(0.2, GaitKind::Slithering, twist(1.0, 0.0), &c)
-                .is_none()
+            t.on_twist(0.2, GaitKind::Slithering, twist(1.0, 0.0), Steer::Knob, &c)
+                .is_empty()
         );
         assert!(
-            t.on_twist(0.5, GaitKind::Slithering, twist(0.5, 0.0), &c)
-                .is_some()
+            t.on_twist(0.5, GaitKind::Slithering, twist(0.5, 0.0), Steer::Knob, &c)
+                .len()
+                == 1
         );
         assert!(
-            t.on_twist(1.25, GaitKind::Slithering, twist(0.5, 0.0), &c)
-                .is_none()
+            t.on_twist(1.25, GaitKind::Slithering, twist(0.5, 0.0), Steer::Knob, &c)
+                .is_empty()
         );
         assert!(
-            t.on_twist(0.5 + c.resend_s, GaitKind::Slithering, twist(0.5, 0.0), &c)
-                .is_some()
+            t.on_twist(
+                0.5 + c.resend_s,
+                GaitKind::Slithering,
+                twist(0.5, 0.0),
+                Steer::Knob,
+                &c
+            )
+            .len()
+                == 1
         );
     }
 
@@ -329,7 +410,7 @@ mod tests {
             None,
             "never driven: nothing"
         );
-        t.on_twist(0.0, GaitKind::Slithering, twist(1.0, 0.0), &c);
+        t.on_twist(0.0, GaitKind::Slithering, twist(1.0, 0.0), Steer::Knob, &c);
         assert_eq!(t.tick(0.4, GaitKind::Slithering, &c), None);
         let r = t.tick(0.5, GaitKind::Slithering, &c).unwrap();
         assert_eq!(
@@ -343,8 +424,64 @@ mod tests {
         assert_eq!(t.state(), TeleopState::Idle);
         assert_eq!(t.tick(9.0, GaitKind::Slithering, &c), None, "holds once");
         // A twist after the stop is sent even if equal to the last one.
-        let r = t.on_twist(10.0, GaitKind::Slithering, twist(1.0, 0.0), &c);
-        assert!(r.is_some());
+        let r = t.on_twist(10.0, GaitKind::Slithering, twist(1.0, 0.0), Steer::Knob, &c);
+        assert_eq!(r.len(), 1);
+    }
+
+    #[test]
+    fn where_the_controller_steers_by_a_heading_the_turn_leads_it() {
+        let c = TeleopConfig::default();
+        let mut t = Teleop::default();
+        let r = t.on_twist(
+            0.0,
+            GaitKind::Sidewinding,
+            twist(1.0, 1.0),
+            Steer::Heading(3.0),
+            &c,
+        );
+        assert_eq!(r.len(), 2, "{r:?}");
+        assert!(
+            r[0].params.get("taper").is_none(),
+            "no taper: the controller steers"
+        );
+        assert_eq!(r[1].method, "controller.heading");
+        let h = r[1].params["heading_rad"].as_f64().unwrap();
+        assert!(
+            (h - crate::num::wrap_pi(3.0 + c.heading_lead_rad)).abs() < 1e-12,
+            "{h}"
+        );
+        // Turning, each twist follows the body; the speed is not re-sent.
+        let r = t.on_twist(
+            0.1,
+            GaitKind::Sidewinding,
+            twist(1.0, 1.0),
+            Steer::Heading(3.05),
+            &c,
+        );
+        assert_eq!(
+            r.iter().map(|r| r.method).collect::<Vec<_>>(),
+            ["controller.heading"]
+        );
+        // Straight again: the heading is held where the body is, once.
+        let r = t.on_twist(
+            0.2,
+            GaitKind::Sidewinding,
+            twist(1.0, 0.0),
+            Steer::Heading(3.1),
+            &c,
+        );
+        assert_eq!(r.len(), 2);
+        assert!((r[1].params["heading_rad"].as_f64().unwrap() - 3.1).abs() < 1e-12);
+        assert!(
+            t.on_twist(
+                0.3,
+                GaitKind::Sidewinding,
+                twist(1.0, 0.0),
+                Steer::Heading(3.1),
+                &c
+            )
+            .is_empty()
+        );
     }
 
     #[test]

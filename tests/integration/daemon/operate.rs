@@ -345,3 +345,60 @@ fn the_parameters_panel_reads_live_values_and_sets_them_with_the_sockets_checks(
         stats.last()
     );
 }
+
+#[test]
+fn teleop_turns_a_sidewinding_controllers_nominal_heading() {
+    let mut d = daemon("");
+    let mut fx = FoxgloveClient::connect(d.fox, Duration::from_secs(30));
+    fx.call(
+        "controller.set",
+        json!({"gait": "sidewinding", "controller": "anti_compliant_sidewinding", "preset": "ac_sfc"}),
+    )
+    .expect("controller.set");
+    fx.call("gait.set", json!({"gait": "sidewinding"}))
+        .expect("gait.set");
+    d.sock.wait_status(
+        Duration::from_secs(30),
+        "sidewinding's controller drives",
+        |s| {
+            s["controller"]["controller"] == "anti_compliant_sidewinding"
+                && s["controller"]["state"] == "engaged"
+                && s["body"]["valid"] == true
+        },
+    );
+    fx.advertise(1, "/cmd_vel");
+    for _ in 0..10 {
+        fx.publish(1, &twist(1.0, 1.0));
+        fx.drain(Duration::from_millis(100));
+    }
+    let [events, signals]: [Vec<Value>; 2] = d
+        .stop_with(&["/operator", "/controller/signals"])
+        .try_into()
+        .unwrap();
+    let headings: Vec<&Value> = events
+        .iter()
+        .filter(|e| e["action"] == "controller.heading")
+        .collect();
+    assert!(
+        headings.len() >= 5,
+        "each turning twist leads the heading: {events:?}"
+    );
+    assert!(headings.iter().all(|e| e["ok"] == true), "{headings:?}");
+    assert!(
+        events
+            .iter()
+            .filter(|e| e["action"] == "params.set")
+            .all(|e| e["params"].get("taper").is_none()),
+        "no taper: the controller steers"
+    );
+    // The controller holds the last heading teleop sent.
+    let last = headings.last().unwrap()["params"]["heading_rad"]
+        .as_f64()
+        .unwrap();
+    let nominal = signals
+        .iter()
+        .rev()
+        .find_map(|s| s["signals"]["heading_nominal_rad"].as_f64())
+        .expect("the controller reports its nominal heading");
+    assert!((nominal - last).abs() < 1e-9, "{nominal} vs {last}");
+}
