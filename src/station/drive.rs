@@ -12,7 +12,7 @@ use serde_json::{Value, json};
 use tokio::sync::mpsc;
 
 use super::services::Operating;
-use super::teleop::{Steer, Teleop, TeleopRequest, Twist};
+use super::teleop::{Steer, Teleop, TeleopRequest, TeleopState, Twist};
 use crate::gait::GaitKind;
 
 /// Twists queued at most (a few of the panel's messages).
@@ -100,6 +100,23 @@ async fn changed_only(op: &Operating, mut r: TeleopRequest) -> Option<TeleopRequ
     (fields.len() > 1).then_some(r)
 }
 
+/// A teleop session starts: the operator drives, so a navigation in progress stops
+/// (as it does before any driving request on the socket).
+async fn take_over(op: &Operating, client: u32) {
+    let navigating = op
+        .station
+        .call("status", json!({}))
+        .await
+        .is_ok_and(|s| s["navigator"]["active"] == true);
+    if navigating {
+        let r = TeleopRequest {
+            method: "navigate",
+            params: json!({ "off": true }),
+        };
+        send(op, &Operating::client_name(client), &r).await;
+    }
+}
+
 async fn send(op: &Operating, who: &str, r: &TeleopRequest) -> bool {
     let answer = op.station.call(r.method, r.params.clone()).await;
     let logged: Result<Value, String> = answer.clone().map_err(|e| e.to_string());
@@ -122,6 +139,9 @@ async fn work(op: Arc<Operating>, mut rx: mpsc::Receiver<Sent>) {
             sent = rx.recv() => {
                 let Some(Sent { client, twist }) = sent else { return };
                 last_client = client;
+                if teleop.state() != TeleopState::Driving {
+                    take_over(&op, client).await;
+                }
                 let mut steer = Steer::Knob;
                 if let Some((g, s)) = active_gait(&op).await {
                     (gait, steer) = (g, s);

@@ -402,3 +402,32 @@ fn teleop_turns_a_sidewinding_controllers_nominal_heading() {
         .expect("the controller reports its nominal heading");
     assert!((nominal - last).abs() < 1e-9, "{nominal} vs {last}");
 }
+
+#[test]
+fn teleop_takes_over_from_the_navigator() {
+    let mut d = daemon("");
+    let mut fx = FoxgloveClient::connect(d.fox, Duration::from_secs(30));
+    d.sock
+        .wait_status(Duration::from_secs(20), "a valid estimate", |s| {
+            s["body"]["valid"] == true
+        });
+    d.sock.call("navigate", json!({"heading_rad": 0.0}));
+    d.sock
+        .wait_status(Duration::from_secs(10), "navigating", |s| {
+            s["navigator"]["active"] == true
+        });
+    fx.advertise(1, "/cmd_vel");
+    fx.publish(1, &twist(0.5, 0.0));
+    let s = d
+        .sock
+        .wait_status(Duration::from_secs(10), "navigation stopped", |s| {
+            s["navigator"]["active"] == false
+        });
+    assert_eq!(s["navigator"]["stopped"], "off", "{}", s["navigator"]);
+    let events = d.stop();
+    assert!(
+        events
+            .iter()
+            .any(|e| e["action"] == "navigate" && e["params"]["off"] == true)
+    );
+}
