@@ -40,6 +40,10 @@ struct Args {
     /// ws://127.0.0.1:8765 unless configured).
     #[arg(long)]
     foxglove: bool,
+    /// Also drive and tune the robot from Foxglove: services, the Teleop and Parameters
+    /// panels (foxglove.operate; implies --foxglove; off loopback it needs a token file).
+    #[arg(long)]
+    operate: bool,
     /// Validate the configuration, print it, and exit.
     #[arg(long)]
     check_config: bool,
@@ -98,6 +102,7 @@ fn main() -> ExitCode {
         }),
         record: args.record.clone(),
         foxglove: args.foxglove,
+        operate: args.operate,
     };
     daemon::apply_overrides(&mut cfg, &overrides);
     // The command line may change what the file said (a TCP port, a world): check the

@@ -45,6 +45,8 @@ pub struct Overrides {
     pub record: Option<PathBuf>,
     /// `--foxglove`: serve the live view (foxglove.enabled).
     pub foxglove: bool,
+    /// `--operate`: drive and tune from Foxglove too (foxglove.operate).
+    pub operate: bool,
 }
 
 /// Apply the command line to the configuration. `--emulated` starts the gait at once
@@ -66,6 +68,7 @@ pub fn apply_overrides(cfg: &mut Config, o: &Overrides) {
         cfg.record.path = r.clone();
     }
     cfg.foxglove.enabled |= o.foxglove;
+    cfg.foxglove.operate |= o.operate;
     // Operating needs the server it operates through.
     cfg.foxglove.enabled |= cfg.foxglove.operate;
     cfg.gait.start = match (o.start, o.emulated) {

@@ -20,7 +20,7 @@ use super::urdf::{URDF_URI, urdf};
 use crate::station::access::Access;
 use crate::station::actions::Actions;
 use crate::station::drive::Drive;
-use crate::station::parameters::Parameters;
+use crate::station::parameters::{Parameters, publish_changes};
 use crate::station::services::{Operating, services};
 
 /// A latched message: its channel, a key (a newer message of the same key replaces
@@ -92,10 +92,13 @@ impl ServerListener for Latch {
     }
 }
 
-/// The server's listener: the latch, and the teleop channel when operating.
+/// The server's listener: the latch, the teleop channel and the parameter
+/// subscriptions when operating.
 struct Listener {
     latch: Arc<Latch>,
     drive: Option<Drive>,
+    /// Parameter names clients subscribed to (the server reports first and last).
+    subscribed: Arc<AtomicUsize>,
 }
 
 impl ServerListener for Listener {
@@ -107,6 +110,19 @@ impl ServerListener for Listener {
         if let Some(d) = &self.drive {
             d.on_message(&client, &channel.topic, payload);
         }
+    }
+
+    fn on_parameters_subscribe(&self, names: Vec<String>) {
+        self.subscribed.fetch_add(names.len(), Ordering::Relaxed);
+    }
+
+    fn on_parameters_unsubscribe(&self, names: Vec<String>) {
+        let n = names.len();
+        let _ = self
+            .subscribed
+            .fetch_update(Ordering::Relaxed, Ordering::Relaxed, |k| {
+                Some(k.saturating_sub(n))
+            });
     }
 
     fn on_client_connect(&self) {
@@ -121,7 +137,10 @@ impl ServerListener for Listener {
 /// A running live server.
 pub struct Live {
     runtime: Option<tokio::runtime::Runtime>,
-    handle: Option<WebSocketServerHandle>,
+    /// Shared (weakly) with the parameter updates' task.
+    handle: Option<Arc<WebSocketServerHandle>>,
+    /// That task, when operating.
+    updates: Option<tokio::task::AbortHandle>,
     addr: SocketAddr,
     pub latch: Arc<Latch>,
 }
@@ -158,6 +177,8 @@ impl Live {
                 }
             });
         let mut drive = None;
+        let mut operating_now = None;
+        let subscribed = Arc::new(AtomicUsize::new(0));
         if let Some(station) = &opts.station {
             // Operating: services and the teleop channel, through the control socket.
             let operating = Arc::new(Operating {
@@ -180,10 +201,12 @@ impl Live {
                 .parameter_handler(Arc::new(Parameters {
                     operating: operating.clone(),
                 }));
+            operating_now = Some(operating);
         }
         let server = server.listener(Arc::new(Listener {
             latch: latch.clone(),
             drive,
+            subscribed: subscribed.clone(),
         }));
         // Inside `block_on` the server finds this runtime as the current one.
         let handle = runtime
@@ -194,9 +217,15 @@ impl Live {
             })?;
         let addr = SocketAddr::new(opts.addr.ip(), handle.port());
         tracing::info!(%addr, "recorder: live view (Foxglove WebSocket) listening");
+        let handle = Arc::new(handle);
+        let updates = operating_now.map(|op| {
+            let task = publish_changes(op, Arc::downgrade(&handle), subscribed);
+            runtime.spawn(task).abort_handle()
+        });
         Ok(Self {
             runtime: Some(runtime),
             handle: Some(handle),
+            updates,
             addr,
             latch,
         })
@@ -208,8 +237,23 @@ impl Live {
 
     /// Closes the connections and stops the runtime. Idempotent.
     pub fn stop(&mut self) {
-        if let Some(h) = self.handle.take() {
-            h.stop().wait_blocking();
+        if let Some(t) = self.updates.take() {
+            t.abort();
+        }
+        if let Some(mut h) = self.handle.take() {
+            // The updates' task holds the handle only while it publishes: wait it out.
+            for _ in 0..500 {
+                match Arc::try_unwrap(h) {
+                    Ok(h) => {
+                        h.stop().wait_blocking();
+                        break;
+                    }
+                    Err(still) => {
+                        h = still;
+                        std::thread::sleep(Duration::from_millis(2));
+                    }
+                }
+            }
         }
         if let Some(rt) = self.runtime.take() {
             rt.shutdown_timeout(Duration::from_secs(1));

@@ -8,8 +8,12 @@
 //! `controller.name`, `controller.preset` (strings) and `controller.config.<path>` (the
 //! configuration's numbers, booleans and strings, dotted).
 
-use std::sync::Arc;
+use std::collections::BTreeMap;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::{Arc, Weak};
+use std::time::Duration;
 
+use foxglove::WebSocketServerHandle;
 use foxglove::websocket::{
     AnyClient, GetParametersResponder, Parameter, ParameterHandler, ParameterValue,
     SetParametersResponder,
@@ -142,6 +146,43 @@ fn request_for(l: &Live, name: &str, value: Value) -> Result<(&'static str, Valu
         }
     }
     Ok(("controller.set", sel))
+}
+
+/// How often subscribed parameters are compared with what is live.
+const UPDATE_EVERY: Duration = Duration::from_secs(1);
+
+/// While a client subscribes to parameter updates (`subscribed` names > 0), publishes
+/// those whose live value changed (by the panel, `snakectl` or the navigator) once a
+/// second; the server sends each client the ones it subscribed to. Runs until aborted.
+pub async fn publish_changes(
+    op: Arc<Operating>,
+    server: Weak<WebSocketServerHandle>,
+    subscribed: Arc<AtomicUsize>,
+) {
+    let mut last: BTreeMap<String, Parameter> = BTreeMap::new();
+    let mut tick = tokio::time::interval(UPDATE_EVERY);
+    loop {
+        tick.tick().await;
+        if subscribed.load(Ordering::Relaxed) == 0 {
+            last.clear();
+            continue;
+        }
+        let Ok(l) = live(&op).await else { continue };
+        let now = all(&l);
+        let changed: Vec<Parameter> = now
+            .iter()
+            .filter(|p| last.get(&p.name) != Some(*p))
+            .cloned()
+            .collect();
+        last = now.into_iter().map(|p| (p.name.clone(), p)).collect();
+        if changed.is_empty() {
+            continue;
+        }
+        match server.upgrade() {
+            Some(h) => h.publish_parameter_values(changed),
+            None => return,
+        }
+    }
 }
 
 impl ParameterHandler for Parameters {

@@ -302,6 +302,17 @@ fn the_parameters_panel_reads_live_values_and_sets_them_with_the_sockets_checks(
     let now = fx.set_parameters(&[("params.temporal_freq_rad_s", json!(0.6))]);
     assert_eq!(now["params.temporal_freq_rad_s"], json!(0.6));
     assert_eq!(slithering_speed(&mut d.sock), 0.6, "set through params.set");
+    // A change made elsewhere (snakectl) reaches a panel that subscribed to updates.
+    fx.subscribe_parameters(&["params.temporal_freq_rad_s"]);
+    d.sock.call(
+        "params.set",
+        json!({"gait": "slithering", "temporal_freq_rad_s": 0.7}),
+    );
+    assert!(
+        fx.wait_parameter("params.temporal_freq_rad_s", Duration::from_secs(10), |v| v
+            == &json!(0.7)),
+        "the update is published"
+    );
     // Refused as the socket refuses it: the panel gets an error status and the live value.
     let now = fx.set_parameters(&[("params.amplitude_lat_rad", json!(99.0))]);
     assert!(

@@ -236,3 +236,37 @@ impl FoxgloveClient {
         panic!("no answer to fetchAsset {uri}");
     }
 }
+
+impl FoxgloveClient {
+    /// Subscribes to updates of `names` (as the Parameters panel does).
+    pub fn subscribe_parameters(&mut self, names: &[&str]) {
+        let m = json!({"op": "subscribeParameterUpdates", "parameterNames": names});
+        self.ws
+            .send(Message::Text(m.to_string().into()))
+            .expect("subscribe");
+    }
+
+    /// Waits for an unsolicited `parameterValues` in which `name` has a value `pred`
+    /// accepts.
+    pub fn wait_parameter(
+        &mut self,
+        name: &str,
+        within: Duration,
+        pred: impl Fn(&Value) -> bool,
+    ) -> bool {
+        let deadline = Instant::now() + within;
+        while Instant::now() < deadline {
+            if let Some(Message::Text(t)) = self.read_one() {
+                let v: Value = serde_json::from_str(&t).unwrap();
+                if v["op"] == "parameterValues"
+                    && v["parameters"]
+                        .as_array()
+                        .is_some_and(|ps| ps.iter().any(|p| p["name"] == name && pred(&p["value"])))
+                {
+                    return true;
+                }
+            }
+        }
+        false
+    }
+}
