@@ -24,17 +24,28 @@ impl LogStyle {
     }
 }
 
-/// Installs the global subscriber: `RUST_LOG` if set, else `default` (e.g. "info").
+/// Installs the global subscriber: `RUST_LOG` if set, else `default` (e.g. "info"), for
+/// what is written; the slow-viewer layer (`record::viewers`) sees the `foxglove`
+/// server's lines whatever the level.
 pub fn init(default: &str) {
+    use tracing_subscriber::Layer;
+    use tracing_subscriber::layer::SubscriberExt;
+    use tracing_subscriber::util::SubscriberInitExt;
     let filter = EnvFilter::try_from_default_env().unwrap_or_else(|_| EnvFilter::new(default));
     let style = LogStyle::detect();
-    let builder = tracing_subscriber::fmt()
-        .with_env_filter(filter)
+    let fmt = tracing_subscriber::fmt::layer()
         .with_writer(std::io::stderr)
         .with_ansi(style.ansi);
-    if style.timestamps {
-        builder.init();
+    let fmt = if style.timestamps {
+        fmt.boxed()
     } else {
-        builder.without_time().init();
-    }
+        fmt.without_time().boxed()
+    };
+    let viewers = crate::record::viewers::SlowViewerLayer.with_filter(
+        tracing_subscriber::filter::Targets::new().with_target("foxglove", tracing::Level::INFO),
+    );
+    let _ = tracing_subscriber::registry()
+        .with(fmt.with_filter(filter))
+        .with(viewers)
+        .try_init();
 }

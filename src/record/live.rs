@@ -8,15 +8,16 @@
 use std::collections::HashMap;
 use std::net::{IpAddr, SocketAddr};
 use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
+use std::sync::{Arc, Mutex, MutexGuard, PoisonError, Weak};
 use std::time::Duration;
 
-use foxglove::websocket::{Capability, ChannelView, Client, ClientChannel, ServerListener};
+use foxglove::websocket::{Capability, ChannelView, Client, ClientChannel, ServerListener, Status};
 use foxglove::{ChannelId, Context, PartialMetadata, RawChannel, WebSocketServerHandle};
 
 use super::error::RecordError;
 use super::options::{LiveOptions, RecordingInfo};
 use super::urdf::{URDF_URI, urdf};
+use super::viewers::{ViewerReports, take_reports};
 use crate::station::access::Access;
 use crate::station::actions::Actions;
 use crate::station::drive::Drive;
@@ -134,13 +135,36 @@ impl ServerListener for Listener {
     }
 }
 
+/// Every slow viewer the server reported (`record::viewers`): a `/live/viewers`
+/// message and a warning status to every viewer. Runs until aborted.
+async fn report_slow_viewers(reports: ViewerReports, server: Weak<WebSocketServerHandle>) {
+    let mut tick = tokio::time::interval(Duration::from_millis(200));
+    loop {
+        tick.tick().await;
+        for viewer in take_reports() {
+            reports.thinned(&viewer);
+            let Some(h) = server.upgrade() else { return };
+            h.publish_status(
+                Status::warning(format!(
+                    "viewer {viewer} cannot keep up: the live view drops its oldest messages"
+                ))
+                .with_id("snaked.slow_viewer"),
+            );
+        }
+    }
+}
+
+/// How long the viewers get to close at shutdown.
+const CLOSE_GRACE: Duration = Duration::from_secs(1);
+
 /// A running live server.
 pub struct Live {
     runtime: Option<tokio::runtime::Runtime>,
     /// Shared (weakly) with the parameter updates' task.
     handle: Option<Arc<WebSocketServerHandle>>,
-    /// That task, when operating.
-    updates: Option<tokio::task::AbortHandle>,
+    /// The tasks that publish through it: parameter updates (when operating), slow
+    /// viewers.
+    tasks: Vec<tokio::task::AbortHandle>,
     addr: SocketAddr,
     pub latch: Arc<Latch>,
 }
@@ -218,14 +242,17 @@ impl Live {
         let addr = SocketAddr::new(opts.addr.ip(), handle.port());
         tracing::info!(%addr, "recorder: live view (Foxglove WebSocket) listening");
         let handle = Arc::new(handle);
-        let updates = operating_now.map(|op| {
+        let mut tasks = Vec::new();
+        if let Some(op) = operating_now {
             let task = publish_changes(op, Arc::downgrade(&handle), subscribed);
-            runtime.spawn(task).abort_handle()
-        });
+            tasks.push(runtime.spawn(task).abort_handle());
+        }
+        let slow = report_slow_viewers(ViewerReports::new(ctx), Arc::downgrade(&handle));
+        tasks.push(runtime.spawn(slow).abort_handle());
         Ok(Self {
             runtime: Some(runtime),
             handle: Some(handle),
-            updates,
+            tasks,
             addr,
             latch,
         })
@@ -237,7 +264,7 @@ impl Live {
 
     /// Closes the connections and stops the runtime. Idempotent.
     pub fn stop(&mut self) {
-        if let Some(t) = self.updates.take() {
+        for t in self.tasks.drain(..) {
             t.abort();
         }
         if let Some(mut h) = self.handle.take() {
@@ -245,7 +272,19 @@ impl Live {
             for _ in 0..500 {
                 match Arc::try_unwrap(h) {
                     Ok(h) => {
-                        h.stop().wait_blocking();
+                        let closing = h.stop();
+                        // A viewer that does not read blocks its connection's close: give
+                        // them a second, then drop what is left (the tasks are aborted).
+                        if let Some(rt) = &self.runtime {
+                            let waited = rt.block_on(async {
+                                tokio::time::timeout(CLOSE_GRACE, closing.wait()).await
+                            });
+                            if waited.is_err() {
+                                tracing::warn!(
+                                    "live view: a viewer did not close within {CLOSE_GRACE:?}; cut off"
+                                );
+                            }
+                        }
                         break;
                     }
                     Err(still) => {

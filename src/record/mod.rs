@@ -64,6 +64,7 @@ mod ring;
 mod scene;
 mod schemas;
 pub mod urdf;
+pub mod viewers;
 mod writer;
 
 pub use channels::Topic;

@@ -4,7 +4,9 @@
 
 use std::sync::Arc;
 
-use foxglove::{Context, RawChannel, Schema};
+use foxglove::{Context, RawChannel};
+
+use crate::record::viewers::json_channel;
 use serde_json::{Value, json};
 
 /// The channel's topic.
@@ -18,19 +20,10 @@ pub struct Actions {
 impl Actions {
     /// On `ctx` (no channel, and nothing logged, if it cannot be made).
     pub fn new(ctx: &Arc<Context>) -> Self {
-        let schema = Schema::new(
-            "snaked.OperatorAction",
-            "jsonschema",
-            br#"{"type":"object","properties":{"client":{"type":"string"},"action":{"type":"string"},"params":{},"ok":{"type":"boolean"},"answer":{}}}"#.as_slice(),
-        );
-        let channel = ctx
-            .channel_builder(TOPIC)
-            .message_encoding("json")
-            .schema(schema)
-            .build_raw()
-            .map_err(|e| tracing::warn!("station: no {TOPIC} channel: {e}"))
-            .ok();
-        Self { channel }
+        let schema = br#"{"type":"object","properties":{"client":{"type":"string"},"action":{"type":"string"},"params":{},"ok":{"type":"boolean"},"answer":{}}}"#;
+        Self {
+            channel: json_channel(ctx, TOPIC, "snaked.OperatorAction", schema),
+        }
     }
 
     /// `client` (its name and id) did `action` with `params` and was answered `answer`.

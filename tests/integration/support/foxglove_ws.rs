@@ -19,6 +19,8 @@ pub struct FoxgloveClient {
     pub services: BTreeMap<String, u32>,
     /// Status messages the server sent this client.
     pub statuses: Vec<Value>,
+    /// Channel id → topic, from `advertise`.
+    pub channels: BTreeMap<u64, String>,
     next_call: u32,
 }
 
@@ -50,6 +52,7 @@ impl FoxgloveClient {
             ws,
             services: BTreeMap::new(),
             statuses: Vec::new(),
+            channels: BTreeMap::new(),
             next_call: 1,
         };
         let deadline = Instant::now() + Duration::from_secs(10);
@@ -84,6 +87,14 @@ impl FoxgloveClient {
                     }
                 }
                 Some("status") => self.statuses.push(v.clone()),
+                Some("advertise") => {
+                    for c in v["channels"].as_array().into_iter().flatten() {
+                        let (id, topic) = (c["id"].as_u64(), c["topic"].as_str());
+                        if let (Some(id), Some(topic)) = (id, topic) {
+                            self.channels.insert(id, topic.to_owned());
+                        }
+                    }
+                }
                 _ => {}
             }
         }
@@ -266,6 +277,37 @@ impl FoxgloveClient {
                     return true;
                 }
             }
+        }
+        false
+    }
+}
+
+impl FoxgloveClient {
+    /// Subscribes to every channel advertised so far (subscription id = channel id).
+    pub fn subscribe_all(&mut self) {
+        let subs: Vec<Value> = self
+            .channels
+            .keys()
+            .map(|id| json!({"id": id, "channelId": id}))
+            .collect();
+        let m = json!({"op": "subscribe", "subscriptions": subs});
+        self.ws
+            .send(Message::Text(m.to_string().into()))
+            .expect("subscribe");
+    }
+
+    /// Waits for a status message whose text contains `what`.
+    pub fn wait_status_message(&mut self, what: &str, within: Duration) -> bool {
+        let deadline = Instant::now() + within;
+        while Instant::now() < deadline {
+            if self
+                .statuses
+                .iter()
+                .any(|s| s["message"].as_str().is_some_and(|m| m.contains(what)))
+            {
+                return true;
+            }
+            self.read_one();
         }
         false
     }
