@@ -70,11 +70,15 @@ impl Drive {
 }
 
 /// The active gait, from `status`, and how a turn steers it: by the nominal heading
-/// where its controller steers by one (anti-compliant sidewinding), else by its knob.
+/// where its engaged controller steers by one (it reports a `heading_nominal_rad`, as
+/// anti-compliant sidewinding does, or its heading hold is on: `steering` 1-3), else
+/// by the gait's knob.
 async fn active_gait(op: &Operating) -> Option<(GaitKind, Steer)> {
     let s = op.station.call("status", json!({})).await.ok()?;
     let gait: GaitKind = serde_json::from_value(s.get("gait")?.clone()).ok()?;
-    let by_heading = s["controller"]["controller"] == "anti_compliant_sidewinding";
+    let signals = &s["controller"]["signals"];
+    let by_heading = signals["heading_nominal_rad"].as_f64().is_some()
+        || signals["steering"].as_f64().is_some_and(|x| x >= 1.0);
     let steer = match (by_heading, s["body"]["heading_rad"].as_f64()) {
         (false, _) => Steer::Knob,
         (true, Some(h)) if s["body"]["valid"] == true => Steer::Heading(h),

@@ -464,3 +464,56 @@ fn a_viewer_that_cannot_keep_up_is_thinned_and_reported() {
     );
     drop(slow);
 }
+
+#[test]
+fn teleop_turns_a_slithering_controllers_held_heading_instead_of_fighting_it() {
+    let mut d = daemon("");
+    let mut fx = FoxgloveClient::connect(d.fox, Duration::from_secs(30));
+    fx.call(
+        "controller.set",
+        json!({"gait": "slithering", "controller": "a_ws_omega"}),
+    )
+    .expect("controller.set");
+    fx.call("gait.set", json!({"gait": "slithering"}))
+        .expect("gait.set");
+    d.sock.wait_status(
+        Duration::from_secs(30),
+        "compliant slithering drives",
+        |s| {
+            s["controller"]["preset"] == "a_ws_omega"
+                && s["controller"]["state"] == "engaged"
+                && s["body"]["valid"] == true
+        },
+    );
+    // Holding a heading: the controller steers by it, so teleop's turn moves it.
+    d.sock.call(
+        "controller.heading",
+        json!({"gait": "slithering", "here": true}),
+    );
+    d.sock.wait_status(Duration::from_secs(10), "holding", |s| {
+        s["controller"]["signals"]["steering"]
+            .as_f64()
+            .is_some_and(|x| x >= 1.0)
+    });
+    fx.advertise(1, "/cmd_vel");
+    for _ in 0..5 {
+        fx.publish(1, &twist(1.0, 1.0)); // the speed it has: nothing hands the joints back
+        fx.drain(Duration::from_millis(100));
+    }
+    let events = d.stop();
+    let turns: Vec<&Value> = events
+        .iter()
+        .filter(|e| e["action"] == "controller.heading")
+        .collect();
+    assert!(
+        turns.len() >= 3 && turns.iter().all(|e| e["ok"] == true),
+        "{events:?}"
+    );
+    assert!(
+        events
+            .iter()
+            .filter(|e| e["action"] == "params.set")
+            .all(|e| e["params"].get("offset_lat_rad").is_none()),
+        "the offset is left to the controller: {events:?}"
+    );
+}
