@@ -1,0 +1,237 @@
+//! Teleop's mapping, resends, heading lead and dead-man (pure, time as an argument).
+use super::*;
+
+fn twist(forward: f64, turn: f64) -> Twist {
+    Twist { forward, turn }
+}
+
+#[test]
+fn a_twist_sets_speed_and_steering_within_limits() {
+    let c = TeleopConfig::default();
+    let mut t = Teleop::default();
+    let r = t
+        .on_twist(0.0, GaitKind::Slithering, twist(0.8, 1.0), Steer::Knob, &c)
+        .pop()
+        .unwrap();
+    assert_eq!(r.method, "params.set");
+    assert_eq!(r.params["gait"], "slithering");
+    assert!((r.params["temporal_freq_rad_s"].as_f64().unwrap() - 0.8).abs() < 1e-12);
+    assert!(
+        (r.params["offset_lat_rad"].as_f64().unwrap() + 0.2).abs() < 1e-12,
+        "left is negative"
+    );
+    let r = t
+        .on_twist(0.1, GaitKind::Slithering, twist(9.0, -9.0), Steer::Knob, &c)
+        .pop()
+        .unwrap();
+    assert_eq!(
+        r.params["temporal_freq_rad_s"], 2.0,
+        "clamped to max_speed_rad_s"
+    );
+    assert_eq!(
+        r.params["offset_lat_rad"], 0.25,
+        "clamped to max_offset_rad"
+    );
+    // Backing: the turn keeps its sense.
+    let r = t
+        .on_twist(0.2, GaitKind::Slithering, twist(-1.0, 1.0), Steer::Knob, &c)
+        .pop()
+        .unwrap();
+    assert!(r.params["offset_lat_rad"].as_f64().unwrap() > 0.0);
+    let r = t
+        .on_twist(
+            0.3,
+            GaitKind::ConicalSidewinding,
+            twist(1.0, 1.0),
+            Steer::Knob,
+            &c,
+        )
+        .pop()
+        .unwrap();
+    assert!((r.params["taper"].as_f64().unwrap() + 0.4).abs() < 1e-12);
+    let r = t.on_twist(
+        0.35,
+        GaitKind::Sidewinding,
+        twist(1.0, 1.0),
+        Steer::Knob,
+        &c,
+    );
+    assert_eq!(
+        r[0].params.as_object().unwrap().len(),
+        2,
+        "plain sidewinding: speed only"
+    );
+    let r = t
+        .on_twist(0.4, GaitKind::Rolling, twist(1.0, 1.0), Steer::Knob, &c)
+        .pop()
+        .unwrap();
+    assert_eq!(
+        r.params.as_object().unwrap().len(),
+        2,
+        "rolling: no steering: {}",
+        r.params
+    );
+}
+
+#[test]
+fn a_repeated_twist_is_resent_only_now_and_then() {
+    let c = TeleopConfig::default();
+    let mut t = Teleop::default();
+    assert!(
+        t.on_twist(0.0, GaitKind::Slithering, twist(1.0, 0.0), Steer::Knob, &c)
+            .len()
+            == 1
+    );
+    assert!(
+        t.on_twist(0.2, GaitKind::Slithering, twist(1.0, 0.0), Steer::Knob, &c)
+            .is_empty()
+    );
+    assert!(
+        t.on_twist(0.5, GaitKind::Slithering, twist(0.5, 0.0), Steer::Knob, &c)
+            .len()
+            == 1
+    );
+    assert!(
+        t.on_twist(1.25, GaitKind::Slithering, twist(0.5, 0.0), Steer::Knob, &c)
+            .is_empty()
+    );
+    assert!(
+        t.on_twist(
+            0.5 + c.resend_s,
+            GaitKind::Slithering,
+            twist(0.5, 0.0),
+            Steer::Knob,
+            &c
+        )
+        .len()
+            == 1
+    );
+}
+
+#[test]
+fn the_dead_man_stops_then_holds_and_a_twist_drives_again() {
+    let c = TeleopConfig::default();
+    let mut t = Teleop::default();
+    assert_eq!(
+        t.tick(100.0, GaitKind::Slithering, &c),
+        None,
+        "never driven: nothing"
+    );
+    t.on_twist(0.0, GaitKind::Slithering, twist(1.0, 0.0), Steer::Knob, &c);
+    assert_eq!(t.tick(0.4, GaitKind::Slithering, &c), None);
+    let r = t.tick(0.5, GaitKind::Slithering, &c).unwrap();
+    assert_eq!(
+        (r.method, r.params["temporal_freq_rad_s"].as_f64()),
+        ("params.set", Some(0.0))
+    );
+    assert_eq!(t.state(), TeleopState::Stopped);
+    assert_eq!(t.tick(2.0, GaitKind::Slithering, &c), None);
+    let r = t.tick(2.5, GaitKind::Slithering, &c).unwrap();
+    assert_eq!(r.method, "hold");
+    assert_eq!(t.state(), TeleopState::Idle);
+    assert_eq!(t.tick(9.0, GaitKind::Slithering, &c), None, "holds once");
+    // A twist after the stop is sent even if equal to the last one.
+    let r = t.on_twist(10.0, GaitKind::Slithering, twist(1.0, 0.0), Steer::Knob, &c);
+    assert_eq!(r.len(), 1);
+}
+
+#[test]
+fn where_the_controller_steers_by_a_heading_the_turn_leads_it() {
+    let c = TeleopConfig::default();
+    let mut t = Teleop::default();
+    let r = t.on_twist(
+        0.0,
+        GaitKind::Sidewinding,
+        twist(1.0, 1.0),
+        Steer::Heading(3.0),
+        &c,
+    );
+    assert_eq!(r.len(), 2, "{r:?}");
+    assert!(
+        r[0].params.get("taper").is_none(),
+        "no taper: the controller steers"
+    );
+    assert_eq!(r[1].method, "controller.heading");
+    let h = r[1].params["heading_rad"].as_f64().unwrap();
+    assert!(
+        (h - crate::num::wrap_pi(3.0 + c.heading_lead_rad)).abs() < 1e-12,
+        "{h}"
+    );
+    // Turning, each twist follows the body; the speed is not re-sent.
+    let r = t.on_twist(
+        0.1,
+        GaitKind::Sidewinding,
+        twist(1.0, 1.0),
+        Steer::Heading(3.05),
+        &c,
+    );
+    assert_eq!(
+        r.iter().map(|r| r.method).collect::<Vec<_>>(),
+        ["controller.heading"]
+    );
+    // Straight again: the heading is held where the body is, once.
+    let r = t.on_twist(
+        0.2,
+        GaitKind::Sidewinding,
+        twist(1.0, 0.0),
+        Steer::Heading(3.1),
+        &c,
+    );
+    assert_eq!(r.len(), 2);
+    assert!((r[1].params["heading_rad"].as_f64().unwrap() - 3.1).abs() < 1e-12);
+    assert!(
+        t.on_twist(
+            0.3,
+            GaitKind::Sidewinding,
+            twist(1.0, 0.0),
+            Steer::Heading(3.1),
+            &c
+        )
+        .is_empty()
+    );
+}
+
+#[test]
+fn twists_are_parsed_and_bad_ones_refused() {
+    let t = Twist::parse(br#"{"linear":{"x":0.5,"y":0,"z":0},"angular":{"x":0,"y":0,"z":-1}}"#)
+        .unwrap();
+    assert_eq!(t, twist(0.5, -1.0));
+    assert_eq!(Twist::parse(b"{}").unwrap(), twist(0.0, 0.0));
+    for bad in [
+        &b"nope"[..],
+        b"[1]",
+        br#"{"linear":{"x":"fast"}}"#,
+        br#"{"linear":{"x":1e999}}"#,
+    ] {
+        assert!(
+            Twist::parse(bad).is_err(),
+            "{}",
+            String::from_utf8_lossy(bad)
+        );
+    }
+}
+
+#[test]
+fn bad_settings_are_refused() {
+    assert!(TeleopConfig::default().check().is_ok());
+    for bad in [
+        TeleopConfig {
+            timeout_s: 0.0,
+            ..Default::default()
+        },
+        TeleopConfig {
+            speed_rad_s: f64::NAN,
+            ..Default::default()
+        },
+        TeleopConfig {
+            max_taper: 2.0,
+            ..Default::default()
+        },
+        TeleopConfig {
+            topic: "cmd_vel".into(),
+            ..Default::default()
+        },
+    ] {
+        assert!(bad.check().is_err(), "{bad:?}");
+    }
+}

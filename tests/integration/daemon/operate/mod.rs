@@ -1,0 +1,100 @@
+//! Operating from Foxglove (`[foxglove] operate`), through `snaked --emulated` and a
+//! WebSocket client speaking as Foxglove's panels do: services answer what the control
+//! socket answers, twists drive (the Teleop panel) and the dead-man stops then holds,
+//! parameters read and set (the Parameters panel), a token gates everything but
+//! `auth`, `status` and `estop`, slow viewers are thinned and reported; every action is
+//! an `/operator` event in the recording naming the client.
+use crate::support::rig;
+
+use std::net::SocketAddr;
+use std::time::Duration;
+
+use rig::{Client, Proc, exe};
+use serde_json::{Value, json};
+
+mod access;
+mod drive;
+mod tune;
+mod viewers;
+
+fn free_tcp_port() -> u16 {
+    std::net::TcpListener::bind("127.0.0.1:0")
+        .and_then(|l| l.local_addr())
+        .expect("a free port")
+        .port()
+}
+
+pub(super) struct Daemon {
+    proc: Proc,
+    pub(super) sock: Client,
+    pub(super) fox: SocketAddr,
+    dir: tempfile::TempDir,
+}
+
+/// `snaked --emulated` on flat ground, operating from Foxglove with `extra` config.
+pub(super) fn daemon(extra: &str) -> Daemon {
+    let dir = tempfile::tempdir().unwrap();
+    let port = free_tcp_port();
+    let config = dir.path().join("snaked.toml");
+    std::fs::write(
+        &config,
+        format!("[foxglove]\noperate = true\nport = {port}\n{extra}\n"),
+    )
+    .unwrap();
+    let sock = dir.path().join("s.sock");
+    let world = concat!(env!("CARGO_MANIFEST_DIR"), "/scenarios/flat.toml");
+    let proc = Proc::spawn(
+        "snaked",
+        &exe("snaked"),
+        &[
+            "--emulated".into(),
+            "--world".into(),
+            world.into(),
+            "--config".into(),
+            config.display().to_string(),
+            "--socket".into(),
+            sock.display().to_string(),
+            "--record".into(),
+            dir.path().join("run.mcap").display().to_string(),
+        ],
+    );
+    let mut c = Client::connect(&sock, Duration::from_secs(30));
+    c.wait_status(Duration::from_secs(30), "running", |s| {
+        s["mode"] == "running"
+    });
+    Daemon {
+        proc,
+        sock: c,
+        fox: SocketAddr::from(([127, 0, 0, 1], port)),
+        dir,
+    }
+}
+
+impl Daemon {
+    /// SIGTERM, exit 0, and the `/operator` events of the recording.
+    pub(super) fn stop(self) -> Vec<Value> {
+        self.stop_with(&["/operator"]).remove(0)
+    }
+
+    /// SIGTERM, exit 0, and the recording's messages on each of `topics`.
+    pub(super) fn stop_with(mut self, topics: &[&str]) -> Vec<Vec<Value>> {
+        self.proc.signal(libc::SIGTERM);
+        assert!(self.proc.wait(Duration::from_secs(30)).success(), "exit 0");
+        let bytes = std::fs::read(self.dir.path().join("run.mcap")).expect("recording");
+        let mut out = vec![Vec::new(); topics.len()];
+        for m in mcap::MessageStream::new(&bytes).expect("MCAP") {
+            let m = m.expect("a message");
+            if let Some(k) = topics.iter().position(|t| *t == m.channel.topic) {
+                out[k].push(serde_json::from_slice(&m.data).expect("JSON"));
+            }
+        }
+        out
+    }
+}
+
+pub(super) fn slithering_speed(c: &mut Client) -> f64 {
+    let p = c.call("params.get", json!({"gait": "slithering"}));
+    p["params"]["temporal_freq_rad_s"]
+        .as_f64()
+        .expect("a speed")
+}
