@@ -3,6 +3,7 @@
 
 pub mod bus_setup;
 pub mod config;
+mod config_record;
 pub mod logging;
 pub mod service;
 pub mod token;
