@@ -15,12 +15,14 @@ use super::actions::Actions;
 use super::{CallError, Station, UNAUTHORIZED};
 
 /// The services, in the order they are advertised.
-pub const SERVICES: [&str; 10] = [
+pub const SERVICES: [&str; 12] = [
     "auth",
     "status",
     "gait.set",
     "params.set",
     "controller.set",
+    "controller.heading",
+    "controller.calibrate",
     "navigate",
     "hold",
     "limp",

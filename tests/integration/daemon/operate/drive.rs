@@ -15,6 +15,8 @@ fn foxglove_drives_the_robot_and_the_dead_man_stops_then_holds_it() {
         "gait.set",
         "params.set",
         "controller.set",
+        "controller.heading",
+        "controller.calibrate",
         "navigate",
         "hold",
         "limp",
