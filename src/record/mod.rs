@@ -67,7 +67,7 @@ pub mod urdf;
 pub mod viewers;
 mod writer;
 
-pub use channels::Topic;
+pub use channels::{Topic, json_channel};
 pub use cycle::{
     CycleRecord, JointSample, RECORD_MAX_LINKS, RECORD_MAX_MODULES, RecordEvent, RecordItem,
 };

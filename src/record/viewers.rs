@@ -9,7 +9,9 @@ use std::sync::Arc;
 use std::sync::OnceLock;
 
 use crossbeam_channel::{Receiver, Sender, bounded};
-use foxglove::{Context, RawChannel, Schema};
+use foxglove::{Context, RawChannel};
+
+use super::channels::json_channel;
 use tracing::field::{Field, Visit};
 use tracing_subscriber::layer::{Context as LayerContext, Layer};
 
@@ -60,22 +62,6 @@ impl<S: tracing::Subscriber> Layer<S> for SlowViewerLayer {
 /// Writes the reports on the recorder's context.
 pub struct ViewerReports {
     channel: Option<Arc<RawChannel>>,
-}
-
-/// A JSON channel `topic` with the JSON Schema `schema` named `name` on `ctx` (`None`,
-/// and a warning, if it cannot be made: what it would carry is then not logged).
-pub fn json_channel(
-    ctx: &Arc<Context>,
-    topic: &str,
-    name: &str,
-    schema: &'static [u8],
-) -> Option<Arc<RawChannel>> {
-    ctx.channel_builder(topic)
-        .message_encoding("json")
-        .schema(Schema::new(name, "jsonschema", schema))
-        .build_raw()
-        .map_err(|e| tracing::warn!("no {topic} channel: {e}"))
-        .ok()
 }
 
 impl ViewerReports {

@@ -1,3 +1,4 @@
+mod controller_commands;
 mod controllers;
 mod lifecycle;
 mod methods;
