@@ -68,6 +68,9 @@ enum Cmd {
         #[arg(long)]
         config: Option<String>,
     },
+    /// Take the drive from the operator who holds it (one operator drives at a time; a
+    /// one-shot command holds it only while it runs, so this frees it).
+    TakeOver,
     /// Freeze the joints where they are.
     Hold,
     /// Stop driving the joints.
@@ -101,6 +104,16 @@ enum GaitCmd {
     List,
     /// Blend into gait NAME.
     Set { name: String },
+    /// A controlled stop: the body at rest within S seconds, whatever the blend time.
+    Stop {
+        #[arg(long, value_name = "S")]
+        within: Option<f64>,
+    },
+    /// The stopped gait moves again, at full speed within S seconds.
+    Resume {
+        #[arg(long, value_name = "S")]
+        within: Option<f64>,
+    },
 }
 
 #[derive(Subcommand, Debug)]
@@ -251,6 +264,13 @@ fn request(cmd: &Cmd) -> Result<(&str, Option<Value>), Failure> {
         Cmd::Gait {
             cmd: GaitCmd::Set { name },
         } => ("gait.set", Some(json!({ "gait": name }))),
+        Cmd::Gait {
+            cmd: GaitCmd::Stop { within },
+        } => ("gait.stop", within.map(|s| json!({ "within_s": s }))),
+        Cmd::Gait {
+            cmd: GaitCmd::Resume { within },
+        } => ("gait.resume", within.map(|s| json!({ "within_s": s }))),
+        Cmd::TakeOver => ("take_over", None),
         Cmd::Params {
             cmd: ParamsCmd::Get { gait },
         } => ("params.get", gait.as_ref().map(|g| json!({ "gait": g }))),
@@ -390,6 +410,13 @@ fn print_human(cmd: &Cmd, r: &Value) {
                 println!("{}", line.trim_end());
             }
         }
+        Cmd::Gait {
+            cmd: GaitCmd::Stop { .. } | GaitCmd::Resume { .. },
+        } => println!(
+            "gait: {} within {} s",
+            text(&r["motion"]),
+            text(&r["within_s"])
+        ),
         Cmd::Gait { .. } => println!("gait: blending into {}", text(&r["gait"])),
         Cmd::Params {
             cmd: ParamsCmd::Get { .. },

@@ -16,5 +16,5 @@ pub use params::{
     Field, GaitKind, GaitParams, GaitTable, JOINT_LIMIT_RAD, ParamError, ParamPatch,
     SEA_MAX_JOINT_SPEED_RAD_S, SEA_MODULE_LENGTH_M,
 };
-pub use selector::{BLEND_TIME_RANGE_S, DEFAULT_BLEND_TIME_S, GaitSelector};
+pub use selector::{BLEND_TIME_RANGE_S, DEFAULT_BLEND_TIME_S, GaitSelector, smoothstep};
 pub use serpenoid::{Serpenoid, Wave, helix_wave};

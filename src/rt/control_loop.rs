@@ -17,13 +17,14 @@ use crate::navigation::progress::{ProgressMonitor, ProgressReport};
 use crate::navigation::state::NavigatorState;
 use crate::navigation::stuck::StuckConfig;
 use crate::rt::controller_slots::{ControllerSlots, Installed};
+use crate::rt::gait_clock::{DEFAULT_STOP_S, GaitClock, STOP_TIME_RANGE_S};
 use crate::rt::messages::{Ack, Envelope, LoopRequest, Refusal, Rejection};
 use crate::rt::observer::CycleObserver;
 use crate::rt::pacer::{Cycle, Pacer};
 use crate::rt::setpoint_guard::{NonFiniteSetpoint, SetpointGuard};
 use crate::rt::stats::{LoopStats, StatsReport};
 use crate::rt::telemetry::TelemetryWriter;
-use crate::safety::failsafe::{Event, Failsafe, Health, Mode, Output};
+use crate::safety::failsafe::{Event, Failsafe, Mode, Output};
 
 /// Requests applied per cycle at most, so a flood cannot stretch a cycle.
 pub const MAX_REQUESTS_PER_CYCLE: usize = 8;
@@ -88,6 +89,8 @@ pub struct ControlLoop {
     /// What the navigator does, as its runner last said.
     navigator: NavigatorState,
     slots: ControllerSlots,
+    /// The gait side's time: the loop's, but for controlled stops.
+    clock: GaitClock,
     guard: SetpointGuard,
     observer: Option<Box<dyn CycleObserver>>,
     held: Vec<f64>,
@@ -126,6 +129,7 @@ impl ControlLoop {
             progress: ProgressMonitor::new(StuckConfig::DEFAULT, n),
             navigator: NavigatorState::OFF,
             slots,
+            clock: GaitClock::new(),
             guard,
             observer,
             held: vec![0.0; n],
@@ -201,6 +205,11 @@ impl ControlLoop {
         self.navigator
     }
 
+    /// The gait clock (controlled stops).
+    pub fn gait_clock(&self) -> &GaitClock {
+        &self.clock
+    }
+
     /// The controller slots (which one drives, its last report).
     pub fn controllers(&self) -> &ControllerSlots {
         &self.slots
@@ -212,6 +221,8 @@ impl ControlLoop {
         let started_ns = self.p.pacer.elapsed_ns();
         let now_s = c.clock_ns as f64 * 1e-9;
         let t_s = c.t_ns as f64 * 1e-9;
+        // The gait side's time this cycle (the loop's unless a controlled stop ran).
+        let tau = self.clock.advance(t_s);
 
         // Read.
         let wait = self.p.pacer.feedback_wait(c, self.last_module_time_us);
@@ -235,7 +246,7 @@ impl ControlLoop {
                 break;
             };
             let request = env.request;
-            let result = self.apply(request, env.controller, now_s, t_s, &health);
+            let result = self.apply(request, env.controller, now_s, t_s, tau);
             if let Some(o) = self.observer.as_mut() {
                 o.request(c.t_ns, env.ticket, request, result);
             }
@@ -259,7 +270,10 @@ impl ControlLoop {
         let mut fault = None;
         let flow = match output {
             Output::Resync => {
-                self.p.selector.resync(&self.measured, t_s);
+                // From rest (the measured pose): the blend in starts at zero speed.
+                self.clock.run();
+                let tau = self.clock.advance(t_s);
+                self.p.selector.resync(&self.measured, tau);
                 self.slots.pause();
                 self.guard.forget();
                 self.p.failsafe.resynced(now_s);
@@ -267,13 +281,13 @@ impl ControlLoop {
                     let _ = self.p.failsafe.request(now_s, Event::Hold);
                     self.hold_commands();
                 } else {
-                    fault = self.run_commands(t_s, now_s);
+                    fault = self.run_commands(t_s, tau, now_s);
                 }
                 self.started = true;
                 Flow::Continue
             }
             Output::Run => {
-                fault = self.run_commands(t_s, now_s);
+                fault = self.run_commands(t_s, tau, now_s);
                 Flow::Continue
             }
             Output::Hold => {
@@ -311,22 +325,30 @@ impl ControlLoop {
         flow
     }
 
+    /// Applies one request; `t_s` is the loop's time, `tau` the gait clock's.
     fn apply(
         &mut self,
         req: LoopRequest,
         controller: Option<Installed>,
         now_s: f64,
         t_s: f64,
-        _health: &Health,
+        tau: f64,
     ) -> Result<(), Rejection> {
+        // E-stop freezes intent: what would run after `arm` changes only before the stop.
+        if self.p.failsafe.mode() == Mode::EStop && !allowed_while_estopped(&req) {
+            if let Some(c) = controller {
+                self.slots.refuse(c);
+            }
+            return Err(Rejection::Failsafe(Refusal::EStopLatched));
+        }
         match req {
             LoopRequest::SetParams { gait: kind, patch } => {
-                return self.set_params(kind, &patch, controller, t_s);
+                return self.set_params(kind, &patch, controller, tau);
             }
             LoopRequest::SetController { gait: kind } => {
                 let c = controller.ok_or(Rejection::NoController)?;
                 let (selector, commanded) = (&mut self.p.selector, &self.positions);
-                self.slots.install(kind, c, selector, commanded, t_s);
+                self.slots.install(kind, c, selector, commanded, tau);
                 return Ok(());
             }
             _ => {
@@ -345,11 +367,13 @@ impl ControlLoop {
                     Mode::Running => {}
                     Mode::Hold | Mode::Limp => fs.request(now_s, Event::Arm)?,
                 }
-                self.p.selector.set_gait(kind, t_s);
+                self.p.selector.set_gait(kind, tau);
                 if self.slots.engaged().is_some_and(|g| g != kind) {
                     let (selector, commanded) = (&mut self.p.selector, &self.positions);
-                    self.slots.hand_back(selector, commanded, t_s);
+                    self.slots.hand_back(selector, commanded, tau);
                 }
+                // Asking for a gait asks for motion: a controlled stop ends.
+                self.clock.resume(t_s, DEFAULT_STOP_S);
                 Ok(())
             }
             LoopRequest::ControllerCommand {
@@ -361,6 +385,18 @@ impl ControlLoop {
                 .selector
                 .set_blend_time(s)
                 .map_err(|_| Rejection::InvalidParams),
+            LoopRequest::StopGait { within_s } | LoopRequest::ResumeGait { within_s } => {
+                let (lo, hi) = STOP_TIME_RANGE_S;
+                if !(lo..=hi).contains(&within_s) {
+                    return Err(Rejection::InvalidParams);
+                }
+                if matches!(req, LoopRequest::StopGait { .. }) {
+                    self.clock.stop(t_s, within_s);
+                } else {
+                    self.clock.resume(t_s, within_s);
+                }
+                Ok(())
+            }
             LoopRequest::Hold => Ok(fs.request(now_s, Event::Hold)?),
             LoopRequest::Limp => Ok(fs.request(now_s, Event::Limp)?),
             LoopRequest::EStop => Ok(fs.request(now_s, Event::EStop)?),
@@ -418,13 +454,19 @@ impl ControlLoop {
         Ok(())
     }
 
-    /// Runs the gait (selector, estimators, controller, guard) into the commands;
-    /// a refused non-finite set-point is returned (the loop holds instead).
-    fn run_commands(&mut self, t_s: f64, now_s: f64) -> Option<NonFiniteSetpoint> {
+    /// Runs the gait (selector, estimators, controller, guard) into the commands, the
+    /// gait side on the gait clock's `tau`; a refused non-finite set-point is returned
+    /// (the loop holds instead).
+    fn run_commands(&mut self, t_s: f64, tau: f64, now_s: f64) -> Option<NonFiniteSetpoint> {
         self.held_valid = false;
         self.p
             .selector
-            .update(t_s, &mut self.positions, &mut self.velocities);
+            .update(tau, &mut self.positions, &mut self.velocities);
+        let rate = self.clock.rate();
+        if rate != 1.0 {
+            // The selector's velocities are per unit of gait time.
+            self.velocities.iter_mut().for_each(|v| *v *= rate);
+        }
         let previous = self.body;
         let mut obs = Observation {
             position_rad: &self.measured,
@@ -439,9 +481,10 @@ impl ControlLoop {
         obs.body = &self.body;
         let drove = self
             .slots
-            .drive(t_s, &self.p.selector, &obs, &mut self.positions);
+            .drive(tau, &self.p.selector, &obs, &mut self.positions);
         let table = self.p.selector.table();
-        let steady = self.p.selector.blend_progress() >= 1.0;
+        // A stopped gait is not stuck: only full-rate cycles are measured.
+        let steady = self.p.selector.blend_progress() >= 1.0 && rate == 1.0;
         let freq = table
             .get(self.p.selector.active())
             .temporal_freq_rad_s
@@ -516,6 +559,21 @@ mod io;
 #[cfg(test)]
 #[path = "control_loop_tests.rs"]
 mod tests;
+
+/// What an e-stopped loop still takes: the stops, `arm`, shutdown and the navigator's
+/// report. Everything else would change what runs after `arm`.
+fn allowed_while_estopped(request: &LoopRequest) -> bool {
+    matches!(
+        request,
+        LoopRequest::Hold
+            | LoopRequest::Limp
+            | LoopRequest::EStop
+            | LoopRequest::Arm
+            | LoopRequest::Shutdown
+            | LoopRequest::Navigation { .. }
+            | LoopRequest::StopGait { .. }
+    )
+}
 
 /// Whether an applied request changes what the body does, so the progress monitor must
 /// measure afresh: not a new nominal heading (steering towards it changes the torques

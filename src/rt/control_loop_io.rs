@@ -107,6 +107,7 @@ impl ControlLoop {
         let record_dropped = self.observer.as_ref().map_or(0, |o| o.dropped());
         let (applied, refused, body) = (self.applied, self.refused, self.body);
         let (progress, navigator) = (self.progress.report(), self.navigator);
+        let (motion, gait_rate) = (self.clock.motion(), self.clock.rate());
         self.p.telemetry.write(|snap| {
             snap.cycle = c.index;
             snap.t_s = c.t_ns as f64 * 1e-9;
@@ -140,6 +141,8 @@ impl ControlLoop {
             snap.body = body;
             snap.progress = progress;
             snap.navigator = navigator;
+            snap.motion = motion;
+            snap.gait_rate = gait_rate;
         });
     }
 }

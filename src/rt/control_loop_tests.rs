@@ -296,3 +296,118 @@ fn the_navigator_s_report_and_a_new_heading_do_not_restart_the_progress_monitor(
     assert_eq!(request(&mut h, 3, gait), Ok(()));
     assert!(measuring(&h) < 0.01, "{}", measuring(&h));
 }
+
+fn positions(h: &Harness) -> Vec<f32> {
+    h.control
+        .commands()
+        .iter()
+        .map(|c| c.position_rad)
+        .collect()
+}
+
+#[test]
+fn a_controlled_stop_brings_every_joint_to_rest_within_its_time_whatever_the_blend() {
+    let mut h = echo_harness(
+        12,
+        None,
+        GaitKind::Rolling,
+        false,
+        FailsafeConfig::default(),
+    );
+    steps(&mut h, 2500);
+    // The slowest blend there is, and a parameter change blending in over it.
+    let long = LoopRequest::SetBlendTime { blend_time_s: 30.0 };
+    assert_eq!(request(&mut h, 1, long), Ok(()));
+    let patch = crate::gait::ParamPatch {
+        temporal_freq_rad_s: Some(3.0),
+        ..Default::default()
+    };
+    let faster = LoopRequest::SetParams {
+        gait: GaitKind::Rolling,
+        patch,
+    };
+    assert_eq!(request(&mut h, 2, faster), Ok(()));
+    steps(&mut h, 500);
+    let stop = LoopRequest::StopGait { within_s: 0.3 };
+    assert_eq!(request(&mut h, 3, stop), Ok(()));
+    let mut prev = positions(&h);
+    let mut moved_at = Vec::new();
+    for k in 1..=1000 {
+        h.control.step();
+        let now = positions(&h);
+        let step = now
+            .iter()
+            .zip(&prev)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0f32, f32::max);
+        if step > 0.0 {
+            moved_at.push(k);
+        }
+        for c in h.control.commands() {
+            assert!(c.velocity_rad_s.is_nan() || c.velocity_rad_s.abs() < 10.0);
+        }
+        prev = now;
+    }
+    let last = *moved_at.last().expect("it was moving when stopped");
+    assert!(
+        last <= 301,
+        "at rest 0.3 s after the stop, moved until cycle {last}"
+    );
+    assert!(
+        moved_at.len() > 100,
+        "it decelerates, not freezes: {moved_at:?}"
+    );
+    let snap = h.telemetry.latest();
+    assert_eq!(snap.motion, crate::rt::gait_clock::Motion::Stopped);
+    assert_eq!(
+        snap.mode,
+        Mode::Running,
+        "a stop is not a hold: no arm needed"
+    );
+    // It moves again on resume, from where it stood.
+    let resume = LoopRequest::ResumeGait { within_s: 0.3 };
+    assert_eq!(request(&mut h, 4, resume), Ok(()));
+    steps(&mut h, 400);
+    assert_ne!(positions(&h), prev, "moving again");
+    assert_eq!(
+        request(&mut h, 5, LoopRequest::StopGait { within_s: 9.0 }),
+        Err(Rejection::InvalidParams)
+    );
+}
+
+#[test]
+fn an_estopped_loop_takes_no_change_of_what_runs_after_arm() {
+    let mut h = echo_harness(6, None, GaitKind::Rolling, false, FailsafeConfig::default());
+    steps(&mut h, 20);
+    let before = h.telemetry.latest().params;
+    assert_eq!(request(&mut h, 1, LoopRequest::EStop), Ok(()));
+    let patch = crate::gait::ParamPatch {
+        temporal_freq_rad_s: Some(0.3),
+        ..Default::default()
+    };
+    let refused = Err(Rejection::Failsafe(Refusal::EStopLatched));
+    let changes = [
+        LoopRequest::SetParams {
+            gait: GaitKind::Rolling,
+            patch,
+        },
+        LoopRequest::ControllerCommand {
+            gait: GaitKind::Rolling,
+            command: crate::controller_interface::ControllerCommand::SetHeading {
+                heading_rad: Some(1.0),
+            },
+        },
+        LoopRequest::SetBlendTime { blend_time_s: 5.0 },
+        LoopRequest::ResumeGait { within_s: 0.3 },
+    ];
+    for (k, r) in changes.into_iter().enumerate() {
+        assert_eq!(request(&mut h, 10 + k as u64, r), refused, "{r:?}");
+    }
+    assert_eq!(request(&mut h, 20, LoopRequest::Arm), Ok(()));
+    steps(&mut h, 2);
+    assert_eq!(
+        h.telemetry.latest().params,
+        before,
+        "nothing changed by the e-stop"
+    );
+}

@@ -30,6 +30,12 @@ pub enum LoopRequest {
     },
     /// Change the gait blend time, s.
     SetBlendTime { blend_time_s: f64 },
+    /// A controlled stop: the gait (selector, blends, the driving controller) comes to
+    /// rest within this long, s, whatever the blend time, and stands still until
+    /// `ResumeGait` (`rt::gait_clock`).
+    StopGait { within_s: f64 },
+    /// The gait moves again, back to full rate within this long, s.
+    ResumeGait { within_s: f64 },
     /// Freeze the set-points where they are.
     Hold,
     /// Stop driving the joints.

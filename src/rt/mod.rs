@@ -4,6 +4,7 @@
 pub mod channels;
 pub mod control_loop;
 pub mod controller_slots;
+pub mod gait_clock;
 pub mod harness;
 pub mod messages;
 pub mod observer;

@@ -56,6 +56,10 @@ pub struct Snapshot {
     pub progress: crate::navigation::progress::ProgressReport,
     /// What the navigator does (issue 28).
     pub navigator: crate::navigation::state::NavigatorState,
+    /// Whether the gait moves or a controlled stop holds it (`rt::gait_clock`), and the
+    /// gait clock's rate, 0..1.
+    pub motion: crate::rt::gait_clock::Motion,
+    pub gait_rate: f64,
 }
 
 impl Snapshot {
@@ -80,6 +84,8 @@ impl Snapshot {
             body: crate::controller_interface::BodyEstimate::default(),
             progress: crate::navigation::progress::ProgressReport::default(),
             navigator: crate::navigation::state::NavigatorState::OFF,
+            motion: crate::rt::gait_clock::Motion::Running,
+            gait_rate: 1.0,
         }
     }
 }

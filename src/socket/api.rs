@@ -36,6 +36,9 @@ pub mod code {
     /// A TCP client called a method before authenticating (`auth`), or with a wrong
     /// token.
     pub const UNAUTHORIZED: i64 = -32005;
+    /// Another client drives (`socket::driver`): a driving request is refused until
+    /// it stops, leaves or lapses, or this client calls `take_over`.
+    pub const DRIVEN_BY_OTHER: i64 = -32006;
 }
 
 /// An error answer: `{"code": .., "message": ".."}`.

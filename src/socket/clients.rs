@@ -28,6 +28,11 @@ pub(crate) struct Client {
 }
 
 impl Client {
+    /// The connection's number (never reused while the server runs).
+    pub(crate) fn id(&self) -> u64 {
+        self.id
+    }
+
     /// A request arrived (or was answered).
     pub(crate) fn touch(&self) {
         let ms = self.epoch.elapsed().as_millis() as u64;

@@ -51,7 +51,11 @@ pub(crate) async fn serve<S>(
     let (out, out_rx) = mpsc::channel::<String>(OUT_QUEUE);
     let writer = tokio::spawn(write_lines(write_half, out_rx));
     let mut reader = LineReader::new(read_half, shared.max_line_bytes);
-    let mut session = Session::new(out, closing);
+    let who = match transport {
+        super::server::Transport::Unix => format!("unix client {}", client.id()),
+        super::server::Transport::Tcp => format!("tcp client {}", client.id()),
+    };
+    let mut session = Session::new(out, closing, who);
     session.set_authorized(transport == super::server::Transport::Unix);
     loop {
         let idle = shared.idle_timeout.filter(|_| !session.subscribed());
@@ -106,6 +110,9 @@ pub(crate) async fn serve<S>(
         if session.send(answer).await.is_err() {
             break; // The writer stopped: the peer is gone.
         }
+        if session.failed_auths >= methods::MAX_FAILED_AUTHS {
+            break; // Told so in the answer.
+        }
         session
             .start_pending(&shared.telemetry, &shared.catalog)
             .await;
@@ -113,6 +120,8 @@ pub(crate) async fn serve<S>(
         client.touch();
     }
     session.unsubscribe().await;
+    // A driver that goes away no longer drives.
+    shared.driver.release(session.who());
     drop(session); // Closes the queue: the writer flushes what is left and ends.
     let _ = writer.await;
 }
@@ -157,7 +166,7 @@ pub(crate) async fn serve_over_limit<S>(
             Err(bad) => api::error_line(&bad.id, &bad.error),
             Ok(req) if STOP_METHODS.contains(&req.method.as_str()) => {
                 let (out, _unused) = mpsc::channel::<String>(1);
-                let mut session = Session::new(out, closing);
+                let mut session = Session::new(out, closing, "unix client over the limit".into());
                 session.set_authorized(true); // Unix only: see `server::admit`.
                 match methods::dispatch(&shared, &mut session, &req.method, req.params).await {
                     Ok(result) => api::result_line(&req.id, &result),

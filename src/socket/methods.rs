@@ -6,20 +6,25 @@ use serde_json::{Value, json};
 
 use super::api::{PATCH_FIELDS, Params, RpcError, code};
 use super::controllers;
+use super::driver;
 use super::navigate;
 use super::session::Session;
 use super::shared::Shared;
 use super::views;
 use crate::controller_interface::Selection;
 use crate::gait::{GaitKind, ParamPatch};
+use crate::rt::gait_clock::{DEFAULT_STOP_S, STOP_TIME_RANGE_S};
 use crate::rt::messages::LoopRequest;
 
 /// Every method the server knows (listed in the unknown-method error).
-pub const METHODS: [&str; 20] = [
+pub const METHODS: [&str; 23] = [
     "auth",
     "status",
     "gait.list",
     "gait.set",
+    "gait.stop",
+    "gait.resume",
+    "take_over",
     "params.get",
     "params.set",
     "controller.list",
@@ -56,37 +61,53 @@ pub(crate) async fn dispatch(
             "unauthorized: a TCP client sends `auth` with the token first",
         ));
     }
+    let now = std::time::Instant::now();
+    if driver::DRIVING.contains(&method) {
+        shared.driver.claim(session.who(), now)?;
+    }
     if navigate::TAKES_OVER.contains(&method) {
         navigate::operator_takes_over(shared);
     }
+    if driver::STOPPING.contains(&method) {
+        // Whoever stops the robot frees the drive; the stop itself is never refused.
+        shared.driver.stopped();
+    }
     match method {
-        "auth" => {
-            let token = p.take_str("token")?.ok_or_else(|| missing("token"))?;
-            p.finish(&["token"])?;
-            let ok = shared.tcp_token.as_deref().is_some_and(|t| {
-                use subtle::ConstantTimeEq;
-                bool::from(t.as_bytes().ct_eq(token.as_bytes()))
-            });
-            if !ok && !session.authorized() {
-                return Err(RpcError::new(
-                    code::UNAUTHORIZED,
-                    "unauthorized: wrong token",
-                ));
-            }
-            session.set_authorized(true);
-            Ok(json!({ "authorized": true }))
-        }
+        "auth" => auth(shared, session, p).await,
         "ping" => {
             p.finish(&[])?;
             Ok(json!({ "pong": true }))
         }
         "status" => {
             p.finish(&[])?;
-            Ok(views::status(
-                &shared.telemetry.latest(),
-                &shared.info,
-                &shared.catalog,
-            ))
+            let mut v = views::status(&shared.telemetry.latest(), &shared.info, &shared.catalog);
+            v["driver"] = views::driver(shared.driver.driver(now).as_ref());
+            Ok(v)
+        }
+        "gait.stop" | "gait.resume" => {
+            let (min, max) = STOP_TIME_RANGE_S;
+            let within_s = p
+                .take_f64_in("within_s", min, max)?
+                .unwrap_or(DEFAULT_STOP_S);
+            p.finish(&["within_s"])?;
+            let request = if method == "gait.stop" {
+                LoopRequest::StopGait { within_s }
+            } else {
+                LoopRequest::ResumeGait { within_s }
+            };
+            shared.router.call(request).await?;
+            Ok(
+                json!({ "motion": if method == "gait.stop" { "stopping" } else { "starting" }, "within_s": within_s }),
+            )
+        }
+        "take_over" => {
+            p.finish(&[])?;
+            let from = shared.driver.take_over(session.who(), now);
+            if let Some(from) = &from {
+                tracing::warn!("{} took the drive over from {from}", session.who());
+            }
+            navigate::operator_takes_over(shared);
+            Ok(json!({ "driver": session.who(), "taken_from": from }))
         }
         "gait.list" => {
             p.finish(&[])?;
@@ -200,6 +221,39 @@ pub fn controller_set_params(mut p: Params) -> Result<(GaitKind, Selection), Rpc
         config,
     };
     Ok((gait, sel))
+}
+
+/// A wrong token is answered after this long, and the connection closed after
+/// [`MAX_FAILED_AUTHS`] of them: guessing costs a connection a second a try.
+pub const AUTH_FAILURE_DELAY: std::time::Duration = std::time::Duration::from_secs(1);
+pub const MAX_FAILED_AUTHS: u32 = 3;
+
+async fn auth(shared: &Shared, session: &mut Session, mut p: Params) -> Result<Value, RpcError> {
+    let token = p.take_str("token")?.ok_or_else(|| missing("token"))?;
+    p.finish(&["token"])?;
+    let ok = shared.tcp_token.as_deref().is_some_and(|t| {
+        use subtle::ConstantTimeEq;
+        bool::from(t.as_bytes().ct_eq(token.as_bytes()))
+    });
+    if !ok && !session.authorized() {
+        session.failed_auths += 1;
+        tracing::warn!(
+            "{}: wrong token ({} of {MAX_FAILED_AUTHS})",
+            session.who(),
+            session.failed_auths
+        );
+        tokio::time::sleep(AUTH_FAILURE_DELAY).await;
+        return Err(RpcError::new(
+            code::UNAUTHORIZED,
+            if session.failed_auths >= MAX_FAILED_AUTHS {
+                "unauthorized: wrong token; too many wrong tokens, closing"
+            } else {
+                "unauthorized: wrong token"
+            },
+        ));
+    }
+    session.set_authorized(true);
+    Ok(json!({ "authorized": true }))
 }
 
 fn missing(field: &str) -> RpcError {

@@ -27,6 +27,7 @@ pub mod client;
 mod clients;
 mod conn;
 mod controllers;
+pub mod driver;
 mod lines;
 mod methods;
 mod navigate;
@@ -78,6 +79,9 @@ pub struct ServerConfig {
     /// The token a TCP client must send with `auth` before any other method; required
     /// when `tcp_port` is set.
     pub tcp_token: Option<String>,
+    /// A driver that sends no driving request for this long no longer holds the drive
+    /// (`socket::driver`).
+    pub driver_timeout: Duration,
 }
 
 impl Default for ServerConfig {
@@ -91,6 +95,7 @@ impl Default for ServerConfig {
             socket_mode: 0o660,
             idle_timeout: Some(Duration::from_secs(300)),
             tcp_token: None,
+            driver_timeout: driver::DEFAULT_DRIVER_TIMEOUT,
         }
     }
 }

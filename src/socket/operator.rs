@@ -29,9 +29,10 @@ impl SocketOperator {
 }
 
 impl Operator for SocketOperator {
-    fn call(&self, method: &str, params: Value) -> CallFuture {
+    fn call(&self, who: &str, method: &str, params: Value) -> CallFuture {
         let shared = self.shared.clone();
         let method = method.to_owned();
+        let who = who.to_owned();
         let task = self.runtime.spawn(async move {
             if CONNECTION_ONLY.contains(&method.as_str()) {
                 return Err(super::api::RpcError::new(
@@ -44,7 +45,7 @@ impl Operator for SocketOperator {
             // told of closing (the runtime's shutdown ends the call).
             let (out, _lines) = mpsc::channel(1);
             let (_closing_tx, closing) = watch::channel(false);
-            let mut session = Session::new(out, closing);
+            let mut session = Session::new(out, closing, who);
             session.set_authorized(true);
             methods::dispatch(&shared, &mut session, &method, p).await
         });
@@ -60,5 +61,15 @@ impl Operator for SocketOperator {
                 }),
             }
         })
+    }
+
+    fn claim_drive(&self, who: &str) -> Result<(), CallError> {
+        self.shared
+            .driver
+            .claim(who, std::time::Instant::now())
+            .map_err(|e| CallError {
+                code: e.code,
+                message: e.message,
+            })
     }
 }

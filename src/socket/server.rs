@@ -179,6 +179,7 @@ pub fn start(cfg: ServerConfig, handle: LoopHandle) -> Result<RunningServer, Ser
         catalog: handle.catalog,
         controller_change: tokio::sync::Mutex::new(()),
         navigation: Default::default(),
+        driver: super::driver::DriverLease::new(cfg.driver_timeout),
     });
     let clients = Clients::new(cfg.max_clients);
     let (closing_tx, closing) = tokio::sync::watch::channel(false);

@@ -25,11 +25,21 @@ pub(crate) struct Session {
     /// True once the server shuts down. Held while the connection lives: the server
     /// waits for every holder to go before it drops the connections.
     closing: watch::Receiver<bool>,
+    /// Who this is, as the drive lease and the logs name it ("unix client 3").
+    who: String,
+    /// Wrong tokens sent so far (`auth`).
+    pub(crate) failed_auths: u32,
 }
 
 impl Session {
-    pub(crate) fn new(out: mpsc::Sender<String>, closing: watch::Receiver<bool>) -> Self {
+    pub(crate) fn new(
+        out: mpsc::Sender<String>,
+        closing: watch::Receiver<bool>,
+        who: String,
+    ) -> Self {
         Self {
+            who,
+            failed_auths: 0,
             out,
             stream: None,
             pending_rate_hz: None,
@@ -44,6 +54,10 @@ impl Session {
         let mut rx = self.closing.clone();
         // An error: the server is gone, which is closing too.
         let _ = rx.wait_for(|closing| *closing).await;
+    }
+
+    pub(crate) fn who(&self) -> &str {
+        &self.who
     }
 
     pub(crate) fn authorized(&self) -> bool {

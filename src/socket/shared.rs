@@ -26,6 +26,8 @@ pub(crate) struct Shared {
     /// Held by a controller change from reading what is installed to the loop's ack,
     /// so each change builds on what the previous one left.
     pub(crate) controller_change: tokio::sync::Mutex<()>,
+    /// Who drives (one operator at a time).
+    pub(crate) driver: super::driver::DriverLease,
     /// The navigator's task while it runs (`navigate`).
     pub(crate) navigation: super::navigate::Navigation,
 }

@@ -17,6 +17,7 @@ pub(crate) fn status(s: &Snapshot, info: &DaemonInfo, catalog: &Catalog) -> Valu
         "gait": s.gait,
         "blend_progress": s.blend_progress,
         "blend_time_s": s.blend_time_s,
+        "motion": motion_view(s),
         "t_s": s.t_s,
         "cycle": s.cycle,
         "modules": s.joints.len(),
@@ -30,6 +31,19 @@ pub(crate) fn status(s: &Snapshot, info: &DaemonInfo, catalog: &Catalog) -> Valu
         "guard": s.guard,
         "daemon": info,
     })
+}
+
+/// Who drives (`socket::driver`): `null` when nobody does.
+pub(crate) fn driver(d: Option<&super::driver::Driver>) -> Value {
+    match d {
+        None => Value::Null,
+        Some(d) => json!({ "client": d.who, "idle_s": d.idle_s, "expires_in_s": d.expires_in_s }),
+    }
+}
+
+/// Whether the gait moves (`gait.stop`, the dead-man's controlled stop).
+fn motion_view(s: &Snapshot) -> Value {
+    json!({ "state": s.motion, "rate": s.gait_rate })
 }
 
 /// The body estimate (docs/estimation.md): its frame and heading while valid; only
@@ -122,6 +136,7 @@ pub(crate) fn telemetry(s: &Snapshot, catalog: &Catalog) -> Value {
         "reason": s.reason,
         "gait": s.gait,
         "blend_progress": s.blend_progress,
+        "motion": motion_view(s),
         "joints": s.joints,
         "controller": telemetry_view(&s.controller, catalog),
         "body": body_view(&s.body),

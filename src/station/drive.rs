@@ -1,8 +1,10 @@
 //! The teleop channel's worker: twists from authorised clients, in order, become the
 //! active gait's speed and steering ([`super::teleop`]); every 50 ms the dead-man looks
 //! at how old the last twist is. It runs as one task on the live view's runtime; the
-//! WebSocket callbacks only parse and queue (a full queue drops the twist: the next
-//! one says the same).
+//! WebSocket callbacks only parse, check and queue (a full queue drops the twist: the
+//! next one says the same). One operator drives at a time (`socket::driver`): a twist
+//! from a client while another drives is refused with a status, and never feeds the
+//! driver's dead-man; the dead-man stops only while its client still drives.
 
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -22,8 +24,15 @@ const TICK: Duration = Duration::from_millis(50);
 
 /// A twist from a client.
 struct Sent {
-    client: u32,
+    client: Client,
     twist: Twist,
+}
+
+/// The name the worker's own reads go by.
+const STATION: &str = "station";
+
+fn teleop_status(client: &Client, message: String) {
+    client.send_status(Status::error(message).with_id("snaked.teleop"));
 }
 
 /// The WebSocket side of the teleop channel.
@@ -51,21 +60,28 @@ impl Drive {
         }
         let id = u32::from(client.id());
         if !self.operating.access.may_operate(id) {
-            client.send_status(
-                Status::error("teleop refused: call the `auth` service with the token first")
-                    .with_id("snaked.teleop"),
+            teleop_status(
+                client,
+                "teleop refused: call the `auth` service with the token first".into(),
             );
             return;
         }
-        match Twist::parse(payload) {
-            Ok(twist) => {
-                // Full: the worker is behind; the next twist says the same.
-                let _ = self.tx.try_send(Sent { client: id, twist });
-            }
-            Err(e) => {
-                client.send_status(Status::error(format!("teleop: {e}")).with_id("snaked.teleop"))
-            }
+        let twist = match Twist::parse(payload) {
+            Ok(twist) => twist,
+            Err(e) => return teleop_status(client, format!("teleop: {e}")),
+        };
+        if let Err(e) = self
+            .operating
+            .station
+            .claim_drive(&Operating::client_name(id))
+        {
+            return teleop_status(client, format!("teleop {e}"));
         }
+        // Full: the worker is behind; the next twist says the same.
+        let _ = self.tx.try_send(Sent {
+            client: client.clone(),
+            twist,
+        });
     }
 }
 
@@ -74,7 +90,7 @@ impl Drive {
 /// anti-compliant sidewinding does, or its heading hold is on: `steering` 1-3), else
 /// by the gait's knob.
 async fn active_gait(op: &Operating) -> Option<(GaitKind, Steer)> {
-    let s = op.station.call("status", json!({})).await.ok()?;
+    let s = op.station.call(STATION, "status", json!({})).await.ok()?;
     let gait: GaitKind = serde_json::from_value(s.get("gait")?.clone()).ok()?;
     let signals = &s["controller"]["signals"];
     let by_heading = signals["heading_nominal_rad"].as_f64().is_some()
@@ -93,7 +109,11 @@ async fn changed_only(op: &Operating, mut r: TeleopRequest) -> Option<TeleopRequ
         return Some(r);
     }
     let gait = r.params["gait"].clone();
-    let Ok(live) = op.station.call("params.get", json!({ "gait": gait })).await else {
+    let Ok(live) = op
+        .station
+        .call(STATION, "params.get", json!({ "gait": gait }))
+        .await
+    else {
         return Some(r);
     };
     let fields = r.params.as_object_mut()?;
@@ -106,10 +126,10 @@ async fn changed_only(op: &Operating, mut r: TeleopRequest) -> Option<TeleopRequ
 
 /// A teleop session starts: the operator drives, so a navigation in progress stops
 /// (as it does before any driving request on the socket).
-async fn take_over(op: &Operating, client: u32) {
+async fn stop_navigation(op: &Operating, client: &Client) {
     let navigating = op
         .station
-        .call("status", json!({}))
+        .call(STATION, "status", json!({}))
         .await
         .is_ok_and(|s| s["navigator"]["active"] == true);
     if navigating {
@@ -117,16 +137,21 @@ async fn take_over(op: &Operating, client: u32) {
             method: "navigate",
             params: json!({ "off": true }),
         };
-        send(op, &Operating::client_name(client), &r).await;
+        let who = Operating::client_name(u32::from(client.id()));
+        send(op, &who, &r, Some(client)).await;
     }
 }
 
-async fn send(op: &Operating, who: &str, r: &TeleopRequest) -> bool {
-    let answer = op.station.call(r.method, r.params.clone()).await;
+/// Sends `r` as `who`; a refusal is logged, recorded and told to `client` (if any).
+async fn send(op: &Operating, who: &str, r: &TeleopRequest, client: Option<&Client>) -> bool {
+    let answer = op.station.call(who, r.method, r.params.clone()).await;
     let logged: Result<Value, String> = answer.clone().map_err(|e| e.to_string());
     op.actions.log(who, r.method, &r.params, &logged);
     if let Err(e) = &answer {
-        tracing::warn!("station: teleop {} refused: {e}", r.method);
+        tracing::warn!("station: {who}'s teleop {} refused: {e}", r.method);
+        if let Some(c) = client {
+            teleop_status(c, format!("teleop {} refused: {e}", r.method));
+        }
     }
     answer.is_ok()
 }
@@ -134,7 +159,7 @@ async fn send(op: &Operating, who: &str, r: &TeleopRequest) -> bool {
 async fn work(op: Arc<Operating>, mut rx: mpsc::Receiver<Sent>) {
     let t0 = Instant::now();
     let mut teleop = Teleop::default();
-    let mut last_client = 0u32;
+    let mut driver: Option<Client> = None;
     let mut gait = GaitKind::Slithering;
     let config = op.station.config.teleop.clone();
     let mut tick = tokio::time::interval(TICK);
@@ -142,9 +167,9 @@ async fn work(op: Arc<Operating>, mut rx: mpsc::Receiver<Sent>) {
         tokio::select! {
             sent = rx.recv() => {
                 let Some(Sent { client, twist }) = sent else { return };
-                last_client = client;
+                let who = Operating::client_name(u32::from(client.id()));
                 if teleop.state() != TeleopState::Driving {
-                    take_over(&op, client).await;
+                    stop_navigation(&op, &client).await;
                 }
                 let mut steer = Steer::Knob;
                 if let Some((g, s)) = active_gait(&op).await {
@@ -155,18 +180,26 @@ async fn work(op: Arc<Operating>, mut rx: mpsc::Receiver<Sent>) {
                     // A parameter change hands the joints back to the selector until
                     // its blend is done: send only what differs from what is live.
                     if let Some(r) = changed_only(&op, r).await {
-                        send(&op, &Operating::client_name(client), &r).await;
+                        send(&op, &who, &r, Some(&client)).await;
                     }
                 }
+                driver = Some(client);
             }
             _ = tick.tick() => {
                 let now = t0.elapsed().as_secs_f64();
-                if let Some(r) = teleop.tick(now, gait, &config) {
-                    let who = format!("dead-man ({})", Operating::client_name(last_client));
-                    if !send(&op, &who, &r).await && r.method == "params.set" {
-                        let hold = teleop.zero_speed_refused();
-                        send(&op, &who, &hold).await;
-                    }
+                let Some(r) = teleop.tick(now, &config) else { continue };
+                let Some(client) = &driver else { continue };
+                let name = Operating::client_name(u32::from(client.id()));
+                // The dead-man is its driver's: another operator who took the drive
+                // over is not stopped by it.
+                if r.method == "gait.stop" && op.station.claim_drive(&name).is_err() {
+                    teleop = Teleop::default();
+                    continue;
+                }
+                let who = format!("dead-man ({name})");
+                if !send(&op, &who, &r, Some(client)).await && r.method == "gait.stop" {
+                    let hold = teleop.stop_refused();
+                    send(&op, &who, &hold, Some(client)).await;
                 }
             }
         }

@@ -44,9 +44,13 @@ impl std::fmt::Display for CallError {
 pub type CallFuture = Pin<Box<dyn Future<Output = Result<Value, CallError>> + Send>>;
 
 /// Carries out a control-socket method (`method`, its `params` object) as an
-/// authorised client's request.
+/// authorised client's request, the client named `who` (the drive lease and the logs
+/// name it so: one operator drives at a time, `socket::driver`).
 pub trait Operator: Send + Sync {
-    fn call(&self, method: &str, params: Value) -> CallFuture;
+    fn call(&self, who: &str, method: &str, params: Value) -> CallFuture;
+    /// `who` is about to drive: it holds the drive or takes a free one; refused while
+    /// another operator drives.
+    fn claim_drive(&self, who: &str) -> Result<(), CallError>;
 }
 
 /// What the station needs, given to the live view: its settings and the operator,
@@ -90,6 +94,13 @@ pub const NOT_READY: i64 = -32002;
 pub const PARSE_ERROR: i64 = -32700;
 pub const INVALID_PARAMS: i64 = -32602;
 
+fn not_ready() -> CallError {
+    CallError {
+        code: NOT_READY,
+        message: "not ready: the control socket is not running yet".into(),
+    }
+}
+
 impl Station {
     pub fn new(config: StationConfig) -> Self {
         Self {
@@ -103,16 +114,19 @@ impl Station {
         let _ = self.operator.set(operator);
     }
 
-    /// Carries `method` out through the bound operator.
-    pub fn call(&self, method: &str, params: Value) -> CallFuture {
+    /// Carries `method` out through the bound operator, as `who`.
+    pub fn call(&self, who: &str, method: &str, params: Value) -> CallFuture {
         match self.operator.get() {
-            Some(op) => op.call(method, params),
-            None => Box::pin(async {
-                Err(CallError {
-                    code: NOT_READY,
-                    message: "not ready: the control socket is not running yet".into(),
-                })
-            }),
+            Some(op) => op.call(who, method, params),
+            None => Box::pin(async { Err(not_ready()) }),
+        }
+    }
+
+    /// Whether `who` may drive now (see [`Operator::claim_drive`]).
+    pub fn claim_drive(&self, who: &str) -> Result<(), CallError> {
+        match self.operator.get() {
+            Some(op) => op.claim_drive(who),
+            None => Err(not_ready()),
         }
     }
 }

@@ -36,15 +36,15 @@ struct Live {
 }
 
 async fn live(op: &Operating) -> Result<Live, CallError> {
-    let status = op.station.call("status", json!({})).await?;
+    let status = op.station.call("station", "status", json!({})).await?;
     let gait = status["gait"].as_str().unwrap_or_default().to_owned();
     let p = op
         .station
-        .call("params.get", json!({ "gait": gait }))
+        .call("station", "params.get", json!({ "gait": gait }))
         .await?;
     let c = op
         .station
-        .call("controller.get", json!({ "gait": gait }))
+        .call("station", "controller.get", json!({ "gait": gait }))
         .await?;
     Ok(Live {
         params: p["params"].as_object().cloned().unwrap_or_default(),
@@ -234,9 +234,12 @@ impl ParameterHandler for Parameters {
                     };
                     let answer = match request_for(&l, &p.name, json_of(v)) {
                         Ok((method, params)) => {
-                            let a = op.station.call(method, params.clone()).await;
+                            let a = op.station.call(&who, method, params.clone()).await;
                             let logged = a.clone().map_err(|e| e.to_string());
                             op.actions.log(&who, method, &params, &logged);
+                            if let Err(e) = &a {
+                                tracing::warn!("station: {who}'s {method} refused: {e}");
+                            }
                             a.map(drop).map_err(|e| e.to_string())
                         }
                         Err(e) => Err(e),

@@ -15,10 +15,13 @@ use super::actions::Actions;
 use super::{CallError, Station, UNAUTHORIZED};
 
 /// The services, in the order they are advertised.
-pub const SERVICES: [&str; 12] = [
+pub const SERVICES: [&str; 15] = [
     "auth",
     "status",
+    "take_over",
     "gait.set",
+    "gait.stop",
+    "gait.resume",
     "params.set",
     "controller.set",
     "controller.heading",
@@ -48,26 +51,29 @@ impl Operating {
 
     /// Carries out `method` for `client` (privilege checked), logs it, answers.
     pub async fn call(&self, client: u32, method: &str, params: Value) -> Result<Value, CallError> {
+        let name = Self::client_name(client);
         let answer = if method == "auth" {
-            self.auth(client, &params)
+            self.auth(client, &params).await
         } else if !OPEN.contains(&method) && !self.access.may_operate(client) {
             Err(CallError {
                 code: UNAUTHORIZED,
                 message: "unauthorized: call the `auth` service with the token first".into(),
             })
         } else {
-            self.station.call(method, params.clone()).await
+            self.station.call(&name, method, params.clone()).await
         };
         if method != "status" {
             let shown = if method == "auth" { json!({}) } else { params };
             let logged = answer.clone().map_err(|e| e.to_string());
-            self.actions
-                .log(&Self::client_name(client), method, &shown, &logged);
+            self.actions.log(&name, method, &shown, &logged);
+            if let Err(e) = &answer {
+                tracing::warn!("station: {name}'s {method} refused: {e}");
+            }
         }
         answer
     }
 
-    fn auth(&self, client: u32, params: &Value) -> Result<Value, CallError> {
+    async fn auth(&self, client: u32, params: &Value) -> Result<Value, CallError> {
         let bad = |message: &str| CallError {
             code: crate::station::INVALID_PARAMS,
             message: message.into(),
@@ -84,13 +90,16 @@ impl Operating {
             .get("token")
             .and_then(Value::as_str)
             .ok_or_else(|| bad("missing `token` (a string)"))?;
-        if self.access.authenticate(client, token) {
-            Ok(json!({ "authorized": true }))
-        } else {
-            Err(CallError {
-                code: UNAUTHORIZED,
-                message: "unauthorized: wrong token".into(),
-            })
+        match self.access.authenticate(client, token) {
+            Ok(()) => Ok(json!({ "authorized": true })),
+            Err(why) => {
+                // Guessing costs a client a second a try, and a few tries in all.
+                tokio::time::sleep(crate::station::access::FAILURE_DELAY).await;
+                Err(CallError {
+                    code: UNAUTHORIZED,
+                    message: format!("unauthorized: {why}"),
+                })
+            }
         }
     }
 }

@@ -4,10 +4,12 @@
 //! offset, conical sidewinding's taper), as `params.set` requests — or, where the gait's
 //! controller steers by a nominal heading (anti-compliant sidewinding), the nominal
 //! heading led `heading_lead_rad` per unit of turn ahead of the body's, as
-//! `controller.heading`; and a **dead-man**: when
-//! twists stop coming for `timeout_s` the gait goes on at zero speed, and after
-//! `hold_after_s` more the robot holds (`arm` resumes).
+//! `controller.heading`; and a **dead-man**: when twists stop coming for `timeout_s`
+//! the gait makes a controlled stop (`gait.stop`: the whole body at rest within
+//! `stop_s`, whatever the blend time), and after `hold_after_s` more the robot holds
+//! (`arm` resumes). The next twist after a stop resumes the gait (`gait.resume`).
 
+use serde::Deserialize;
 use serde_json::{Value, json};
 
 use crate::gait::GaitKind;
@@ -19,6 +21,8 @@ pub struct TeleopConfig {
     pub topic: String,
     /// Twists expire after this long, s: the gait then runs at zero speed.
     pub timeout_s: f64,
+    /// The dead-man's controlled stop brings the body to rest within this long, s.
+    pub stop_s: f64,
     /// After that, the robot holds this much later, s.
     pub hold_after_s: f64,
     /// Temporal frequency per unit of `linear.x`, rad/s.
@@ -46,6 +50,7 @@ impl Default for TeleopConfig {
         Self {
             topic: "/cmd_vel".into(),
             timeout_s: 0.5,
+            stop_s: crate::rt::gait_clock::DEFAULT_STOP_S,
             hold_after_s: 2.0,
             speed_rad_s: 1.0,
             max_speed_rad_s: 2.0,
@@ -74,6 +79,13 @@ impl TeleopConfig {
         };
         pos("timeout_s", self.timeout_s, 10.0)?;
         pos("hold_after_s", self.hold_after_s, 60.0)?;
+        let (lo, hi) = crate::rt::gait_clock::STOP_TIME_RANGE_S;
+        if !(lo..=hi).contains(&self.stop_s) {
+            return Err(format!(
+                "teleop stop_s must be in [{lo}, {hi}], not {}",
+                self.stop_s
+            ));
+        }
         pos("speed_rad_s", self.speed_rad_s, 10.0)?;
         pos("max_speed_rad_s", self.max_speed_rad_s, 10.0)?;
         pos("offset_rad", self.offset_rad, 1.0)?;
@@ -100,27 +112,53 @@ pub struct Twist {
     pub turn: f64,
 }
 
+/// `geometry_msgs/Twist` as JSON, read strictly: unknown and duplicate keys refused.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct TwistMsg {
+    linear: Option<Vector3>,
+    angular: Option<Vector3>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Vector3 {
+    x: Option<f64>,
+    y: Option<f64>,
+    z: Option<f64>,
+}
+
 impl Twist {
     /// From a JSON `geometry_msgs/Twist` (`{"linear": {"x": ..}, "angular": {"z": ..}}`;
-    /// absent members are 0). Refused: not JSON, not an object, non-finite numbers.
+    /// absent axes are 0, `y` and `z` of `linear` and `x`, `y` of `angular` are read
+    /// and ignored). Refused: not JSON, not such an object (unknown or duplicate keys,
+    /// neither `linear` nor `angular`), non-finite numbers.
     pub fn parse(payload: &[u8]) -> Result<Twist, String> {
-        let v: Value =
-            serde_json::from_slice(payload).map_err(|e| format!("a twist is JSON: {e}"))?;
-        if !v.is_object() {
-            return Err("a twist is an object {linear: {x}, angular: {z}}".into());
+        let m: TwistMsg = serde_json::from_slice(payload).map_err(|e| {
+            format!(
+                "a twist is JSON {{\"linear\": {{\"x\": ..}}, \"angular\": {{\"z\": ..}}}}: {e}"
+            )
+        })?;
+        if m.linear.is_none() && m.angular.is_none() {
+            return Err("a twist has `linear` or `angular` (or both)".into());
         }
-        let get = |part: &str, axis: &str| -> Result<f64, String> {
-            match v.get(part).and_then(|p| p.get(axis)) {
-                None | Some(Value::Null) => Ok(0.0),
-                Some(x) => x
-                    .as_f64()
-                    .filter(|x| x.is_finite())
-                    .ok_or_else(|| format!("twist {part}.{axis} must be a finite number, not {x}")),
-            }
-        };
+        let axis =
+            |v: &Option<Vector3>, part: &str, name: &str, pick: fn(&Vector3) -> Option<f64>| {
+                let x = v.as_ref().and_then(pick).unwrap_or(0.0);
+                if x.is_finite() {
+                    Ok(x)
+                } else {
+                    Err(format!("twist {part}.{name} must be a finite number"))
+                }
+            };
+        for (v, part) in [(&m.linear, "linear"), (&m.angular, "angular")] {
+            axis(v, part, "x", |v| v.x)?;
+            axis(v, part, "y", |v| v.y)?;
+            axis(v, part, "z", |v| v.z)?;
+        }
         Ok(Twist {
-            forward: get("linear", "x")?,
-            turn: get("angular", "z")?,
+            forward: axis(&m.linear, "linear", "x", |v| v.x)?,
+            turn: axis(&m.angular, "angular", "z", |v| v.z)?,
         })
     }
 }
@@ -151,7 +189,7 @@ pub enum TeleopState {
     Idle,
     /// Twists arrive.
     Driving,
-    /// They stopped: the gait runs at zero speed until the hold.
+    /// They stopped: the gait made a controlled stop and stands until the hold.
     Stopped,
 }
 
@@ -207,6 +245,14 @@ impl Teleop {
             _ => None,
         };
         self.last_twist_s = now_s;
+        let mut out = Vec::new();
+        if self.state != TeleopState::Driving {
+            // A session starts (or restarts after the dead-man): the gait moves again.
+            out.push(TeleopRequest {
+                method: "gait.resume",
+                params: json!({ "within_s": c.stop_s }),
+            });
+        }
         self.state = TeleopState::Driving;
         let speed = (twist.forward * c.speed_rad_s).clamp(-c.max_speed_rad_s, c.max_speed_rad_s);
         let mut params = json!({ "gait": gait, "temporal_freq_rad_s": speed });
@@ -233,7 +279,6 @@ impl Teleop {
             }
             None => true,
         };
-        let mut out = Vec::new();
         if fresh {
             self.sent = Some((gait, now, now_s));
             out.push(TeleopRequest {
@@ -254,17 +299,16 @@ impl Teleop {
         out
     }
 
-    /// The dead-man at `now_s`: zero speed once the twists are `timeout_s` old, hold
-    /// `hold_after_s` later.
-    pub fn tick(&mut self, now_s: f64, gait: GaitKind, c: &TeleopConfig) -> Option<TeleopRequest> {
+    /// The dead-man at `now_s`: a controlled stop (the body at rest within `stop_s`)
+    /// once the twists are `timeout_s` old, hold `hold_after_s` later.
+    pub fn tick(&mut self, now_s: f64, c: &TeleopConfig) -> Option<TeleopRequest> {
         let age = now_s - self.last_twist_s;
         match self.state {
             TeleopState::Driving if age >= c.timeout_s => {
                 self.state = TeleopState::Stopped;
-                self.sent = None;
                 Some(TeleopRequest {
-                    method: "params.set",
-                    params: json!({ "gait": gait, "temporal_freq_rad_s": 0.0 }),
+                    method: "gait.stop",
+                    params: json!({ "within_s": c.stop_s }),
                 })
             }
             TeleopState::Stopped if age >= c.timeout_s + c.hold_after_s => {
@@ -275,9 +319,8 @@ impl Teleop {
         }
     }
 
-    /// The zero-speed request was refused (a controller that cannot run at zero
-    /// speed): hold at once.
-    pub fn zero_speed_refused(&mut self) -> TeleopRequest {
+    /// The stop was refused: hold at once.
+    pub fn stop_refused(&mut self) -> TeleopRequest {
         self.state = TeleopState::Idle;
         hold()
     }

@@ -77,10 +77,11 @@ fn a_twist_sets_speed_and_steering_within_limits() {
 fn a_repeated_twist_is_resent_only_now_and_then() {
     let c = TeleopConfig::default();
     let mut t = Teleop::default();
-    assert!(
-        t.on_twist(0.0, GaitKind::Slithering, twist(1.0, 0.0), Steer::Knob, &c)
-            .len()
-            == 1
+    let first = t.on_twist(0.0, GaitKind::Slithering, twist(1.0, 0.0), Steer::Knob, &c);
+    assert_eq!(
+        first.iter().map(|r| r.method).collect::<Vec<_>>(),
+        ["gait.resume", "params.set"],
+        "a session starts by letting the gait move"
     );
     assert!(
         t.on_twist(0.2, GaitKind::Slithering, twist(1.0, 0.0), Steer::Knob, &c)
@@ -112,27 +113,35 @@ fn a_repeated_twist_is_resent_only_now_and_then() {
 fn the_dead_man_stops_then_holds_and_a_twist_drives_again() {
     let c = TeleopConfig::default();
     let mut t = Teleop::default();
-    assert_eq!(
-        t.tick(100.0, GaitKind::Slithering, &c),
-        None,
-        "never driven: nothing"
-    );
+    assert_eq!(t.tick(100.0, &c), None, "never driven: nothing");
     t.on_twist(0.0, GaitKind::Slithering, twist(1.0, 0.0), Steer::Knob, &c);
-    assert_eq!(t.tick(0.4, GaitKind::Slithering, &c), None);
-    let r = t.tick(0.5, GaitKind::Slithering, &c).unwrap();
+    assert_eq!(t.tick(0.4, &c), None);
+    let r = t.tick(0.5, &c).unwrap();
     assert_eq!(
-        (r.method, r.params["temporal_freq_rad_s"].as_f64()),
-        ("params.set", Some(0.0))
+        (r.method, r.params["within_s"].as_f64()),
+        ("gait.stop", Some(c.stop_s)),
+        "a controlled stop, not a speed change blended over the blend time"
     );
     assert_eq!(t.state(), TeleopState::Stopped);
-    assert_eq!(t.tick(2.0, GaitKind::Slithering, &c), None);
-    let r = t.tick(2.5, GaitKind::Slithering, &c).unwrap();
+    // A twist within the stop resumes at once; the speed it asks for is live.
+    let r = t.on_twist(0.6, GaitKind::Slithering, twist(1.0, 0.0), Steer::Knob, &c);
+    assert_eq!(
+        r.iter().map(|r| r.method).collect::<Vec<_>>(),
+        ["gait.resume"]
+    );
+    assert_eq!(t.tick(1.1, &c).unwrap().method, "gait.stop");
+    assert_eq!(t.tick(2.0, &c), None);
+    assert_eq!(t.tick(3.0, &c), None);
+    let r = t.tick(3.1, &c).unwrap();
     assert_eq!(r.method, "hold");
     assert_eq!(t.state(), TeleopState::Idle);
-    assert_eq!(t.tick(9.0, GaitKind::Slithering, &c), None, "holds once");
-    // A twist after the stop is sent even if equal to the last one.
-    let r = t.on_twist(10.0, GaitKind::Slithering, twist(1.0, 0.0), Steer::Knob, &c);
-    assert_eq!(r.len(), 1);
+    assert_eq!(t.tick(9.0, &c), None, "holds once");
+    assert_eq!(t.stop_refused().method, "hold");
+    let r = t.on_twist(10.0, GaitKind::Slithering, twist(0.5, 0.0), Steer::Knob, &c);
+    assert_eq!(
+        r.iter().map(|r| r.method).collect::<Vec<_>>(),
+        ["gait.resume", "params.set"]
+    );
 }
 
 #[test]
@@ -146,13 +155,14 @@ fn where_the_controller_steers_by_a_heading_the_turn_leads_it() {
         Steer::Heading(3.0),
         &c,
     );
-    assert_eq!(r.len(), 2, "{r:?}");
+    assert_eq!(r.len(), 3, "{r:?}");
+    assert_eq!(r[0].method, "gait.resume");
     assert!(
-        r[0].params.get("taper").is_none(),
+        r[1].params.get("taper").is_none(),
         "no taper: the controller steers"
     );
-    assert_eq!(r[1].method, "controller.heading");
-    let h = r[1].params["heading_rad"].as_f64().unwrap();
+    assert_eq!(r[2].method, "controller.heading");
+    let h = r[2].params["heading_rad"].as_f64().unwrap();
     assert!(
         (h - crate::num::wrap_pi(3.0 + c.heading_lead_rad)).abs() < 1e-12,
         "{h}"
@@ -196,12 +206,21 @@ fn twists_are_parsed_and_bad_ones_refused() {
     let t = Twist::parse(br#"{"linear":{"x":0.5,"y":0,"z":0},"angular":{"x":0,"y":0,"z":-1}}"#)
         .unwrap();
     assert_eq!(t, twist(0.5, -1.0));
-    assert_eq!(Twist::parse(b"{}").unwrap(), twist(0.0, 0.0));
+    assert_eq!(
+        Twist::parse(br#"{"linear":{"x":0.2}}"#).unwrap(),
+        twist(0.2, 0.0)
+    );
     for bad in [
         &b"nope"[..],
         b"[1]",
+        b"{}",
+        br#"{"linear":"x"}"#,
         br#"{"linear":{"x":"fast"}}"#,
         br#"{"linear":{"x":1e999}}"#,
+        br#"{"linear":{"x":1},"linear":{"x":-1}}"#,
+        br#"{"linear":{"x":1,"x":-1}}"#,
+        br#"{"linear":{"x":1},"angle":{"z":1}}"#,
+        br#"{"linear":{"w":1}}"#,
     ] {
         assert!(
             Twist::parse(bad).is_err(),

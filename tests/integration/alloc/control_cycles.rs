@@ -46,6 +46,8 @@ fn control_cycles_allocate_nothing() {
                 ..Default::default()
             },
         },
+        LoopRequest::StopGait { within_s: 0.3 },
+        LoopRequest::ResumeGait { within_s: 0.3 },
         LoopRequest::Hold,
         LoopRequest::Arm,
         LoopRequest::SetGait {
@@ -129,6 +131,12 @@ fn every_registered_controller_in_the_loop_allocates_nothing() {
                 calls += allocator_calls(|| {
                     send(&mut h, LoopRequest::SetController { gait }, Some(c));
                     steps(&mut h, 4500);
+                    // A controlled stop and a restart: the controller keeps driving
+                    // through ticks of (nearly) no time, its set-points finite.
+                    send(&mut h, LoopRequest::StopGait { within_s: 0.3 }, None);
+                    steps(&mut h, 500);
+                    send(&mut h, LoopRequest::ResumeGait { within_s: 0.3 }, None);
+                    steps(&mut h, 500);
                     if compliant && *preset == "a_ws_omega" {
                         send(
                             &mut h,

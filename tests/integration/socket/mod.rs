@@ -1,5 +1,6 @@
 mod controller_commands;
 mod controllers;
+mod drivers;
 mod lifecycle;
 mod methods;
 mod navigate;

@@ -125,6 +125,8 @@ fn apply(s: &mut Snapshot, r: &LoopRequest) {
         LoopRequest::Arm => s.mode = Mode::Running,
         LoopRequest::SetController { .. } | LoopRequest::ControllerCommand { .. } => {}
         LoopRequest::Navigation { state } => s.navigator = state,
+        LoopRequest::StopGait { .. } => s.motion = snaked::rt::gait_clock::Motion::Stopped,
+        LoopRequest::ResumeGait { .. } => s.motion = snaked::rt::gait_clock::Motion::Running,
     }
     s.reason = Reason::Operator;
 }

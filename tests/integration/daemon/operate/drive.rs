@@ -31,17 +31,19 @@ fn foxglove_drives_the_robot_and_the_dead_man_stops_then_holds_it() {
             fx.services
         );
     }
-    // A service answers what the socket answers, results and errors alike.
+    // A service answers what the socket answers, results and errors alike (each
+    // socket connection drives only while connected: one operator at a time).
+    let via_sock = d.once().call("gait.set", json!({"gait": "slithering"}));
     let via_fox = fx
         .call("gait.set", json!({"gait": "slithering"}))
         .expect("gait.set");
-    assert_eq!(
-        via_fox,
-        d.sock.call("gait.set", json!({"gait": "slithering"}))
-    );
+    assert_eq!(via_fox, via_sock);
     let bad = json!({"gait": "slithering", "amplitude_lat_rad": 99.0});
     let fox_err = fx.call("params.set", bad.clone()).expect_err("refused");
-    let sock_err = d.sock.call_raw("params.set", bad);
+    let mut other = d.once();
+    other.call("take_over", json!({}));
+    let sock_err = other.call_raw("params.set", bad);
+    drop(other);
     let msg = sock_err["error"]["message"].as_str().expect("an error");
     assert!(
         fox_err.contains(msg),
@@ -69,8 +71,8 @@ fn foxglove_drives_the_robot_and_the_dead_man_stops_then_holds_it() {
     );
     assert_eq!(d.sock.call("status", json!({}))["mode"], "running");
 
-    // The dead-man: the twists stop; the gait goes to zero speed (or, where the
-    // controller refuses it, straight to the hold), then the robot holds.
+    // The dead-man: the twists stop; the gait makes a controlled stop, then the robot
+    // holds.
     let stopped = Instant::now();
     let s = d
         .sock
@@ -82,10 +84,9 @@ fn foxglove_drives_the_robot_and_the_dead_man_stops_then_holds_it() {
         after >= 0.5,
         "not before the twists expired: {after} s ({s})"
     );
-    assert_eq!(
-        slithering_speed(&mut d.sock),
-        0.0,
-        "zero speed before the hold"
+    assert!(
+        (slithering_speed(&mut d.sock) - 0.8).abs() < 1e-9,
+        "the speed asked for stays: the stop stopped the gait, not its parameters"
     );
     // E-stop from Foxglove, and arming again.
     fx.call("estop", json!({})).expect("estop");
@@ -204,10 +205,11 @@ fn teleop_turns_a_slithering_controllers_held_heading_instead_of_fighting_it() {
         },
     );
     // Holding a heading: the controller steers by it, so teleop's turn moves it.
-    d.sock.call(
+    fx.call(
         "controller.heading",
         json!({"gait": "slithering", "here": true}),
-    );
+    )
+    .expect("controller.heading");
     d.sock.wait_status(Duration::from_secs(10), "holding", |s| {
         s["controller"]["signals"]["steering"]
             .as_f64()
@@ -244,7 +246,9 @@ fn teleop_takes_over_from_the_navigator() {
         .wait_status(Duration::from_secs(20), "a valid estimate", |s| {
             s["body"]["valid"] == true
         });
-    d.sock.call("navigate", json!({"heading_rad": 0.0}));
+    // A one-off navigate (as `snakectl navigate` is): its connection drives only while
+    // it is open.
+    d.once().call("navigate", json!({"heading_rad": 0.0}));
     d.sock
         .wait_status(Duration::from_secs(10), "navigating", |s| {
             s["navigator"]["active"] == true

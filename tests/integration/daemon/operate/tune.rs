@@ -10,7 +10,7 @@ use serde_json::{Value, json};
 fn the_parameters_panel_reads_live_values_and_sets_them_with_the_sockets_checks() {
     let mut d = daemon("");
     let mut fx = FoxgloveClient::connect(d.fox, Duration::from_secs(30));
-    d.sock.call("gait.set", json!({"gait": "slithering"}));
+    d.once().call("gait.set", json!({"gait": "slithering"}));
     // The robot's model is served as an asset: a URDF of the 18 modules.
     let urdf = fx
         .fetch_asset(snaked::record::urdf::URDF_URI)
@@ -28,12 +28,16 @@ fn the_parameters_panel_reads_live_values_and_sets_them_with_the_sockets_checks(
     let now = fx.set_parameters(&[("params.temporal_freq_rad_s", json!(0.6))]);
     assert_eq!(now["params.temporal_freq_rad_s"], json!(0.6));
     assert_eq!(slithering_speed(&mut d.sock), 0.6, "set through params.set");
-    // A change made elsewhere (snakectl) reaches a panel that subscribed to updates.
+    // A change made elsewhere (snakectl, taking the drive over from the panel's
+    // client) reaches a panel that subscribed to updates.
     fx.subscribe_parameters(&["params.temporal_freq_rad_s"]);
-    d.sock.call(
+    let mut snakectl = d.once();
+    snakectl.call("take_over", json!({}));
+    snakectl.call(
         "params.set",
         json!({"gait": "slithering", "temporal_freq_rad_s": 0.7}),
     );
+    drop(snakectl);
     assert!(
         fx.wait_parameter("params.temporal_freq_rad_s", Duration::from_secs(10), |v| v
             == &json!(0.7)),
