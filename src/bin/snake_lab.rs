@@ -9,7 +9,7 @@ use std::process::ExitCode;
 use clap::{Arg, ArgAction, Command};
 use snaked::lab::LabError;
 use snaked::lab::cli::command_line;
-use snaked::lab::registry::{EXPERIMENTS, find};
+use snaked::lab::registry::{EXPERIMENTS, describe, find};
 use snaked::lab::shard;
 
 fn cli() -> Command {
@@ -19,7 +19,7 @@ fn cli() -> Command {
         .subcommand_required(true)
         .arg_required_else_help(true)
         .subcommand(Command::new("list").about(
-            "List every experiment and the controllers it compares by default, in report order.",
+            "List every experiment, the controllers it compares by default (in report order) and what else it can run.",
         ))
         .subcommand(
             Command::new("merge")
@@ -38,6 +38,16 @@ fn cli() -> Command {
                         .value_name("DIR")
                         .value_parser(clap::value_parser!(PathBuf))
                         .help("Output directory (default: the first directory given)"),
+                )
+                .arg(
+                    Arg::new("expect")
+                        .long("expect")
+                        .value_name("N")
+                        .value_parser(clap::builder::RangedU64ValueParser::<usize>::new().range(1..))
+                        .help(
+                            "The run's shard count: shards of another count are refused, and \
+                             the missing ones are named even when no file is there",
+                        ),
                 )
                 .arg(
                     Arg::new("quiet")
@@ -88,14 +98,11 @@ fn main() -> ExitCode {
     }
 }
 
-/// Every experiment: its name and summary, then its controllers one per line.
+/// Every experiment: its name and summary, its default controllers, what else it can
+/// run (`lab::registry::describe`).
 fn list() {
     for e in EXPERIMENTS {
-        println!("{}: {}", e.name(), e.summary());
-        for c in e.controllers() {
-            println!("{c}");
-        }
-        println!();
+        println!("{}", describe(*e));
     }
 }
 
@@ -104,12 +111,13 @@ fn merge(m: &clap::ArgMatches) -> Result<(), LabError> {
         .get_many::<PathBuf>("shards")
         .map(|v| v.cloned().collect())
         .unwrap_or_default();
-    let files = shard::find(&given)?;
+    let expect = m.get_one::<usize>("expect").copied();
+    let files = shard::find(&given, expect)?;
     let heads = files
         .iter()
         .map(|p| Ok((p.clone(), shard::read_head(p)?)))
         .collect::<Result<Vec<_>, LabError>>()?;
-    shard::check_complete(&heads)?;
+    shard::check_complete(&heads, expect)?;
     let experiment = &heads[0].1.experiment;
     let lab = find(experiment).ok_or_else(|| {
         LabError::BadValue(format!(

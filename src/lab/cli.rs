@@ -5,6 +5,7 @@
 
 use std::path::{Path, PathBuf};
 
+use clap::parser::ValueSource;
 use clap::{Args, FromArgMatches};
 
 use super::LabError;
@@ -14,7 +15,7 @@ use super::layout::Layout;
 use super::report::{SummaryContext, write_report};
 use super::runner::{RunOptions, Setup, plan_fingerprint, run_share};
 use super::shard::{self, Shard, ShardFile, ShardHead};
-use super::trial::{TrialConfig, nominal_gaits};
+use super::trial::{TrialConfig, patch_nominal, patch_nominal_json};
 use crate::emu::servo::PositionLoop;
 use crate::gait::GaitKind;
 
@@ -83,6 +84,12 @@ pub trait Lab: Sync {
     fn name(&self) -> &'static str;
     fn summary(&self) -> &'static str;
     fn controllers(&self) -> &'static [&'static str];
+    /// The gait its controllers run (a controller name resolves in it first).
+    fn gait(&self) -> GaitKind;
+    /// Whether it compares gaits (any gait's controllers and the navigator).
+    fn any_gait(&self) -> bool;
+    /// The controller a `--variant` overrides unless its JSON names another.
+    fn variant_base(&self) -> &'static str;
     /// Its subcommand: the common options and its own, with its defaults.
     fn command(&self) -> clap::Command;
     /// Runs it as `matches` (of [`Lab::command`]) ask; `command` is the command line as
@@ -105,6 +112,15 @@ impl<E: Experiment> Lab for Plugin<E> {
     }
     fn controllers(&self) -> &'static [&'static str] {
         self.0.controllers()
+    }
+    fn gait(&self) -> GaitKind {
+        self.0.gait()
+    }
+    fn any_gait(&self) -> bool {
+        self.0.any_gait()
+    }
+    fn variant_base(&self) -> &'static str {
+        self.0.variant_base()
     }
 
     fn command(&self) -> clap::Command {
@@ -132,16 +148,40 @@ impl<E: Experiment> Lab for Plugin<E> {
             ..TrialConfig::default()
         };
         let (module, layouts) = self.0.configure(&own, &mut trial)?;
+        // What the command line gives, else the scenario's protocol, else the defaults.
+        let typed = |id: &str| matches.value_source(id) == Some(ValueSource::CommandLine);
+        let protocol = module.protocol().map(|p| p.spec).unwrap_or_default();
+        let count = |id: &str, given: Option<usize>, file: Option<usize>, default: usize| {
+            match typed(id) {
+                true => given,
+                false => file.or(given),
+            }
+            .unwrap_or(default)
+        };
+        if !typed("seconds")
+            && let Some(s) = protocol.seconds
+        {
+            trial.limit_s = s;
+        }
         let nominal_gait = match common.nominal_gait.as_deref() {
             None => module.gait(),
             Some(name) => GaitKind::from_name(name).ok_or_else(|| {
                 LabError::BadValue(format!("--nominal-gait {name:?}: not a gait"))
             })?,
         };
-        trial.gaits = nominal_gaits(nominal_gait, common.nominal.as_deref())?;
+        // The daemon's nominal (TrialConfig's), the protocol's patch, then --nominal.
+        if let Some(p) = module.protocol()
+            && let Some(patch) = &p.spec.nominal
+        {
+            let what = format!("{}: [protocol] nominal", p.source);
+            patch_nominal(&mut trial.gaits, module.gait(), patch, &what)?;
+        }
+        if let Some(json) = common.nominal.as_deref() {
+            patch_nominal_json(&mut trial.gaits, nominal_gait, json)?;
+        }
         let module = module.with_trial(&trial);
-        let starts = common.starts.unwrap_or(d.starts);
-        let repeats = common.repeats.unwrap_or(d.repeats);
+        let starts = count("starts", common.starts, protocol.starts, d.starts);
+        let repeats = count("repeats", common.repeats, protocol.repeats, d.repeats);
         check_counts(&layouts, starts, repeats, trial.limit_s)?;
         let threads = threads(common.threads)?;
         let mut controllers = compared(&module, &common.controllers, &common.variants)?;

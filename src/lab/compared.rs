@@ -32,6 +32,8 @@ pub const NAVIGATOR_SIDEWIND_ONLY: &str = "navigator_sidewind_only";
 /// The navigator that only turns the body across, then sidewinds (no slithering, no
 /// backing off).
 pub const NAVIGATOR_TURN_ONLY: &str = "navigator_turn_only";
+/// Every name that runs the navigator, as an experiment that compares gaits takes them.
+pub const NAVIGATORS: &[&str] = &[NAVIGATOR, NAVIGATOR_SIDEWIND_ONLY, NAVIGATOR_TURN_ONLY];
 
 impl LabController {
     /// For an experiment that compares gaits (`Experiment::any_gait`): the navigator,

@@ -76,6 +76,13 @@ pub trait Experiment: Sync + Sized + Serialize + DeserializeOwned + 'static {
         trial: &mut TrialConfig,
     ) -> Result<(Self, Vec<Layout>), LabError>;
 
+    /// The protocol its configuration came with (a scenario file's `[protocol]`,
+    /// `lab::protocol`): the nominal, layouts, starts, repeats and time limit the run
+    /// takes where the command line gives none, over [`Experiment::defaults`].
+    fn protocol(&self) -> Option<&super::protocol::Protocol> {
+        None
+    }
+
     /// The experiment once the trials' configuration is final (the gaits' nominal
     /// parameters, the module count): for figures computed from them.
     fn with_trial(self, _trial: &TrialConfig) -> Self {

@@ -7,6 +7,7 @@
 //!
 //! What they share:
 //! - [`layout`]: a world scenario per layout, the seeds its trials derive from it;
+//!   [`protocol`]: a scenario file's `[protocol]` (nominal, counts), a run's defaults;
 //! - [`controllers`]: the compared controllers, named ones and `--variant`s;
 //! - [`calibration`]: a controller's friction offsets, measured on open ground;
 //! - [`trial`]: one trial through the daemon's `ControlLoop` over a `SimBus`, in
@@ -33,6 +34,7 @@ pub mod odometry_check;
 pub mod pegboard;
 pub mod plots;
 pub mod pole;
+pub mod protocol;
 pub mod registry;
 pub mod report;
 pub mod runner;

@@ -112,7 +112,9 @@ pub fn write<E: Experiment>(dir: &Path, file: &ShardFile<E>) -> Result<PathBuf, 
 }
 
 /// The shard files named by `paths`: a file as is, a directory's `shard-*-of-*.cbor`.
-pub fn find(paths: &[PathBuf]) -> Result<Vec<PathBuf>, LabError> {
+/// None is an error; with `expect` (the run's shard count, `merge --expect N`) it names
+/// every shard as missing.
+pub fn find(paths: &[PathBuf], expect: Option<usize>) -> Result<Vec<PathBuf>, LabError> {
     let mut files = Vec::new();
     for p in paths {
         if p.is_dir() {
@@ -140,14 +142,21 @@ pub fn find(paths: &[PathBuf]) -> Result<Vec<PathBuf>, LabError> {
         }
     }
     if files.is_empty() {
-        return Err(LabError::BadValue(format!(
-            "no shard files (shard-K-of-N.cbor) in {}",
-            paths
-                .iter()
-                .map(|p| p.display().to_string())
-                .collect::<Vec<_>>()
-                .join(", ")
-        )));
+        let dirs = paths
+            .iter()
+            .map(|p| p.display().to_string())
+            .collect::<Vec<_>>()
+            .join(", ");
+        return Err(LabError::BadValue(match expect {
+            Some(n) => format!(
+                "{n} of {n} shards missing: {} (no shard files in {dirs})",
+                (1..=n)
+                    .map(|k| format!("{k}/{n}"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+            None => format!("no shard files (shard-K-of-N.cbor) in {dirs}"),
+        }));
     }
     Ok(files)
 }
@@ -188,12 +197,25 @@ fn read<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, LabError> {
 }
 
 /// Checks that `heads` (with their paths) are every shard of one run, once each:
-/// the same experiment, plan and shard count, none missing or twice. Names the
-/// missing shards.
-pub fn check_complete(heads: &[(PathBuf, ShardHead)]) -> Result<(), LabError> {
+/// the same experiment, plan and shard count (`expect`'s, when given), none missing
+/// or twice. Names the missing shards.
+pub fn check_complete(
+    heads: &[(PathBuf, ShardHead)],
+    expect: Option<usize>,
+) -> Result<(), LabError> {
     let Some((first_path, first)) = heads.first() else {
         return Err(LabError::BadValue("no shard files".into()));
     };
+    if let Some(n) = expect
+        && first.shard.n != n
+    {
+        return Err(LabError::BadValue(format!(
+            "{} is shard {} of a {}-shard run, not of {n}",
+            first_path.display(),
+            first.shard,
+            first.shard.n
+        )));
+    }
     for (p, h) in heads {
         let same = h.experiment == first.experiment
             && h.plan == first.plan
@@ -257,6 +279,16 @@ pub fn merge_results<E: Experiment>(
     let mut trials = 0;
     for f in files {
         trials = f.head.trials;
+        let shard = f.head.shard;
+        let owned = (0..trials).filter(|&i| shard.owns(i)).count();
+        let held = f.results.iter().filter(|(i, _)| shard.owns(*i)).count();
+        if held != owned || f.results.len() != owned {
+            return Err(LabError::BadValue(format!(
+                "shard {shard} is incomplete: it holds {} trials, {held} of its {owned} \
+                 (cut short? run it again)",
+                f.results.len()
+            )));
+        }
         all.extend(f.results);
         module_ctx.get_or_insert((f.module, f.context));
     }
@@ -308,12 +340,29 @@ mod tests {
 
     #[test]
     fn merge_names_missing_duplicate_and_foreign_shards() {
-        assert!(check_complete(&[head(1, 3, 7), head(2, 3, 7), head(3, 3, 7)]).is_ok());
-        let e = check_complete(&[head(1, 3, 7), head(3, 3, 7)]).unwrap_err();
+        assert!(check_complete(&[head(1, 3, 7), head(2, 3, 7), head(3, 3, 7)], None).is_ok());
+        let e = check_complete(&[head(1, 3, 7), head(3, 3, 7)], None).unwrap_err();
         assert_eq!(e.to_string(), "1 of 3 shards missing: 2/3 (have 1/3, 3/3)");
-        let e = check_complete(&[head(1, 2, 7), head(1, 2, 7)]).unwrap_err();
+        let e = check_complete(&[head(1, 2, 7), head(1, 2, 7)], None).unwrap_err();
         assert!(e.to_string().starts_with("shard 1/2 given twice"), "{e}");
-        let e = check_complete(&[head(1, 2, 7), head(2, 2, 8)]).unwrap_err();
+        let e = check_complete(&[head(1, 2, 7), head(2, 2, 8)], None).unwrap_err();
         assert!(e.to_string().contains("is not of the same run"), "{e}");
+        // Told how many there are (`merge --expect N`): another count is refused.
+        let e = check_complete(&[head(1, 2, 7), head(2, 2, 7)], Some(4)).unwrap_err();
+        assert!(e.to_string().contains("of a 2-shard run, not of 4"), "{e}");
+        assert!(check_complete(&[head(1, 2, 7), head(2, 2, 7)], Some(2)).is_ok());
+    }
+
+    #[test]
+    fn with_the_count_known_no_file_at_all_names_every_shard() {
+        let dir = tempfile::tempdir().unwrap();
+        let given = [dir.path().to_owned()];
+        let e = find(&given, Some(3)).unwrap_err().to_string();
+        assert!(
+            e.starts_with("3 of 3 shards missing: 1/3, 2/3, 3/3 (no shard files in "),
+            "{e}"
+        );
+        let e = find(&given, None).unwrap_err().to_string();
+        assert!(e.starts_with("no shard files"), "{e}");
     }
 }

@@ -182,15 +182,37 @@ impl TrialRecord {
 pub fn nominal_gaits(gait: GaitKind, json: Option<&str>) -> Result<GaitTable, LabError> {
     let mut table = GaitTable::default();
     if let Some(json) = json {
-        let patch: crate::gait::ParamPatch = serde_json::from_str(json)
-            .map_err(|e| LabError::BadValue(format!("--nominal {json:?}: {e}")))?;
-        let params = table
-            .get(gait)
-            .patched(gait, &patch)
-            .map_err(|e| LabError::BadValue(format!("--nominal {json:?}: {e}")))?;
-        *table.get_mut(gait) = params;
+        patch_nominal_json(&mut table, gait, json)?;
     }
     Ok(table)
+}
+
+/// `table` with `gait`'s nominal parameters patched by `json` (as `--nominal` gives it).
+pub fn patch_nominal_json(
+    table: &mut GaitTable,
+    gait: GaitKind,
+    json: &str,
+) -> Result<(), LabError> {
+    let what = format!("--nominal {json:?}");
+    let patch: crate::gait::ParamPatch =
+        serde_json::from_str(json).map_err(|e| LabError::BadValue(format!("{what}: {e}")))?;
+    patch_nominal(table, gait, &patch, &what)
+}
+
+/// `table` with `gait`'s nominal parameters patched by `patch`, checked as the daemon
+/// checks `params.set`; `what` names where the patch came from in the message.
+pub fn patch_nominal(
+    table: &mut GaitTable,
+    gait: GaitKind,
+    patch: &crate::gait::ParamPatch,
+    what: &str,
+) -> Result<(), LabError> {
+    let params = table
+        .get(gait)
+        .patched(gait, patch)
+        .map_err(|e| LabError::BadValue(format!("{what}: {e}")))?;
+    *table.get_mut(gait) = params;
+    Ok(())
 }
 
 /// The body layout and nominal parameters every slithering controller gets.

@@ -186,7 +186,6 @@ pub fn summarise(results: &[TrialResult<Displacement>]) -> Vec<ControllerSummary
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::lab::displacement::Terrain;
     use crate::lab::experiment::Experiment;
 
     fn record(centre: Vec<[f64; 2]>, seconds: f64) -> TrialRecord {
@@ -230,10 +229,8 @@ mod tests {
         assert_eq!(m.self_contacts, 7);
         assert_eq!(m.mode_switches, 5.0);
         assert!((m.directional_share - 2.0 / 3.0).abs() < 1e-12, "{m:?}");
-        let m = Displacement {
-            terrain: Terrain::PegArray,
-        }
-        .metrics(&crate::lab::displacement::FieldEdge::FULL_TIME, &rec);
+        let m =
+            Displacement::PEG_ARRAY.metrics(&crate::lab::displacement::FieldEdge::FULL_TIME, &rec);
         assert!(
             (m.velocity_bl_min - 1.3 / 1.024 / 2.0).abs() < 1e-12,
             "16 modules"

@@ -10,25 +10,29 @@ pub mod metrics;
 pub mod plots;
 pub mod report;
 
+use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use crate::emu::world::WorldSpec;
-use crate::emu::world::scenario::{MODULE_LENGTH_M, WorldScenario};
-use crate::gait::GaitKind;
+use crate::emu::world::scenario::MODULE_LENGTH_M;
+use crate::gait::{GaitKind, GaitParams};
 use crate::lab::LabError;
 use crate::lab::experiment::{Defaults, Experiment};
 use crate::lab::file_stem;
 use crate::lab::layout::Layout;
+use crate::lab::protocol::{self, Protocol};
 use crate::lab::report::SummaryContext;
 use crate::lab::runner::TrialResult;
 use crate::lab::trial::{TrialConfig, TrialRecord};
 pub use field::FieldEdge;
 use metrics::{DisplacementMetrics, displacement_metrics};
 
-/// The peg array's scenario (`scenarios/peg-array.toml`), built in.
-pub const PEG_ARRAY_TOML: &str = include_str!("../../../scenarios/peg-array.toml");
-/// The rock pile's scenario (`scenarios/rock-pile-3d.toml`), built in.
-pub const ROCK_PILE_TOML: &str = include_str!("../../../scenarios/rock-pile-3d.toml");
+/// The peg array's protocol, the one directional compliance is evaluated with
+/// (`scenarios/protocols/peg-array.toml`: the world, the nominal, the poses and trials),
+/// built in.
+pub const PEG_ARRAY_TOML: &str = include_str!("../../../scenarios/protocols/peg-array.toml");
+/// The rock pile's protocol (`scenarios/protocols/rock-pile.toml`), built in.
+pub const ROCK_PILE_TOML: &str = include_str!("../../../scenarios/protocols/rock-pile.toml");
 
 /// The paper's robot: sixteen modules.
 pub const MODULES: usize = 16;
@@ -43,23 +47,35 @@ pub enum Terrain {
 }
 
 /// The experiment of one terrain.
-#[derive(Debug, Clone, Copy, serde::Serialize, serde::Deserialize)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct Displacement {
     pub terrain: Terrain,
+    /// The protocol of its scenario (the built-in one's unless `--scenario` names a
+    /// file without one).
+    #[serde(default)]
+    pub protocol: Option<Protocol>,
+    /// The nominal parameters of the trials' gait, once final (for the summary).
+    #[serde(default)]
+    pub nominal: Option<GaitParams>,
 }
 
-/// Their own options: which layouts, and the body. The defaults are the paper's
-/// protocol: one layout, 5 random poses, 4 trials per pose, 2 minutes each.
+/// Their own options: which layouts, and the body. The defaults are the protocol
+/// directional compliance is evaluated with (`scenarios/protocols/`): the paper's one
+/// layout, 5 random poses, 4 trials per pose, 2 minutes each, on the evaluated world
+/// with its nominal.
 #[derive(Debug, Clone, clap::Args)]
 pub struct DisplacementArgs {
-    /// Seeded layouts: the scenario with master seeds seed-base .. seed-base + N - 1.
-    #[arg(long, default_value_t = 1)]
-    pub layouts: usize,
+    /// Seeded layouts: the scenario with master seeds seed-base .. seed-base + N - 1
+    /// (default: the scenario's protocol's, else 1).
+    #[arg(long)]
+    pub layouts: Option<usize>,
     /// Master seed of the first layout (default: the scenario's own).
     #[arg(long)]
     pub seed_base: Option<u64>,
-    /// World scenario the layouts come from (default: the built-in
-    /// scenarios/peg-array.toml or scenarios/rock-pile-3d.toml).
+    /// The scenario the layouts come from: a world scenario, or a protocol file (a
+    /// world with a [protocol] table: nominal, layouts, starts, repeats, seconds;
+    /// docs/lab.md). Default: the built-in scenarios/protocols/peg-array.toml or
+    /// scenarios/protocols/rock-pile.toml.
     #[arg(long, value_name = "FILE")]
     pub scenario: Option<PathBuf>,
     /// Modules of the snake (the paper's robot has 16).
@@ -74,16 +90,28 @@ pub const ROCK_PILE_CONTROLLERS: &[&str] = &["dc3d_nc", "dc3d_ndc", "dc3d_pdc", 
 impl Displacement {
     pub const PEG_ARRAY: Displacement = Displacement {
         terrain: Terrain::PegArray,
+        protocol: None,
+        nominal: None,
     };
     pub const ROCK_PILE: Displacement = Displacement {
         terrain: Terrain::RockPile,
+        protocol: None,
+        nominal: None,
     };
 
-    /// The terrain's built-in scenario.
+    /// The terrain's built-in protocol file.
     pub fn scenario_toml(&self) -> &'static str {
         match self.terrain {
             Terrain::PegArray => PEG_ARRAY_TOML,
             Terrain::RockPile => ROCK_PILE_TOML,
+        }
+    }
+
+    /// Where the built-in protocol file is in the repository, as the summary names it.
+    pub fn scenario_name(&self) -> &'static str {
+        match self.terrain {
+            Terrain::PegArray => "scenarios/protocols/peg-array.toml",
+            Terrain::RockPile => "scenarios/protocols/rock-pile.toml",
         }
     }
 }
@@ -131,11 +159,19 @@ impl Experiment for Displacement {
         }
     }
     fn defaults(&self) -> Defaults {
+        // The built-in protocols' (a unit test checks they agree).
         Defaults {
             starts: 5,
             repeats: 4,
             seconds: 120.0,
         }
+    }
+    fn protocol(&self) -> Option<&Protocol> {
+        self.protocol.as_ref()
+    }
+    fn with_trial(mut self, trial: &TrialConfig) -> Self {
+        self.nominal = Some(*trial.gaits.get(self.gait()));
+        self
     }
 
     fn configure(
@@ -150,15 +186,27 @@ impl Experiment for Displacement {
             )));
         }
         trial.modules = args.modules;
-        let base = match &args.scenario {
-            Some(path) => WorldScenario::load(path)?,
-            None => WorldScenario::parse(self.scenario_toml())?,
+        let (base, protocol) = match &args.scenario {
+            Some(path) => protocol::load(path)?,
+            None => {
+                let name = format!("{} (built in)", self.scenario_name());
+                protocol::parse(self.scenario_toml(), &name, None)?
+            }
         };
+        let count = args
+            .layouts
+            .or(protocol.as_ref().and_then(|p| p.spec.layouts))
+            .unwrap_or(1);
         let seed_base = args.seed_base.unwrap_or(base.seed);
-        let layouts = (0..args.layouts as u64)
+        let layouts = (0..count as u64)
             .map(|k| Layout::seeded(&base, seed_base.wrapping_add(k)))
             .collect();
-        Ok((*self, layouts))
+        let configured = Displacement {
+            terrain: self.terrain,
+            protocol,
+            nominal: None,
+        };
+        Ok((configured, layouts))
     }
 
     fn world(
@@ -187,7 +235,24 @@ impl Experiment for Displacement {
         report::csv_row(result)
     }
     fn summary_tables(&self, results: &[TrialResult<Self>], _ctx: &SummaryContext) -> String {
-        report::summary_tables(results)
+        let mut s = String::new();
+        if let Some(p) = &self.protocol {
+            let _ = writeln!(s, "{}\n", p.describe());
+        }
+        if let Some(n) = &self.nominal {
+            let _ = writeln!(
+                s,
+                "Nominal {} parameters of every trial: amplitude_lat_rad {}, \
+                 amplitude_dor_rad {}, spatial_freq_rad {}, temporal_freq_rad_s {}.\n",
+                self.gait().name(),
+                n.amplitude_lat_rad,
+                n.amplitude_dor_rad,
+                n.spatial_freq_rad,
+                n.temporal_freq_rad_s
+            );
+        }
+        s.push_str(&report::summary_tables(results));
+        s
     }
     fn trial_plots(
         &self,
@@ -218,5 +283,52 @@ impl Experiment for Displacement {
         );
         plots::velocity_plot(&p, &title, results)?;
         Ok(vec![p])
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_defaults_are_the_evaluated_protocol() {
+        for e in [Displacement::PEG_ARRAY, Displacement::ROCK_PILE] {
+            let (world, p) = protocol::parse(e.scenario_toml(), e.scenario_name(), None).unwrap();
+            let p = p.expect("the built-in scenario is a protocol");
+            let d = e.defaults();
+            assert_eq!(p.spec.layouts, Some(1));
+            assert_eq!(p.spec.starts, Some(d.starts));
+            assert_eq!(p.spec.repeats, Some(d.repeats));
+            assert_eq!(p.spec.seconds, Some(d.seconds));
+            // The nominal of docs/lab-results/dc-corrected/*-protocol.
+            let n = p.spec.nominal.unwrap();
+            assert_eq!(n.amplitude_lat_rad, Some(1.2));
+            assert_eq!(n.spatial_freq_rad, Some(std::f64::consts::TAU));
+            let mut args = DisplacementArgs {
+                layouts: None,
+                seed_base: None,
+                scenario: None,
+                modules: MODULES,
+            };
+            let mut trial = TrialConfig::default();
+            let (configured, layouts) = e.configure(&args, &mut trial).unwrap();
+            assert_eq!(configured.protocol.map(|c| c.spec), Some(p.spec));
+            assert_eq!(layouts.len(), 1);
+            assert_eq!(layouts[0].scenario.seed, world.seed);
+            args.layouts = Some(3);
+            assert_eq!(e.configure(&args, &mut trial).unwrap().1.len(), 3);
+        }
+        // The peg array's world is the one the evaluation ran on (smooth pegs).
+        let evaluated =
+            include_str!("../../../docs/lab-results/peg-array-sleeve/peg-array-sleeve.toml");
+        let (world, _) = protocol::parse(PEG_ARRAY_TOML, "built in", None).unwrap();
+        assert_eq!(world, world_of(evaluated));
+        let (world, _) = protocol::parse(ROCK_PILE_TOML, "built in", None).unwrap();
+        let rocks = include_str!("../../../scenarios/rock-pile-3d.toml");
+        assert_eq!(world, world_of(rocks));
+    }
+
+    fn world_of(text: &str) -> crate::emu::world::scenario::WorldScenario {
+        crate::emu::world::scenario::WorldScenario::parse(text).unwrap()
     }
 }

@@ -3,33 +3,18 @@
 use std::path::Path;
 use std::process::Output;
 
-use super::{lab, read};
+use super::{lab, lab_ok, read};
 
 const PNG_SIGNATURE: [u8; 8] = [0x89, b'P', b'N', b'G', 0x0d, 0x0a, 0x1a, 0x0a];
 
 /// A tiny peg-board run (1 start, 2 s) into `out`; panics with stderr unless it succeeds.
 fn pegboard(out: &Path, extra: &[&str]) -> Output {
-    let out_s = out.to_str().unwrap();
-    let mut args = vec![
-        "pegboard",
-        "--controllers",
-        "open_loop",
-        "--starts",
-        "1",
-        "--seconds",
-        "2",
-        "--quiet",
-        "--out",
-        out_s,
-    ];
+    let mut args = vec![out.to_str().unwrap()];
     args.extend_from_slice(extra);
-    let o = lab(&args);
-    assert!(
-        o.status.success(),
-        "snake-lab {args:?} failed: {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    o
+    lab_ok(
+        "pegboard --controllers open_loop --starts 1 --seconds 2 --quiet --out",
+        &args,
+    )
 }
 
 #[test]
@@ -189,11 +174,16 @@ fn variants_run_beside_the_named_controllers() {
 }
 
 #[test]
-fn list_names_every_experiment_and_its_controllers() {
+fn list_names_every_experiment_and_what_it_can_run() {
     let o = lab(&["list"]);
     assert!(o.status.success());
     let names = String::from_utf8_lossy(&o.stdout);
-    for line in ["open_loop", "dc3d_switching", "ac_sfc", "windowed_adaptive"] {
+    for line in [
+        "  default: open_loop, a_ws_omega, dc_switching, ac_sfc",
+        "  default: dc3d_nc, dc3d_ndc, dc3d_pdc, dc3d_switching",
+        "  default: ac_sfc, ac, sfc, sw_open_loop",
+        "  default: fixed, central, windowed, windowed_adaptive",
+    ] {
         assert!(names.lines().any(|l| l == line), "{line}: {names}");
     }
     for experiment in [
@@ -202,6 +192,7 @@ fn list_names_every_experiment_and_its_controllers() {
         "rock-pile",
         "sidewinding",
         "pole",
+        "flat-ground",
         "crossing",
     ] {
         assert!(
@@ -211,6 +202,13 @@ fn list_names_every_experiment_and_its_controllers() {
             "{experiment}: {names}"
         );
     }
+    // Crossing runs the navigator too (issue 44): named under it, and nowhere else.
+    let crossing = names.split("\ncrossing: ").nth(1).expect("crossing listed");
+    assert!(
+        crossing.contains("navigator: navigator, navigator_sidewind_only, navigator_turn_only"),
+        "{crossing}"
+    );
+    assert_eq!(names.matches("navigator_turn_only").count(), 1, "{names}");
 }
 
 /// Runs `args` expecting exit code 2 and returns stderr.

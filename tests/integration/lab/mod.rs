@@ -2,7 +2,9 @@
 
 mod cli;
 mod crossing;
+mod protocol;
 mod shard;
+mod slurm;
 
 use std::path::Path;
 use std::process::{Command, Output};
@@ -13,6 +15,19 @@ fn lab(args: &[&str]) -> Output {
         .args(args)
         .output()
         .expect("snake-lab runs")
+}
+
+/// `snake-lab` with the words of `line` then `extra` (paths), which must succeed.
+fn lab_ok(line: &str, extra: &[&str]) -> Output {
+    let mut args: Vec<&str> = line.split_whitespace().collect();
+    args.extend_from_slice(extra);
+    let o = lab(&args);
+    assert!(
+        o.status.success(),
+        "snake-lab {args:?}: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    o
 }
 
 fn read(path: &Path) -> String {

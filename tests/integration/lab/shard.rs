@@ -2,33 +2,17 @@
 
 use std::path::Path;
 
-use super::{lab, read};
+use super::{lab, lab_ok, read};
 
 /// `snake-lab pegboard` with two controllers on two layouts (4 trials, 2 s each):
 /// the second controller's plotted trial (plan index 2) falls in shard 3 of 3.
 fn run(out: &Path, extra: &[&str]) {
-    let mut args = vec![
-        "pegboard",
-        "--controllers",
-        "open_loop,a_ws_omega",
-        "--layouts",
-        "2",
-        "--starts",
-        "1",
-        "--seconds",
-        "2",
-        "--threads",
-        "1",
-        "--quiet",
-        "--out",
-        out.to_str().unwrap(),
-    ];
+    let mut args = vec![out.to_str().unwrap()];
     args.extend_from_slice(extra);
-    let o = lab(&args);
-    assert!(
-        o.status.success(),
-        "snake-lab {args:?}: {}",
-        String::from_utf8_lossy(&o.stderr)
+    lab_ok(
+        "pegboard --controllers open_loop,a_ws_omega --layouts 2 --starts 1 --seconds 2 \
+         --threads 1 --quiet --out",
+        &args,
     );
 }
 
@@ -94,4 +78,36 @@ fn merge_names_the_missing_shards_and_refuses_other_runs() {
     );
     let o = lab(&["pegboard", "--shard", "4/3"]);
     assert_eq!(o.status.code(), Some(2));
+}
+
+#[test]
+fn merge_names_an_incomplete_shard() {
+    let dir = tempfile::tempdir().unwrap();
+    for k in ["1/2", "2/2"] {
+        run(dir.path(), &["--shard", k]);
+    }
+    // Shard 1/2 with one of its two trials gone.
+    let path = dir.path().join("shard-1-of-2.cbor");
+    let mut file: ciborium::Value =
+        ciborium::from_reader(std::fs::File::open(&path).unwrap()).unwrap();
+    let ciborium::Value::Map(fields) = &mut file else {
+        panic!("a shard file is a map")
+    };
+    let results = fields
+        .iter_mut()
+        .find(|(k, _)| k.as_text() == Some("results"))
+        .map(|(_, v)| v)
+        .unwrap();
+    let ciborium::Value::Array(trials) = results else {
+        panic!("results is an array")
+    };
+    trials.pop();
+    ciborium::into_writer(&file, std::fs::File::create(&path).unwrap()).unwrap();
+    let o = lab(&["merge", dir.path().to_str().unwrap(), "--quiet"]);
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("shard 1/2 is incomplete: it holds 1 trials, 1 of its 2"),
+        "{err}"
+    );
 }
