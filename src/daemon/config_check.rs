@@ -339,6 +339,8 @@ impl Config {
             1.0,
             1000.0,
         )?;
+        // What the recorder refuses when it starts (its size cap's minimum, the path).
+        self.record.check(path)?;
         self.cross_checks(path)?;
         if let Some(old) = &self.gait.slithering_controller {
             return Err(bad(

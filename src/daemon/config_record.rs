@@ -1,17 +1,22 @@
 //! `snaked.toml`'s `[record]` and `[foxglove]`: the recording, the live view and operating
 //! from Foxglove (docs/recording.md); part of [`super::config::Config`].
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
+
+use super::config::ConfigError;
+use crate::num::Num;
+use crate::record::McapOptions;
 
 /// `[record]`: an MCAP file of every cycle (docs/recording.md).
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct RecordConfig {
     /// The file to write; empty = no recording. It must not exist yet; its directory
-    /// must. `{time}` in the name is replaced by the start time (UTC, `YYYYmmdd-HHMMSS`).
+    /// must. `{time}` in the name is replaced by the start time (s since the Unix epoch).
     pub path: PathBuf,
-    /// Stop writing (and finish the file) past this size, MB; 0 = no size cap.
+    /// Stop writing (and finish the file) past this size, MB; 0 = no size cap, else at
+    /// least 1 (`record::MIN_MAX_BYTES`).
     pub max_mb: f64,
     /// Stop writing past this much loop time, s; 0 = no duration cap.
     pub max_duration_s: f64,
@@ -34,6 +39,57 @@ impl Default for RecordConfig {
             ring_capacity: 1024,
             scene_rate_hz: 50.0,
         }
+    }
+}
+
+impl RecordConfig {
+    /// The file's options for the recorder (`None`: no file), `{time}` in the path
+    /// replaced by now, s since the Unix epoch.
+    pub fn mcap_options(&self) -> Option<McapOptions> {
+        if self.path.as_os_str().is_empty() {
+            return None;
+        }
+        let now = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0, |d| d.as_secs());
+        let path = self
+            .path
+            .to_string_lossy()
+            .replace("{time}", &now.to_string());
+        Some(McapOptions {
+            path: PathBuf::from(path),
+            max_bytes: (self.max_mb > 0.0).then_some((self.max_mb * 1e6) as u64),
+            max_duration_s: (self.max_duration_s > 0.0).then_some(self.max_duration_s),
+            chunk_duration_s: self.chunk_duration_s,
+        })
+    }
+
+    /// What the recorder would refuse when the daemon starts it, by the recorder's own
+    /// check ([`McapOptions::check`]), as the configuration's error naming the key.
+    pub(super) fn check(&self, file: &Path) -> Result<(), ConfigError> {
+        let Some(opts) = self.mcap_options() else {
+            return Ok(());
+        };
+        opts.check().map_err(|e| {
+            let (key, value) = match e.mcap_field() {
+                Some("max_bytes") => ("record.max_mb", Num(self.max_mb).to_string()),
+                Some("max_duration_s") => (
+                    "record.max_duration_s",
+                    Num(self.max_duration_s).to_string(),
+                ),
+                Some("chunk_duration_s") => (
+                    "record.chunk_duration_s",
+                    Num(self.chunk_duration_s).to_string(),
+                ),
+                _ => ("record.path", format!("{:?}", self.path)),
+            };
+            ConfigError::Invalid {
+                path: file.to_owned(),
+                key,
+                value,
+                why: e.to_string(),
+            }
+        })
     }
 }
 

@@ -20,7 +20,7 @@ use crate::controller_interface::catalog::Catalog;
 use crate::controller_interface::registry;
 use crate::controllers::REGISTRY;
 use crate::gait::{BodyLayout, GaitKind, GaitSelector, GaitTable};
-use crate::record::{LiveOptions, McapOptions, RecordOptions, RecordTx, Recorder, RecordingInfo};
+use crate::record::{LiveOptions, RecordOptions, RecordTx, Recorder, RecordingInfo};
 use crate::record::{LoopRecorder, LoopRecording};
 use crate::rt::control_loop::{ControlLoop, LoopParts};
 use crate::rt::controller_slots::Installed;
@@ -332,17 +332,12 @@ fn start_recorder(
     station: Option<&Station>,
 ) -> Result<Option<(RecordTx, Recorder)>> {
     let rec = &cfg.record;
-    let path = (!rec.path.as_os_str().is_empty()).then(|| record_path(&rec.path));
-    if path.is_none() && !cfg.foxglove.enabled {
+    let mcap = rec.mcap_options();
+    if mcap.is_none() && !cfg.foxglove.enabled {
         return Ok(None);
     }
     let opts = RecordOptions {
-        mcap: path.map(|p| McapOptions {
-            path: p,
-            max_bytes: (rec.max_mb > 0.0).then_some((rec.max_mb * 1e6) as u64),
-            max_duration_s: (rec.max_duration_s > 0.0).then_some(rec.max_duration_s),
-            chunk_duration_s: rec.chunk_duration_s,
-        }),
+        mcap,
         live: cfg.foxglove.enabled.then(|| LiveOptions {
             addr: std::net::SocketAddr::new(cfg.foxglove.host, cfg.foxglove.port),
             station: station.cloned(),
@@ -388,14 +383,6 @@ fn operator_station(cfg: &Config) -> Result<Option<Station>> {
         .check()
         .map_err(|e| anyhow::anyhow!("bad configuration: foxglove: {e}"))?;
     Ok(Some(Station::new(StationConfig { token, teleop })))
-}
-
-/// `path` with `{time}` replaced by the start time, s since the Unix epoch.
-fn record_path(path: &std::path::Path) -> PathBuf {
-    let now = std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map_or(0, |d| d.as_secs());
-    PathBuf::from(path.to_string_lossy().replace("{time}", &now.to_string()))
 }
 
 /// Finishes the file (summary and index) and says what it holds.

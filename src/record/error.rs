@@ -60,3 +60,16 @@ pub enum RecordError {
     #[error("the recorder was already finished")]
     Finished,
 }
+
+impl RecordError {
+    /// The [`super::McapOptions`] field an error of [`super::McapOptions::check`] is about
+    /// (`path`, `max_bytes`, `max_duration_s`, `chunk_duration_s`); `None` for the others.
+    pub fn mcap_field(&self) -> Option<&'static str> {
+        match self {
+            Self::MissingDirectory { .. } | Self::Create { .. } => Some("path"),
+            // Their messages start with the field.
+            Self::InvalidOption(m) => m.split(' ').next(),
+            _ => None,
+        }
+    }
+}

@@ -23,9 +23,75 @@ use super::error::RecordError;
 use super::options::{CapReason, FileState, McapOptions};
 
 /// Largest chunk (uncompressed), bytes: the writer's default.
-const MAX_CHUNK: u64 = 1024 * 1024;
+pub(super) const MAX_CHUNK: u64 = 1024 * 1024;
 /// Smallest chunk, bytes: below this compression suffers for little gain.
 const MIN_CHUNK: u64 = 32 * 1024;
+/// Smallest size cap, bytes (1 MB, under a second of a run at 1 kHz): a smaller file
+/// would hold its metadata and a chunk or two.
+pub const MIN_MAX_BYTES: u64 = 1_000_000;
+
+impl McapOptions {
+    /// What the recorder refuses before it creates the file: [`super::start`] runs it,
+    /// and so does the daemon's configuration check (`snaked --check-config`). A bad
+    /// number is [`RecordError::InvalidOption`], its message starting with the field
+    /// ([`RecordError::mcap_field`]); a missing directory [`RecordError::MissingDirectory`]; a path
+    /// that exists, is a directory or whose directory is not one, [`RecordError::Create`]
+    /// with the OS's reason.
+    pub fn check(&self) -> Result<(), RecordError> {
+        if self
+            .max_duration_s
+            .is_some_and(|s| !(s.is_finite() && s > 0.0))
+        {
+            return Err(RecordError::InvalidOption(
+                "max_duration_s must be positive and finite",
+            ));
+        }
+        if !(self.chunk_duration_s.is_finite() && self.chunk_duration_s > 0.0) {
+            return Err(RecordError::InvalidOption(
+                "chunk_duration_s must be positive and finite",
+            ));
+        }
+        if self.max_bytes.is_some_and(|m| m < MIN_MAX_BYTES) {
+            return Err(RecordError::InvalidOption(
+                "max_bytes must be at least 1000000 (1 MB): a smaller file would hold its \
+                 metadata and a chunk or two",
+            ));
+        }
+        let path = &self.path;
+        let create = |code| {
+            Err(RecordError::Create {
+                path: path.clone(),
+                reason: io::Error::from_raw_os_error(code),
+            })
+        };
+        let dir = directory(path);
+        match std::fs::metadata(dir) {
+            Err(e) if e.kind() == io::ErrorKind::NotFound => {
+                return Err(RecordError::MissingDirectory {
+                    dir: dir.to_path_buf(),
+                    path: path.clone(),
+                });
+            }
+            Err(e) => return create(e.raw_os_error().unwrap_or(libc::EACCES)),
+            Ok(m) if !m.is_dir() => return create(libc::ENOTDIR),
+            Ok(_) => {}
+        }
+        // An earlier recording is never overwritten (`create_new` refuses it too).
+        match std::fs::symlink_metadata(path) {
+            Ok(m) if m.is_dir() => create(libc::EISDIR),
+            Ok(_) => create(libc::EEXIST),
+            Err(_) => Ok(()),
+        }
+    }
+}
+
+/// The directory a file of `path` goes in.
+fn directory(path: &Path) -> &Path {
+    match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    }
+}
 
 /// A `File` that counts how far it reaches and keeps the first failed write's reason.
 struct Counting {
@@ -108,17 +174,8 @@ impl McapFile {
         size: Arc<AtomicU64>,
         room: Option<u64>,
     ) -> Result<Self, RecordError> {
+        opts.check()?;
         let path = opts.path.clone();
-        let dir = match path.parent() {
-            Some(d) if !d.as_os_str().is_empty() => d,
-            _ => Path::new("."),
-        };
-        if !dir.exists() {
-            return Err(RecordError::MissingDirectory {
-                dir: dir.to_path_buf(),
-                path,
-            });
-        }
         let create = |reason| RecordError::Create {
             path: path.clone(),
             reason,

@@ -9,8 +9,11 @@
 //!
 //! RecordOptions { mcap: Option<McapOptions>, live: Option<LiveOptions>,
 //!                 ring_capacity: usize /* 1024 */, scene_rate_hz: f64 /* 50 */ }   // Default
-//! McapOptions   { path: PathBuf, max_bytes: Option<u64>, max_duration_s: Option<f64>,
+//! McapOptions   { path: PathBuf, max_bytes: Option<u64> /* ≥ MIN_MAX_BYTES, 1 MB */,
+//!                 max_duration_s: Option<f64>,
 //!                 chunk_duration_s: f64 /* 1: a chunk reaches the disk whole at least this often */ } // ::new(path)
+//!     fn check(&self) -> Result<(), RecordError>;  // what start refuses before creating the file;
+//!                                                  // RecordError::mcap_field names the field
 //! LiveOptions   { addr: SocketAddr /* 127.0.0.1:8765; port 0 = any */ }            // Default
 //! RecordingInfo { source: String /* "snaked" | "snake-lab" */, module_names: Vec<String>,
 //!                 layout: BodyLayout, world: Option<WorldSpec>, catalog: Catalog,
@@ -33,6 +36,8 @@
 //! FileState     { Writing, Finished, Unfinished }
 //!
 //! // A file a crash or a full disk left unfinished → a finished one (`snaked --recover`).
+//! // Bounded (RECOVER_MAX_CHUNK_BYTES, 64 MiB, a record or a chunk's contents), written to a
+//! // hidden file renamed into place once finished: a failure leaves no output.
 //! pub fn recover(input: &Path, output: &Path) -> Result<Recovery, RecoverError>;
 //! pub fn recovered_path(input: &Path) -> PathBuf;   // run.mcap → run.recovered.mcap
 //! Recovery { already_finished, chunks, messages, per_topic, log_time_ns, lost_bytes, stopped }
@@ -72,12 +77,13 @@ pub use cycle::{
     CycleRecord, JointSample, RECORD_MAX_LINKS, RECORD_MAX_MODULES, RecordEvent, RecordItem,
 };
 pub use error::RecordError;
+pub use file::MIN_MAX_BYTES;
 pub use loop_recorder::{LoopRecorder, LoopRecording};
 pub use options::{
     CapReason, DEFAULT_CHUNK_DURATION_S, DEFAULT_LIVE_PORT, FileState, LiveOptions, McapOptions,
     RecordOptions, RecordSummary, RecorderStatus, RecordingInfo,
 };
 pub use recorder::{Recorder, start};
-pub use recover::{RecoverError, Recovery, recover, recovered_path};
+pub use recover::{RECOVER_MAX_CHUNK_BYTES, RecoverError, Recovery, recover, recovered_path};
 pub use ring::RecordTx;
 pub use scene::{BODY_FRAME, WORLD_FRAME, link_frame};

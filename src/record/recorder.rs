@@ -62,24 +62,7 @@ fn validate(opts: &RecordOptions) -> Result<(), RecordError> {
             "scene_rate_hz must be positive and finite",
         ));
     }
-    if let Some(m) = &opts.mcap {
-        if m.max_duration_s
-            .is_some_and(|s| !(s.is_finite() && s > 0.0))
-        {
-            return Err(RecordError::InvalidOption(
-                "max_duration_s must be positive and finite",
-            ));
-        }
-        if !(m.chunk_duration_s.is_finite() && m.chunk_duration_s > 0.0) {
-            return Err(RecordError::InvalidOption(
-                "chunk_duration_s must be positive and finite",
-            ));
-        }
-        if m.max_bytes == Some(0) {
-            return Err(RecordError::InvalidOption("max_bytes must be positive"));
-        }
-    }
-    Ok(())
+    opts.mcap.as_ref().map_or(Ok(()), |m| m.check())
 }
 
 /// The running recording. [`Recorder::finish`] (or dropping it) drains the ring,

@@ -4,19 +4,28 @@
 //! written to a new file (the old one is never touched), and reading stops at the
 //! first record that is cut short or does not check out: the chunk that was being
 //! written. `snaked --recover` runs it.
+//!
+//! Bounded: the input is read record by record, no record outside a chunk and no
+//! chunk's contents may exceed [`RECOVER_MAX_CHUNK_BYTES`] (a chunk declaring more is refused
+//! before anything is decompressed, and none is decompressed past what it declares),
+//! and the output is written as it goes. The output is written to a hidden file beside
+//! it and renamed into place only once finished: a failure leaves nothing behind.
 
 use std::collections::BTreeMap;
-use std::fs::File;
+use std::ffi::CString;
+use std::fs::{File, OpenOptions};
 use std::io::{self, BufWriter, Read, Seek, SeekFrom};
+use std::os::unix::ffi::OsStrExt;
+use std::os::unix::fs::{FileTypeExt, OpenOptionsExt};
 use std::path::{Path, PathBuf};
 
-use mcap::records::{MessageHeader, Record};
-use mcap::sans_io::linear_reader::{LinearReadEvent, LinearReader, LinearReaderOptions};
-use mcap::write::NoSeek;
-use mcap::{McapError, WriteOptions, Writer};
+#[path = "recover_copy.rs"]
+mod copy;
 
-/// Chunk size of the recovered file, bytes (uncompressed), as the recorder writes.
-const CHUNK: u64 = 1024 * 1024;
+/// Largest record outside a chunk (a compressed chunk, a metadata record, an attachment)
+/// and largest chunk contents (uncompressed) a recovery reads, bytes: 64 times the
+/// recorder's chunk (1 MiB, `super::file::MAX_CHUNK`).
+pub const RECOVER_MAX_CHUNK_BYTES: u64 = 64 * super::file::MAX_CHUNK;
 
 /// Why a recovery could not be done.
 #[derive(Debug, thiserror::Error)]
@@ -25,10 +34,52 @@ pub enum RecoverError {
     Read { path: PathBuf, reason: io::Error },
     #[error("{} is not an MCAP file (it does not start with the MCAP magic)", path.display())]
     NotMcap { path: PathBuf },
+    /// A FIFO, a device, a directory...: refused before anything is read from it.
+    #[error("{} is {kind}, not a regular file: only a recording's file can be recovered", path.display())]
+    NotAFile { path: PathBuf, kind: &'static str },
+    #[error(
+        "{}: the chunk at byte {offset} declares {declared} bytes uncompressed, more than the \
+         {limit} bytes a recovery expands a chunk to (snaked writes chunks of about 1 MiB): \
+         refused, nothing written",
+        path.display()
+    )]
+    ChunkTooLarge {
+        path: PathBuf,
+        offset: u64,
+        declared: u64,
+        limit: u64,
+    },
+    #[error(
+        "{}: the record at byte {offset} (opcode {opcode:#04x}) is {len} bytes long, more than \
+         the {limit} bytes a recovery reads at once: refused, nothing written",
+        path.display()
+    )]
+    RecordTooLarge {
+        path: PathBuf,
+        offset: u64,
+        opcode: u8,
+        len: u64,
+        limit: u64,
+    },
+    /// Not one message in a complete chunk: no file is written.
+    #[error("{}: nothing to recover: {why}; nothing written", path.display())]
+    Nothing { path: PathBuf, why: String },
     #[error("cannot create {}: {reason}", path.display())]
     Create { path: PathBuf, reason: io::Error },
-    #[error("cannot write {}: {reason}", path.display())]
-    Write { path: PathBuf, reason: McapError },
+    #[error("cannot write {}: {reason}{}", path.display(), write_hint(reason))]
+    Write { path: PathBuf, reason: io::Error },
+}
+
+/// What a failed write's reason means for the operator.
+fn write_hint(reason: &io::Error) -> &'static str {
+    match reason.raw_os_error() {
+        Some(libc::ENOSPC) => {
+            " (ENOSPC: the disk is full; free some space or recover to another disk)"
+        }
+        Some(libc::EDQUOT) => " (EDQUOT: the disk quota is used up)",
+        Some(libc::EFBIG) => " (EFBIG: past the file-size limit, `ulimit -f`)",
+        _ => "",
+    }
 }
 
 /// What a recovery found and wrote.
@@ -64,24 +115,14 @@ pub fn recovered_path(input: &Path) -> PathBuf {
 }
 
 /// Writes `output` (which must not exist) from the complete part of `input`. A file
-/// that already ends with its footer is left alone (`already_finished`).
+/// that already ends with its footer is left alone (`already_finished`). On any error
+/// `output` is not created.
 pub fn recover(input: &Path, output: &Path) -> Result<Recovery, RecoverError> {
     let read_err = |reason| RecoverError::Read {
         path: input.to_path_buf(),
         reason,
     };
-    let mut file = File::open(input).map_err(read_err)?;
-    let len = file.metadata().map_err(read_err)?.len();
-    let mut magic = [0u8; 8];
-    file.read_exact(&mut magic)
-        .map_err(|_| RecoverError::NotMcap {
-            path: input.to_path_buf(),
-        })?;
-    if magic != mcap::MAGIC {
-        return Err(RecoverError::NotMcap {
-            path: input.to_path_buf(),
-        });
-    }
+    let (mut file, len) = open_input(input)?;
     if ends_finished(&mut file, len).map_err(read_err)? {
         return Ok(Recovery {
             already_finished: true,
@@ -89,30 +130,64 @@ pub fn recover(input: &Path, output: &Path) -> Result<Recovery, RecoverError> {
         });
     }
     file.seek(SeekFrom::Start(0)).map_err(read_err)?;
-    let out = File::create_new(output).map_err(|reason| RecoverError::Create {
-        path: output.to_path_buf(),
-        reason,
-    })?;
-    let mut copy = Copy {
-        out: Some(out),
-        writer: None,
-        rec: Recovery::default(),
-        channels: BTreeMap::new(),
-    };
+    let (mut partial, out) = Partial::create(output)?;
+    let (rec, out) = copy::copy(&mut file, len, input, output, BufWriter::new(out))?;
     let write_err = |reason| RecoverError::Write {
         path: output.to_path_buf(),
         reason,
     };
-    let done = match copy.run(&mut file, len) {
-        Ok(()) => copy.finish(input).map_err(write_err),
-        Err(Stop::Input(McapError::Io(e))) => Err(read_err(e)),
-        Err(Stop::Input(e) | Stop::Output(e)) => Err(write_err(e)),
+    out.into_inner()
+        .map_err(|e| write_err(e.into_error()))?
+        .sync_all()
+        .map_err(write_err)?;
+    partial.persist().map_err(write_err)?;
+    Ok(rec)
+}
+
+/// Opens `input` without blocking (a FIFO would wait for a writer), refuses anything
+/// but a regular file, and checks its magic. Its length too.
+fn open_input(input: &Path) -> Result<(File, u64), RecoverError> {
+    let read_err = |reason| RecoverError::Read {
+        path: input.to_path_buf(),
+        reason,
     };
-    if done.is_err() {
-        // A half-written copy would only mislead.
-        let _ = std::fs::remove_file(output);
+    let mut file = OpenOptions::new()
+        .read(true)
+        .custom_flags(libc::O_NONBLOCK | libc::O_NOCTTY)
+        .open(input)
+        .map_err(read_err)?;
+    let meta = file.metadata().map_err(read_err)?;
+    let t = meta.file_type();
+    let kind = if t.is_file() {
+        None
+    } else if t.is_fifo() {
+        Some("a FIFO")
+    } else if t.is_dir() {
+        Some("a directory")
+    } else if t.is_char_device() {
+        Some("a character device")
+    } else if t.is_block_device() {
+        Some("a block device")
+    } else if t.is_socket() {
+        Some("a socket")
+    } else {
+        Some("not a file")
+    };
+    if let Some(kind) = kind {
+        return Err(RecoverError::NotAFile {
+            path: input.to_path_buf(),
+            kind,
+        });
     }
-    done.map(|()| copy.rec)
+    let mut magic = [0u8; 8];
+    let not_mcap = || RecoverError::NotMcap {
+        path: input.to_path_buf(),
+    };
+    file.read_exact(&mut magic).map_err(|_| not_mcap())?;
+    if magic != mcap::MAGIC {
+        return Err(not_mcap());
+    }
+    Ok((file, meta.len()))
 }
 
 /// Whether the file ends with the MCAP magic after room for a footer: a finished file.
@@ -127,189 +202,110 @@ fn ends_finished(file: &mut File, len: u64) -> io::Result<bool> {
     Ok(tail == mcap::MAGIC)
 }
 
-type Out = Writer<NoSeek<BufWriter<File>>>;
-
-/// The copy in progress.
-struct Copy {
-    /// The output file until the input's header is read (the writer writes its header
-    /// with the input's profile).
-    out: Option<File>,
-    writer: Option<Out>,
-    rec: Recovery,
-    /// Topic of each channel id.
-    channels: BTreeMap<u16, String>,
+/// The output while it is written: a hidden file in the output's directory
+/// (`.NAME.partial-PID`), renamed to the output only once finished and removed
+/// otherwise, so a failure never leaves a file that a rerun would refuse to overwrite.
+struct Partial {
+    tmp: PathBuf,
+    output: PathBuf,
+    persisted: bool,
 }
 
-impl Copy {
-    /// Reads `input` record by record until its data section ends or a record fails.
-    /// Only reading the file itself is an error; a record that fails ends the copy.
-    fn run(&mut self, input: &mut File, len: u64) -> Result<(), Stop> {
-        // A length beyond the file (a chunk that never got its length) fails at once.
-        let limit = usize::try_from(len).unwrap_or(usize::MAX);
-        let mut reader = LinearReader::new_with_options(
-            LinearReaderOptions::default()
-                .with_emit_chunks(true)
-                .with_record_length_limit(limit),
-        );
-        // The reader asks for exactly the bytes of the record it reads: after a record,
-        // everything fed so far is complete.
-        let (mut fed, mut complete) = (0u64, 0u64);
-        while let Some(event) = reader.next_event() {
-            let record = match event {
-                Ok(LinearReadEvent::ReadRequest(need)) => {
-                    let n = input
-                        .read(reader.insert(need))
-                        .map_err(|e| Stop::Input(McapError::Io(e)))?;
-                    reader.notify_read(n);
-                    fed += n as u64;
-                    continue;
-                }
-                Ok(LinearReadEvent::Record { opcode, data }) => mcap::parse_record(opcode, data),
-                Err(e) => Err(e),
-            };
-            match record.map_err(Stop::Input).and_then(|r| self.record(r)) {
-                Ok(end) => {
-                    complete = fed;
-                    if end {
-                        break;
-                    }
-                }
-                Err(Stop::Input(e)) => {
-                    self.rec.stopped = Some(e.to_string());
-                    break;
-                }
-                Err(e) => return Err(e),
-            }
-        }
-        self.rec.lost_bytes = len.saturating_sub(complete);
-        Ok(())
-    }
-
-    /// Copies one record; `Ok(true)` at the end of the data section.
-    fn record(&mut self, record: Record<'_>) -> Result<bool, Stop> {
-        match record {
-            Record::Header(h) => {
-                let Some(out) = self.out.take() else {
-                    return Ok(false); // a second header: nothing to copy
-                };
-                let options = WriteOptions::new()
-                    .profile(h.profile)
-                    .compression(Some(mcap::Compression::Zstd))
-                    .chunk_size(Some(CHUNK))
-                    .disable_seeking(true);
-                self.writer = Some(
-                    options
-                        .create(NoSeek::new(BufWriter::new(out)))
-                        .map_err(Stop::Output)?,
-                );
-            }
-            Record::Chunk { header, data } => {
-                // Decompressed and checked whole before any of it is copied.
-                let inner: Vec<Record<'_>> = mcap::read::ChunkReader::new(header, &data)
-                    .map_err(Stop::Input)?
-                    .collect::<Result<_, _>>()
-                    .map_err(Stop::Input)?;
-                for r in inner {
-                    self.record(r)?;
-                }
-                self.rec.chunks += 1;
-            }
-            Record::DataEnd(_) | Record::Footer(_) => return Ok(true),
-            r => self.copy(r)?,
-        }
-        Ok(false)
-    }
-
-    fn copy(&mut self, record: Record<'_>) -> Result<(), Stop> {
-        if self.writer.is_none() {
-            // Records before a header: not an MCAP file we can copy.
-            return Err(Stop::Input(McapError::UnexpectedEof));
-        }
-        self.copy_into(record).map_err(Stop::Output)
-    }
-
-    fn copy_into(&mut self, record: Record<'_>) -> Result<(), McapError> {
-        let w = self.writer.as_mut().expect("checked by copy");
-        match record {
-            Record::Schema { header, data } => {
-                w.add_schema_with_id(header.id, &header.name, &header.encoding, &data)?;
-            }
-            Record::Channel(c) => {
-                w.add_channel_with_id(
-                    c.id,
-                    c.schema_id,
-                    &c.topic,
-                    &c.message_encoding,
-                    &c.metadata,
-                )?;
-                self.channels.insert(c.id, c.topic);
-            }
-            Record::Message { header, data } => {
-                w.write_to_known_channel(&header, &data)?;
-                self.count(&header);
-            }
-            Record::Metadata(m) => w.write_metadata(&m)?,
-            Record::Attachment { header, data, .. } => w.attach(&mcap::Attachment {
-                log_time: header.log_time,
-                create_time: header.create_time,
-                name: header.name,
-                media_type: header.media_type,
-                data,
-            })?,
-            // Indexes and statistics are rebuilt by the writer.
-            _ => {}
-        }
-        Ok(())
-    }
-
-    fn count(&mut self, h: &MessageHeader) {
-        let rec = &mut self.rec;
-        rec.messages += 1;
-        let topic = self
-            .channels
-            .get(&h.channel_id)
-            .cloned()
-            .unwrap_or_default();
-        *rec.per_topic.entry(topic).or_insert(0) += 1;
-        rec.log_time_ns = Some(match rec.log_time_ns {
-            None => (h.log_time, h.log_time),
-            Some((a, b)) => (a.min(h.log_time), b.max(h.log_time)),
-        });
-    }
-
-    /// Notes the recovery in the file, writes its summary and footer, syncs.
-    fn finish(&mut self, input: &Path) -> Result<(), McapError> {
-        let Some(mut w) = self.writer.take() else {
-            return Err(McapError::UnexpectedEof);
+impl Partial {
+    /// The hidden file, created, and its handle.
+    fn create(output: &Path) -> Result<(Self, File), RecoverError> {
+        let create_err = |reason| RecoverError::Create {
+            path: output.to_path_buf(),
+            reason,
         };
-        let r = &self.rec;
-        let note = BTreeMap::from([
-            ("from".to_owned(), input.display().to_string()),
-            ("chunks".to_owned(), r.chunks.to_string()),
-            ("messages".to_owned(), r.messages.to_string()),
-            ("lost_bytes".to_owned(), r.lost_bytes.to_string()),
-            ("stopped".to_owned(), r.stopped.clone().unwrap_or_default()),
-        ]);
-        w.write_metadata(&mcap::records::Metadata {
-            name: "snaked.recovery".into(),
-            metadata: note,
-        })?;
-        w.finish()?;
-        let file = w
-            .into_inner()
-            .into_inner()
-            .into_inner()
-            .map_err(|e| e.into_error())?;
-        file.sync_all()?;
+        if output.symlink_metadata().is_ok() {
+            return Err(create_err(io::Error::new(
+                io::ErrorKind::AlreadyExists,
+                "it exists, and a recovery never overwrites a file",
+            )));
+        }
+        let name = output
+            .file_name()
+            .ok_or_else(|| create_err(io::Error::from(io::ErrorKind::InvalidInput)))?;
+        let dir = match output.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d,
+            _ => Path::new("."),
+        };
+        let pid = std::process::id();
+        for n in 0..100 {
+            let suffix = if n == 0 {
+                String::new()
+            } else {
+                format!(".{n}")
+            };
+            let tmp = dir.join(format!(".{}.partial-{pid}{suffix}", name.to_string_lossy()));
+            match File::create_new(&tmp) {
+                Ok(file) => {
+                    let partial = Self {
+                        tmp,
+                        output: output.to_path_buf(),
+                        persisted: false,
+                    };
+                    return Ok((partial, file));
+                }
+                Err(e) if e.kind() == io::ErrorKind::AlreadyExists => continue,
+                Err(e) => return Err(create_err(e)),
+            }
+        }
+        Err(create_err(io::Error::from(io::ErrorKind::AlreadyExists)))
+    }
+
+    /// Renames the finished file to the output, unless the output appeared meanwhile,
+    /// and syncs the directory (at best) so the name survives a power loss.
+    fn persist(&mut self) -> io::Result<()> {
+        rename_no_replace(&self.tmp, &self.output)?;
+        self.persisted = true;
+        let dir = match self.output.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d,
+            _ => Path::new("."),
+        };
+        let _ = File::open(dir).and_then(|d| d.sync_all());
         Ok(())
     }
 }
 
-/// Why copying stopped: the input's end (expected after a crash; only a failed read of
-/// the file is an error) or a failed write.
-enum Stop {
-    Input(McapError),
-    Output(McapError),
+impl Drop for Partial {
+    fn drop(&mut self) {
+        if !self.persisted {
+            let _ = std::fs::remove_file(&self.tmp);
+        }
+    }
+}
+
+/// `rename(from, to)` that fails if `to` exists (`renameat2(RENAME_NOREPLACE)`; a hard
+/// link and an unlink on a file system without it).
+fn rename_no_replace(from: &Path, to: &Path) -> io::Result<()> {
+    let c = |p: &Path| {
+        CString::new(p.as_os_str().as_bytes())
+            .map_err(|_| io::Error::from(io::ErrorKind::InvalidInput))
+    };
+    let (f, t) = (c(from)?, c(to)?);
+    // SAFETY: two NUL-terminated paths that outlive the call.
+    let r = unsafe {
+        libc::renameat2(
+            libc::AT_FDCWD,
+            f.as_ptr(),
+            libc::AT_FDCWD,
+            t.as_ptr(),
+            libc::RENAME_NOREPLACE,
+        )
+    };
+    if r == 0 {
+        return Ok(());
+    }
+    let e = io::Error::last_os_error();
+    match e.raw_os_error() {
+        Some(libc::EINVAL | libc::ENOSYS) => {
+            std::fs::hard_link(from, to)?;
+            std::fs::remove_file(from)
+        }
+        _ => Err(e),
+    }
 }
 
 #[cfg(test)]

@@ -1,6 +1,7 @@
 //! Recovery of a file cut short, and what it refuses.
 
 use std::collections::BTreeMap;
+use std::io;
 
 use mcap::records::Record;
 
@@ -100,5 +101,104 @@ fn the_recovered_file_sits_beside_the_input() {
     assert_eq!(
         recovered_path(Path::new("/var/lib/snaked/run-1.mcap")),
         Path::new("/var/lib/snaked/run-1.recovered.mcap")
+    );
+}
+
+// Files refused, and what is left after a failure.
+
+/// How many files `dir` holds: the input alone, after a failure (no output, no partial
+/// file).
+fn files(dir: &Path) -> usize {
+    std::fs::read_dir(dir).expect("read_dir").count()
+}
+
+#[test]
+fn only_the_magic_is_blamed_on_the_input() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = dir.path().join("magic.mcap");
+    std::fs::write(&path, mcap::MAGIC).expect("write");
+    let err = recover(&path, &dir.path().join("out.mcap")).expect_err("nothing");
+    assert!(matches!(err, RecoverError::Nothing { .. }), "{err:?}");
+    let msg = err.to_string();
+    assert!(
+        msg.contains("magic.mcap") && msg.contains("only the MCAP magic"),
+        "{msg}"
+    );
+    assert!(!msg.contains("out.mcap"), "{msg}");
+    assert_eq!(files(dir.path()), 1);
+}
+
+#[test]
+fn a_file_without_a_complete_chunk_has_nothing_to_recover() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    // One chunk (10 s of chunk, 300 ms of messages), cut in its middle.
+    let path = cut(dir.path(), 300, 10.0, |len| len / 2);
+    let out = dir.path().join("out.mcap");
+    let err = recover(&path, &out).expect_err("nothing");
+    let msg = err.to_string();
+    assert!(matches!(err, RecoverError::Nothing { .. }), "{err:?}");
+    assert!(
+        msg.contains("no complete chunk") && msg.contains("cut.mcap"),
+        "{msg}"
+    );
+    assert_eq!(files(dir.path()), 1, "no empty 'finished' file");
+}
+
+#[test]
+fn a_directory_is_refused() {
+    // A FIFO too, at once (`tests/integration/record/recover.rs`, through snaked).
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("out.mcap");
+    let err = recover(dir.path(), &out).expect_err("a directory");
+    assert!(
+        matches!(
+            err,
+            RecoverError::NotAFile {
+                kind: "a directory",
+                ..
+            }
+        ),
+        "{err:?}"
+    );
+    assert!(!out.exists());
+}
+
+/// A disk with room for `room` bytes.
+struct Full {
+    room: usize,
+}
+
+impl io::Write for Full {
+    fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
+        if self.room == 0 {
+            return Err(io::Error::from_raw_os_error(libc::ENOSPC));
+        }
+        let n = buf.len().min(self.room);
+        self.room -= n;
+        Ok(n)
+    }
+
+    fn flush(&mut self) -> io::Result<()> {
+        Ok(())
+    }
+}
+
+#[test]
+fn a_full_output_disk_says_so() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = cut(dir.path(), 3000, 0.02, |len| len - 100);
+    let mut input = File::open(&path).expect("open");
+    let len = input.metadata().expect("len").len();
+    let out = Path::new("/media/full/out.mcap");
+    let Err(err) = copy::copy(&mut input, len, &path, out, Full { room: 16 * 1024 }) else {
+        panic!("the disk filled");
+    };
+    assert!(matches!(err, RecoverError::Write { .. }), "{err:?}");
+    let msg = err.to_string();
+    assert!(
+        msg.contains("cannot write /media/full/out.mcap")
+            && msg.contains("No space left on device")
+            && msg.contains("ENOSPC"),
+        "{msg}"
     );
 }

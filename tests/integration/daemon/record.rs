@@ -379,3 +379,59 @@ fn a_full_disk_is_reported_as_an_unfinished_file_that_recovers() {
         "{first}..{last} s, {held} s held"
     );
 }
+
+/// `snaked ARGS --config CONFIG`: its exit code and what it said on stderr.
+fn snaked_with(config: &std::path::Path, args: &[&str]) -> (Option<i32>, String) {
+    let out = Command::new(exe("snaked"))
+        .args(args)
+        .arg("--config")
+        .arg(config)
+        .env("RUST_LOG", "off")
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr).into_owned();
+    (out.status.code(), err)
+}
+
+/// `--check-config` refuses the `[record]` settings the recorder would refuse when the
+/// daemon starts (by the recorder's own check), and the daemon refuses them the same
+/// way: exit 2, the file and the key named.
+#[test]
+fn check_config_refuses_the_record_settings_the_start_would() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path().display();
+    let config = dir.path().join("c.toml");
+    let sock = dir.path().join("s.sock");
+    let start = ["--emulated", "--socket", sock.to_str().unwrap()];
+    for (text, key) in [
+        (
+            format!("[record]\npath = \"{d}/r.mcap\"\nmax_mb = 5e-324\n"),
+            "record.max_mb",
+        ),
+        (
+            format!("[record]\npath = \"{d}/r.mcap\"\nmax_mb = 0.5\n"),
+            "record.max_mb",
+        ),
+        (format!("[record]\npath = \"{d}\"\n"), "record.path"),
+        (
+            format!("[record]\npath = \"{d}/missing/r-{{time}}.mcap\"\n"),
+            "record.path",
+        ),
+    ] {
+        std::fs::write(&config, &text).unwrap();
+        for args in [&["--check-config"][..], &start] {
+            let (code, err) = snaked_with(&config, args);
+            assert_eq!(code, Some(2), "{args:?} {text}: {err}");
+            assert!(err.contains("c.toml") && err.contains(key), "{text}: {err}");
+        }
+    }
+    // At the smallest cap, in a directory that exists, it is fine.
+    let text = format!("[record]\npath = \"{d}/r.mcap\"\nmax_mb = 1\n");
+    std::fs::write(&config, text).unwrap();
+    let (code, err) = snaked_with(&config, &["--check-config"]);
+    assert_eq!(code, Some(0), "{err}");
+    assert!(
+        !dir.path().join("r.mcap").exists(),
+        "a check creates nothing"
+    );
+}

@@ -2,4 +2,5 @@ mod layout;
 mod live;
 mod no_alloc;
 mod python;
+mod recover;
 mod writer;

@@ -216,8 +216,8 @@ fn a_size_cap_finishes_a_valid_file_and_keeps_draining() {
     let dir = tempfile::tempdir().expect("tempdir");
     let path = dir.path().join("capped.mcap");
     let (catalog, id) = catalog();
-    let cap = 64 * 1024;
-    let items = run(3000, id, true);
+    // The smallest cap the recorder takes (chunks of 1/8 of it).
+    let cap = snaked::record::MIN_MAX_BYTES;
     let opts = RecordOptions {
         mcap: Some(McapOptions {
             max_bytes: Some(cap),
@@ -227,18 +227,36 @@ fn a_size_cap_finishes_a_valid_file_and_keeps_draining() {
         ..RecordOptions::default()
     };
     let (tx, rec) = start(opts, info(catalog, true)).expect("start");
-    push_all_waiting(&tx, &items);
+    // Cycles of the scripted run (made as they are pushed) until the cap is reached,
+    // then as many again: drained, not written.
+    let (mut k, mut pushed) = (0, 0u64);
+    let mut push = |k: u64| {
+        let items = events_at(k, id).into_iter().chain(stats_at(k));
+        for item in items.chain([cycle(k, id, true)]) {
+            assert!(tx.push_wait(&item), "refused");
+            pushed += 1;
+        }
+    };
+    while rec.status().capped.is_none() {
+        assert!(k < 200_000, "the cap was never reached");
+        push(k);
+        k += 1;
+    }
+    for more in k..2 * k {
+        push(more);
+    }
     let summary = rec.finish().expect("finish");
     assert_eq!(summary.capped, Some(CapReason::MaxBytes));
-    assert_eq!(summary.items, items.len() as u64, "drained to the end");
+    assert_eq!(summary.items, pushed, "drained to the end");
     assert_eq!(summary.dropped, 0, "push_wait waits instead");
     let file = read_mcap(&path);
     let joints = file.counts["/joints"];
-    assert!(joints > 0 && joints < 3000, "{joints} /joints messages");
+    assert!(joints > 0 && joints <= k, "{joints} /joints messages of {}", 2 * k);
     assert_eq!(summary.per_topic, file.counts);
     let size = std::fs::metadata(&path).expect("size").len();
     assert!(size >= cap, "stopped at {size} bytes, before the cap");
-    assert!(size < cap + 64 * 1024, "{size} bytes: far over the cap");
+    // Past the cap by at most a chunk (1/8 of it) and the summary.
+    assert!(size < cap + cap / 8 + 64 * 1024, "{size} bytes: far over the cap");
     assert_eq!(file.metadata["snaked.status"]["capped"], "max_bytes");
 }
 
