@@ -20,7 +20,8 @@ use crate::emu::servo::PositionLoop;
 use crate::gait::GaitKind;
 
 /// The options of every experiment. `--starts`, `--repeats`, `--seconds` and `--out`
-/// default to the experiment's own (shown by `--help`).
+/// default to the experiment's own (shown by `--help`), the first three to a protocol
+/// file's where the experiment has one (`lab::protocol`).
 #[derive(Debug, Clone, clap::Args)]
 pub struct CommonArgs {
     /// Controllers to compare, comma-separated (default: the experiment's, see
@@ -33,13 +34,16 @@ pub struct CommonArgs {
     /// unless it names another; other keys override the configuration (docs/lab.md).
     #[arg(long = "variant", value_name = "LABEL=JSON")]
     pub variants: Vec<String>,
-    /// Starts (poses) per layout.
+    /// Starts (poses) per layout (a protocol file's value, if it gives one, before the
+    /// default).
     #[arg(long)]
     pub starts: Option<usize>,
-    /// Trials per start, differing only in their sensor-noise seed.
+    /// Trials per start, differing only in their sensor-noise seed (a protocol file's
+    /// value, if it gives one, before the default).
     #[arg(long)]
     pub repeats: Option<usize>,
-    /// Time limit of a trial, simulated s.
+    /// Time limit of a trial, simulated s (a protocol file's value, if it gives one,
+    /// before the default).
     #[arg(long)]
     pub seconds: Option<f64>,
     /// Worker threads (default: the available parallelism).
@@ -66,7 +70,8 @@ pub struct CommonArgs {
     pub servo_loop: PositionLoop,
     /// The experiment's gait's nominal parameters, a partial set as the socket's
     /// `params.set` takes it, checked as the daemon checks it (default: the daemon's,
-    /// docs/gaits.md), e.g. '{"amplitude_lat_rad":1.1,"spatial_freq_rad":6.28}'.
+    /// docs/gaits.md, patched by the scenario's protocol if it has one; given, it
+    /// patches those), e.g. '{"amplitude_lat_rad":1.1,"spatial_freq_rad":6.28}'.
     #[arg(long = "nominal", value_name = "JSON")]
     pub nominal: Option<String>,
     /// The gait `--nominal` patches, by name (default: the experiment's; crossing runs
@@ -128,7 +133,10 @@ impl<E: Experiment> Lab for Plugin<E> {
         // clap keeps defaults as 'static strings; a handful per process.
         let leak = |s: String| -> &'static str { Box::leak(s.into_boxed_str()) };
         let cmd = clap::Command::new(self.0.name()).about(self.0.summary());
-        let cmd = E::Args::augment_args(CommonArgs::augment_args(cmd));
+        // The experiment's summary, not the option structs' doc comments.
+        let cmd = E::Args::augment_args(CommonArgs::augment_args(cmd))
+            .about(self.0.summary())
+            .long_about(None);
         cmd.mut_arg("starts", |a| a.default_value(leak(d.starts.to_string())))
             .mut_arg("repeats", |a| a.default_value(leak(d.repeats.to_string())))
             .mut_arg("seconds", |a| a.default_value(leak(d.seconds.to_string())))
