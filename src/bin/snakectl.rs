@@ -36,6 +36,10 @@ struct Cli {
     /// Seconds to wait for an answer.
     #[arg(long, value_name = "S", default_value_t = 5.0, global = true)]
     timeout: f64,
+    /// Take the drive from whoever holds it before the command (one operator drives at
+    /// a time: a driving command is refused while another client drives).
+    #[arg(long, global = true)]
+    take_over: bool,
     #[command(subcommand)]
     cmd: Cmd,
 }
@@ -221,6 +225,9 @@ fn converse(
 ) -> Result<(), Failure> {
     if let Some(token) = token {
         client.call("auth", Some(json!({ "token": token })))?;
+    }
+    if cli.take_over {
+        client.call("take_over", None)?;
     }
     let result = client.call(method, params)?;
     match &cli.cmd {

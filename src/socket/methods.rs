@@ -62,7 +62,9 @@ pub(crate) async fn dispatch(
         ));
     }
     let now = std::time::Instant::now();
-    if driver::DRIVING.contains(&method) {
+    // Stopping the navigator stops driving: anyone may.
+    let navigation_off = method == "navigate" && p.contains("off");
+    if driver::DRIVING.contains(&method) && !navigation_off {
         shared.driver.claim(session.who(), now)?;
     }
     if navigate::TAKES_OVER.contains(&method) {
@@ -82,6 +84,7 @@ pub(crate) async fn dispatch(
             p.finish(&[])?;
             let mut v = views::status(&shared.telemetry.latest(), &shared.info, &shared.catalog);
             v["driver"] = views::driver(shared.driver.driver(now).as_ref());
+            v["record"] = shared.record();
             Ok(v)
         }
         "gait.stop" | "gait.resume" => {
@@ -181,7 +184,9 @@ pub(crate) async fn dispatch(
         "arm" => act(shared, p, LoopRequest::Arm).await,
         "stats" => {
             p.finish(&[])?;
-            Ok(views::stats(&shared.telemetry.latest()))
+            let mut v = views::stats(&shared.telemetry.latest());
+            v["record"] = shared.record();
+            Ok(v)
         }
         "telemetry.subscribe" => {
             let (min, max) = RATE_RANGE_HZ;

@@ -124,6 +124,12 @@ async fn start(
 ) -> Result<Value, RpcError> {
     let config: NavigatorConfig = match config {
         None => NavigatorConfig::DEFAULT,
+        // serde would read a struct from an array too (`[]`: every default).
+        Some(v) if !v.is_object() => {
+            return Err(RpcError::invalid_params(
+                "config: an object of the navigator's settings, e.g. {\"slither_max_s\": 60}",
+            ));
+        }
         Some(v) => serde_json::from_value(v)
             .map_err(|e| RpcError::invalid_params(format!("config: {e}")))?,
     };

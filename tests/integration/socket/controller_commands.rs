@@ -52,7 +52,10 @@ fn a_controller_is_calibrated_through_the_socket_and_snakectl() {
         s["controller"]["signals"]["calibration"], 0.0,
         "uncalibrated: {s}"
     );
-    let text = snakectl(&l, &["controller", "calibrate", "--seconds", "1"]);
+    let text = snakectl(
+        &l,
+        &["--take-over", "controller", "calibrate", "--seconds", "1"],
+    );
     assert!(text.contains("calibrated over 1.0 s"), "{text}");
     assert!(text.contains("offset lateral_rad"), "{text}");
     assert!(text.contains("friction_offset"), "{text}");
@@ -79,7 +82,7 @@ fn a_controller_is_calibrated_through_the_socket_and_snakectl() {
         .call("controller.calibrate", Some(json!({"gait": "slithering"})))
         .unwrap();
     assert!((r["seconds"].as_f64().unwrap() - 3.0 * std::f64::consts::TAU / 3.0).abs() < 1e-9);
-    let text = snakectl(&l, &["controller", "calibrate", "--clear"]);
+    let text = snakectl(&l, &["--take-over", "controller", "calibrate", "--clear"]);
     assert!(text.contains("cleared"), "{text}");
     let s = status_when(&mut c, |s| s["controller"]["signals"]["calibration"] == 0.0);
     assert_eq!(s["controller"]["signals"]["calibration"], 0.0, "{s}");
@@ -108,6 +111,7 @@ fn a_calibration_waiting_when_the_server_shuts_down_is_refused_not_cut_off() {
         Some(Duration::from_secs(20)),
     )
     .unwrap();
+    waiting.call("take_over", None).unwrap(); // c drove first: one operator at a time
     waiting
         .send_line(r#"{"id":3,"method":"controller.calibrate","params":{"seconds":60}}"#)
         .unwrap();
@@ -170,12 +174,26 @@ fn a_nominal_heading_is_set_through_the_socket_and_snakectl() {
     assert_eq!(r["heading_rad"], -1.0);
     let text = snakectl(
         &l,
-        &["controller", "heading", "here", "--gait", "sidewinding"],
+        &[
+            "--take-over",
+            "controller",
+            "heading",
+            "here",
+            "--gait",
+            "sidewinding",
+        ],
     );
     assert!(text.contains("nominal heading \"here\""), "{text}");
     let text = snakectl(
         &l,
-        &["controller", "heading", "-0.3", "--gait", "sidewinding"],
+        &[
+            "--take-over",
+            "controller",
+            "heading",
+            "-0.3",
+            "--gait",
+            "sidewinding",
+        ],
     );
     assert!(text.contains("nominal heading -0.3"), "{text}");
 }
@@ -194,6 +212,7 @@ fn the_pole_climbing_controller_is_tuned_and_reported_through_the_socket() {
     let text = snakectl(
         &l,
         &[
+            "--take-over",
             "controller",
             "set",
             "rolling_helix",

@@ -286,6 +286,7 @@ fn status_telemetry_and_snakectl_show_any_controller_s_report() {
     let text = snakectl(
         &l,
         &[
+            "--take-over",
             "controller",
             "set",
             "slithering",

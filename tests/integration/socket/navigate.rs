@@ -23,6 +23,8 @@ fn navigate_checks_its_params_and_is_refused_while_it_cannot_steer() {
         json!({"off": true, "config": {}}),
         json!({"heading_rad": 0.5, "config": {"bogus": 1}}),
         json!({"heading_rad": 0.5, "config": {"settle_s": -1.0}}),
+        json!({"heading_rad": 0.5, "config": []}),
+        json!({"heading_rad": 0.5, "config": [60.0]}),
         json!({"heading_rad": 0.5, "speed": 1.0}),
     ] {
         let r = call(&mut c, "navigate", bad.clone());
@@ -63,7 +65,7 @@ fn the_navigator_drives_through_the_loop_reports_itself_and_yields_to_the_operat
     assert_eq!(s["navigator"]["stopped"], Value::Null, "never ran: {s}");
     // Across the body: the navigator sidewinds (with anti-compliant sidewinding).
     let heading = s["body"]["heading_rad"].as_f64().unwrap() + 1.5;
-    let text = snakectl(&l, &["navigate", &format!("{heading}")]);
+    let text = snakectl(&l, &["--take-over", "navigate", &format!("{heading}")]);
     assert!(text.contains("navigating towards"), "{text}");
     let s = status_when(&mut c, |s| {
         s["navigator"]["choice"] == "sidewind"
