@@ -109,11 +109,11 @@ impl GaitClock {
     }
 
     pub fn motion(&self) -> Motion {
-        match (self.ramp, self.rate) {
-            (Some(r), _) if r.to < r.from => Motion::Stopping,
-            (Some(_), _) => Motion::Starting,
-            (None, r) if r == 0.0 => Motion::Stopped,
-            (None, _) => Motion::Running,
+        match self.ramp {
+            Some(r) if r.to < r.from => Motion::Stopping,
+            Some(_) => Motion::Starting,
+            None if self.rate == 0.0 => Motion::Stopped,
+            None => Motion::Running,
         }
     }
 
@@ -183,7 +183,7 @@ mod tests {
             }
             let next = c.advance(t);
             let rate = (next - tau) / DT;
-            assert!(rate >= -1e-12 && rate <= 1.0 + 1e-12, "rate {rate} at {t}");
+            assert!((-1e-12..=1.0 + 1e-12).contains(&rate), "rate {rate} at {t}");
             // Smooth: the rate changes by at most 1.5/0.3 per second.
             assert!((rate - last_rate).abs() <= 1.5 / 0.3 * DT + 1e-9);
             if t >= 1.0 + 0.3 + DT {
