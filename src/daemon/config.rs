@@ -399,7 +399,7 @@ mod tests {
         use std::os::unix::fs::PermissionsExt;
         let dir = tempfile::tempdir().unwrap();
         let token = dir.path().join("token");
-        std::fs::write(&token, "s3cret\n").unwrap();
+        std::fs::write(&token, "s3cret-s3cret-s3cret\n").unwrap();
         let text = format!(
             "[control]\ntcp_port = 7878\ntcp_token_file = \"{}\"\n",
             token.display()

@@ -99,6 +99,7 @@ impl Config {
                 )
             })?;
         }
+        self.foxglove_checks(path)?;
         let cap = crate::rt::control_loop::MAX_REQUESTS_PER_CYCLE;
         if self.control.channel_capacity < cap {
             return Err(bad(
@@ -131,6 +132,62 @@ impl Config {
             scenario
                 .generate_trial(self.emulator.modules, self.emulator.world_trial)
                 .map_err(|e| bad("emulator.world", world.display().to_string(), e.to_string()))?;
+        }
+        Ok(())
+    }
+
+    /// `[foxglove]` against the rest, and what the daemon reads for it when it starts: the
+    /// token file, the teleop settings, a port of its own, a teleop topic that is none of
+    /// the daemon's own channels, and the connections it lets in below the file limit.
+    fn foxglove_checks(&self, path: &Path) -> Result<(), ConfigError> {
+        let bad = |key: &'static str, value: String, why: String| ConfigError::Invalid {
+            path: path.to_owned(),
+            key,
+            value,
+            why,
+        };
+        let fx = &self.foxglove;
+        if fx.enabled && fx.operate {
+            fx.token().map_err(|e| {
+                bad(
+                    "foxglove.token_file",
+                    fx.token_file.display().to_string(),
+                    e.to_string(),
+                )
+            })?;
+        }
+        fx.teleop()
+            .check()
+            .map_err(|e| bad("foxglove", "teleop settings".into(), e))?;
+        // The recorder's channels, and the live view's and the station's own.
+        use crate::record::viewers::TOPIC as VIEWERS;
+        use crate::station::actions::TOPIC as OPERATOR;
+        let recorder = crate::record::Topic::ALL.iter().map(|t| t.name());
+        if let Some(own) = recorder
+            .chain([VIEWERS, OPERATOR])
+            .find(|t| *t == fx.teleop_topic)
+        {
+            return Err(bad(
+                "foxglove.teleop_topic",
+                format!("{own:?}"),
+                "one of the daemon's own channels (docs/recording.md, \"Channels\"): clients \
+                 would publish twists on the topic it publishes on"
+                    .into(),
+            ));
+        }
+        let tcp = self.control.tcp_port;
+        if fx.enabled && tcp != 0 && fx.port == tcp {
+            return Err(bad(
+                "foxglove.port",
+                fx.port.to_string(),
+                "the control socket's TCP port (control.tcp_port) too: one of them could not \
+                 listen"
+                    .into(),
+            ));
+        }
+        // What the daemon raises its soft limit to when it starts (`daemon::files`).
+        if let Ok(limit) = crate::daemon::files::file_limit() {
+            self.check_file_limit(path, limit.hard)?;
         }
         Ok(())
     }
@@ -215,6 +272,24 @@ impl Config {
                 why,
             ));
         }
+        range(
+            "foxglove.max_connections",
+            fx.max_connections as f64,
+            1.0,
+            4096.0,
+        )?;
+        range(
+            "foxglove.max_connections_per_address",
+            fx.max_connections_per_address as f64,
+            1.0,
+            fx.max_connections as f64,
+        )?;
+        range(
+            "foxglove.handshake_timeout_s",
+            fx.handshake_timeout_s,
+            0.1,
+            60.0,
+        )?;
         // Operating is a privilege: off loopback, only with a token clients must give.
         if fx.operate && !fx.host.is_loopback() && fx.token_file.as_os_str().is_empty() {
             let why = "operating from Foxglove on an address other than loopback needs \

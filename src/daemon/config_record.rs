@@ -8,6 +8,8 @@ use super::config::ConfigError;
 use crate::num::Num;
 use crate::record::McapOptions;
 
+use super::token::{TokenError, read_token};
+
 /// `[record]`: an MCAP file of every cycle (docs/recording.md).
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -117,6 +119,14 @@ pub struct FoxgloveConfig {
     pub teleop_speed_rad_s: f64,
     /// Largest |temporal frequency| teleop asks for, rad/s.
     pub teleop_max_speed_rad_s: f64,
+    /// Connections the server holds at once, counted from accept (a connection still in
+    /// its handshake counts); one more is closed at once, with a warning in the log.
+    pub max_connections: usize,
+    /// ...of which from one IP address.
+    pub max_connections_per_address: usize,
+    /// A connection must complete its WebSocket handshake and take the server's first
+    /// message within this long, s, or it is closed.
+    pub handshake_timeout_s: f64,
 }
 
 impl Default for FoxgloveConfig {
@@ -133,11 +143,24 @@ impl Default for FoxgloveConfig {
             teleop_hold_after_s: t.hold_after_s,
             teleop_speed_rad_s: t.speed_rad_s,
             teleop_max_speed_rad_s: t.max_speed_rad_s,
+            max_connections: 32,
+            max_connections_per_address: 8,
+            handshake_timeout_s: 5.0,
         }
     }
 }
 
 impl FoxgloveConfig {
+    /// The token clients give before operating, from `token_file` (`None`: no file set),
+    /// refused as [`read_token`] refuses it. The daemon reads it when it starts and the
+    /// configuration's check when operating is on, so both refuse the same files.
+    pub fn token(&self) -> Result<Option<String>, TokenError> {
+        if self.token_file.as_os_str().is_empty() {
+            return Ok(None);
+        }
+        read_token(&self.token_file).map(Some)
+    }
+
     /// The teleop settings these give (checked by `TeleopConfig::check`).
     pub fn teleop(&self) -> crate::station::TeleopConfig {
         crate::station::TeleopConfig {

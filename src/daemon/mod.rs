@@ -4,6 +4,7 @@
 pub mod bus_setup;
 pub mod config;
 mod config_record;
+pub mod files;
 pub mod logging;
 pub mod service;
 pub mod token;
@@ -153,6 +154,22 @@ pub fn run(cfg: Config, emulated: bool) -> Result<()> {
         let stop = stop.clone();
         ctrlc::set_handler(move || stop.store(true, Ordering::Relaxed))
             .context("installing the SIGINT/SIGTERM handler")?;
+    }
+
+    // The configuration's check refused caps that do not fit below the hard limit.
+    match files::raise_file_limit() {
+        Ok(n) => tracing::debug!(open_files = n, "file limit"),
+        Err(e) => tracing::warn!("raising the open files' soft limit refused ({e})"),
+    }
+    let needed = cfg.files_needed();
+    if let Ok(l) = files::file_limit()
+        && l.soft < needed
+    {
+        anyhow::bail!(
+            "the connections the configuration lets in need {needed} open files, more than \
+             the {} the process may open (RLIMIT_NOFILE; systemd: LimitNOFILE=)",
+            l.soft
+        );
     }
 
     // Everything that can be refused without the robot is checked before discovery.
@@ -341,6 +358,9 @@ fn start_recorder(
         live: cfg.foxglove.enabled.then(|| LiveOptions {
             addr: std::net::SocketAddr::new(cfg.foxglove.host, cfg.foxglove.port),
             station: station.cloned(),
+            max_connections: Some(cfg.foxglove.max_connections),
+            max_connections_per_address: Some(cfg.foxglove.max_connections_per_address),
+            handshake_timeout: Some(Duration::from_secs_f64(cfg.foxglove.handshake_timeout_s)),
         }),
         ring_capacity: rec.ring_capacity,
         scene_rate_hz: rec.scene_rate_hz,
@@ -365,19 +385,15 @@ fn start_recorder(
 }
 
 /// The operator's station the configuration asks for (`[foxglove] operate`), with its
-/// token read from `token_file`.
+/// token read from `token_file` (as the configuration's check reads it).
 fn operator_station(cfg: &Config) -> Result<Option<Station>> {
     let fx = &cfg.foxglove;
     if !(fx.enabled && fx.operate) {
         return Ok(None);
     }
-    let token = if fx.token_file.as_os_str().is_empty() {
-        None
-    } else {
-        let t = token::read_token(&fx.token_file)
-            .with_context(|| format!("foxglove.token_file {}", fx.token_file.display()))?;
-        Some(t)
-    };
+    let token = fx
+        .token()
+        .with_context(|| format!("foxglove.token_file {}", fx.token_file.display()))?;
     let teleop = fx.teleop();
     teleop
         .check()

@@ -93,6 +93,9 @@ impl ServerListener for Latch {
     }
 }
 
+/// The one encoding clients may publish in (the server's `supportedEncodings`).
+const CLIENT_ENCODING: &str = "json";
+
 /// The server's listener: the latch, the teleop channel and the parameter
 /// subscriptions when operating.
 struct Listener {
@@ -107,7 +110,30 @@ impl ServerListener for Listener {
         self.latch.on_subscribe(client, channel);
     }
 
+    fn on_client_advertise(&self, client: Client, channel: &ClientChannel) {
+        if channel.encoding != CLIENT_ENCODING {
+            tracing::warn!(
+                "live view: foxglove client {} advertised {} in {:?}: refused (json only)",
+                u32::from(client.id()),
+                channel.topic,
+                channel.encoding
+            );
+            client.send_status(
+                Status::error(format!(
+                    "channel {}: encoding {:?} refused: this server takes {CLIENT_ENCODING} \
+                     only; its messages are ignored",
+                    channel.topic, channel.encoding
+                ))
+                .with_id("snaked.client_channel"),
+            );
+        }
+    }
+
     fn on_message_data(&self, client: Client, channel: &ClientChannel, payload: &[u8]) {
+        // A channel in another encoding was refused when advertised: never read.
+        if channel.encoding != CLIENT_ENCODING {
+            return;
+        }
         if let Some(d) = &self.drive {
             d.on_message(&client, &channel.topic, payload);
         }
@@ -192,14 +218,25 @@ impl Live {
         let mut server = ctx
             .websocket_server()
             .name(info.source.clone())
-            .bind(host, opts.addr.port())
-            .fetch_asset_handler_blocking_fn(move |_client, uri: String| {
-                if uri == URDF_URI {
-                    Ok(model.clone().into_bytes())
-                } else {
-                    Err(format!("no asset {uri:?} (this server has {URDF_URI})"))
-                }
-            });
+            .bind(host, opts.addr.port());
+        // Admission (the patched crate, third_party/foxglove): caps counted from accept,
+        // a handshake timeout; a failed accept is retried, never the end of the server.
+        if let Some(n) = opts.max_connections {
+            server = server.max_connections(n);
+        }
+        if let Some(n) = opts.max_connections_per_address {
+            server = server.max_connections_per_ip(n);
+        }
+        if let Some(t) = opts.handshake_timeout {
+            server = server.handshake_timeout(t);
+        }
+        let mut server = server.fetch_asset_handler_blocking_fn(move |_client, uri: String| {
+            if uri == URDF_URI {
+                Ok(model.clone().into_bytes())
+            } else {
+                Err(format!("no asset {uri:?} (this server has {URDF_URI})"))
+            }
+        });
         let mut drive = None;
         let mut operating_now = None;
         let subscribed = Arc::new(AtomicUsize::new(0));
@@ -220,7 +257,7 @@ impl Live {
                     Capability::Services,
                     Capability::Parameters,
                 ])
-                .supported_encodings(["json"])
+                .supported_encodings([CLIENT_ENCODING])
                 .services(services(&operating))
                 .parameter_handler(Arc::new(Parameters {
                     operating: operating.clone(),

@@ -77,6 +77,14 @@ pub struct LiveOptions {
     /// Operating from Foxglove (services, teleop; `[foxglove] operate`): `None`, the
     /// view is for watching only.
     pub station: Option<crate::station::Station>,
+    /// Connections the server holds at once, counted from accept (one still in its
+    /// handshake counts); one more is closed at once, with a warning. `None`: no cap.
+    pub max_connections: Option<usize>,
+    /// ...of which from one IP address.
+    pub max_connections_per_address: Option<usize>,
+    /// A connection that has not completed its WebSocket handshake and taken the server's
+    /// first message within this long is closed. `None`: no timeout.
+    pub handshake_timeout: Option<std::time::Duration>,
 }
 
 impl Default for LiveOptions {
@@ -84,6 +92,9 @@ impl Default for LiveOptions {
         Self {
             addr: SocketAddr::from((Ipv4Addr::LOCALHOST, DEFAULT_LIVE_PORT)),
             station: None,
+            max_connections: None,
+            max_connections_per_address: None,
+            handshake_timeout: None,
         }
     }
 }

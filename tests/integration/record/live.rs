@@ -96,6 +96,7 @@ fn a_client_sees_the_channels_and_receives_joints_and_the_latched_world() {
         live: Some(LiveOptions {
             addr: "127.0.0.1:0".parse().expect("addr"),
             station: None,
+            ..LiveOptions::default()
         }),
         ..RecordOptions::default()
     };

@@ -1,3 +1,4 @@
+mod accept;
 mod layout;
 mod live;
 mod no_alloc;

@@ -437,6 +437,7 @@ fn a_port_in_use_is_a_clear_error() {
         live: Some(LiveOptions {
             addr,
             station: None,
+            ..LiveOptions::default()
         }),
         ..RecordOptions::default()
     };

@@ -3,7 +3,7 @@
 //! panel), a client channel and its messages (Teleop panel) — and what they read back.
 
 use std::collections::BTreeMap;
-use std::net::{SocketAddr, TcpStream};
+use std::net::{IpAddr, SocketAddr, TcpStream};
 use std::time::{Duration, Instant};
 
 use serde_json::{Value, json};
@@ -27,6 +27,12 @@ pub struct FoxgloveClient {
 impl FoxgloveClient {
     /// Connects (retrying until the server listens) and reads the advertisements.
     pub fn connect(addr: SocketAddr, timeout: Duration) -> Self {
+        Self::connect_from(addr, None, timeout)
+    }
+
+    /// As [`Self::connect`], from the local address `source` (on loopback, 127.0.0.2 is
+    /// another client address than 127.0.0.1).
+    pub fn connect_from(addr: SocketAddr, source: Option<IpAddr>, timeout: Duration) -> Self {
         let deadline = Instant::now() + timeout;
         let ws = loop {
             let mut req = format!("ws://{addr}")
@@ -36,7 +42,14 @@ impl FoxgloveClient {
                 "Sec-WebSocket-Protocol",
                 SUBPROTOCOL.parse().expect("header"),
             );
-            match tungstenite::connect(req) {
+            let opened = match source {
+                None => TcpStream::connect(addr),
+                Some(ip) => tcp_from(ip, addr),
+            };
+            let handshake = opened.map_err(|e| e.to_string()).and_then(|s| {
+                tungstenite::client(req, MaybeTlsStream::Plain(s)).map_err(|e| e.to_string())
+            });
+            match handshake {
                 Ok((ws, _)) => break ws,
                 Err(e) => {
                     assert!(Instant::now() < deadline, "connecting to ws://{addr}: {e}");
@@ -143,8 +156,13 @@ impl FoxgloveClient {
 
     /// Advertises a client channel (as the Teleop panel does).
     pub fn advertise(&mut self, id: u32, topic: &str) {
+        self.advertise_in(id, topic, "json");
+    }
+
+    /// Advertises a client channel whose messages are in `encoding`.
+    pub fn advertise_in(&mut self, id: u32, topic: &str, encoding: &str) {
         let m = json!({"op": "advertise", "channels": [
-            {"id": id, "topic": topic, "encoding": "json", "schemaName": "geometry_msgs/Twist"}
+            {"id": id, "topic": topic, "encoding": encoding, "schemaName": "geometry_msgs/Twist"}
         ]});
         self.ws
             .send(Message::Text(m.to_string().into()))
@@ -166,6 +184,18 @@ impl FoxgloveClient {
             self.read_one();
         }
     }
+}
+
+/// A TCP connection to `addr` from the local address `source`.
+pub fn tcp_from(source: IpAddr, addr: SocketAddr) -> std::io::Result<TcpStream> {
+    let s = socket2::Socket::new(
+        socket2::Domain::for_address(addr),
+        socket2::Type::STREAM,
+        None,
+    )?;
+    s.bind(&SocketAddr::new(source, 0).into())?;
+    s.connect(&addr.into())?;
+    Ok(s.into())
 }
 
 /// A twist as the Teleop panel publishes it.
@@ -283,6 +313,26 @@ impl FoxgloveClient {
 }
 
 impl FoxgloveClient {
+    /// Reads until the server closes the connection: the code of its close frame (1005:
+    /// a frame without one), or `None` when it closed without a frame (what clients
+    /// report as 1006).
+    pub fn wait_close(&mut self, within: Duration) -> Option<u16> {
+        let end = Instant::now() + within;
+        while Instant::now() < end {
+            match self.ws.read() {
+                Ok(Message::Close(frame)) => return Some(frame.map_or(1005, |f| f.code.into())),
+                Ok(_) => {}
+                Err(tungstenite::Error::Io(e))
+                    if matches!(
+                        e.kind(),
+                        std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
+                    ) => {}
+                Err(_) => return None,
+            }
+        }
+        panic!("the server did not close the connection within {within:?}");
+    }
+
     /// Subscribes to every channel advertised so far (subscription id = channel id).
     pub fn subscribe_all(&mut self) {
         let subs: Vec<Value> = self

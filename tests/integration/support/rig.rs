@@ -33,12 +33,24 @@ pub struct Proc {
 
 impl Proc {
     pub fn spawn(name: &'static str, exe: &str, args: &[String]) -> Proc {
-        let child = Command::new(exe)
-            .args(args)
+        Self::spawn_with(name, exe, args, |_| {})
+    }
+
+    /// As [`Proc::spawn`], the command prepared by `setup` first (limits, its output).
+    pub fn spawn_with(
+        name: &'static str,
+        exe: &str,
+        args: &[String],
+        setup: impl FnOnce(&mut Command),
+    ) -> Proc {
+        let mut cmd = Command::new(exe);
+        cmd.args(args)
             .stdin(Stdio::null())
             .stdout(Stdio::null())
             .stderr(Stdio::inherit())
-            .env("RUST_LOG", "warn")
+            .env("RUST_LOG", "warn");
+        setup(&mut cmd);
+        let child = cmd
             .spawn()
             .unwrap_or_else(|e| panic!("spawning {name}: {e}"));
         Proc {
@@ -85,6 +97,51 @@ impl Drop for Proc {
             let _ = c.kill();
             let _ = c.wait();
         }
+    }
+}
+
+/// The process `cmd` starts may open at most `n` files (RLIMIT_NOFILE, soft and hard).
+pub fn limit_files(cmd: &mut Command, n: u64) {
+    use std::os::unix::process::CommandExt;
+    // SAFETY: setrlimit is async-signal-safe; nothing else runs between fork and exec.
+    unsafe {
+        cmd.pre_exec(move || {
+            let r = libc::rlimit {
+                rlim_cur: n,
+                rlim_max: n,
+            };
+            if libc::setrlimit(libc::RLIMIT_NOFILE, &r) != 0 {
+                return Err(std::io::Error::last_os_error());
+            }
+            Ok(())
+        });
+    }
+}
+
+/// Raises this process's open files' soft limit to the hard one (a flood's own ends).
+pub fn raise_file_limit() {
+    let mut r = libc::rlimit {
+        rlim_cur: 0,
+        rlim_max: 0,
+    };
+    // SAFETY: getrlimit and setrlimit read and write the struct they are given.
+    unsafe {
+        assert_eq!(libc::getrlimit(libc::RLIMIT_NOFILE, &mut r), 0);
+        r.rlim_cur = r.rlim_max;
+        assert_eq!(libc::setrlimit(libc::RLIMIT_NOFILE, &r), 0);
+    }
+}
+
+/// Waits (at most 30 s) until the log file at `path` holds every one of `what`; the log.
+pub fn wait_log(path: &Path, what: &[&str]) -> String {
+    let deadline = Instant::now() + Duration::from_secs(30);
+    loop {
+        let log = std::fs::read_to_string(path).unwrap_or_default();
+        if what.iter().all(|w| log.contains(w)) {
+            return log;
+        }
+        assert!(Instant::now() < deadline, "the log lacks {what:?}:\n{log}");
+        std::thread::sleep(Duration::from_millis(100));
     }
 }
 

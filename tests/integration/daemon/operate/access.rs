@@ -11,7 +11,7 @@ use serde_json::{Value, json};
 fn with_a_token_a_client_operates_only_after_giving_it_and_estop_is_always_reachable() {
     let dir = tempfile::tempdir().unwrap();
     let token = dir.path().join("token");
-    std::fs::write(&token, "correct-horse\n").unwrap();
+    std::fs::write(&token, "correct-horse-battery\n").unwrap();
     std::fs::set_permissions(&token, std::os::unix::fs::PermissionsExt::from_mode(0o600)).unwrap();
     let mut d = daemon(&format!("token_file = {:?}", token.display().to_string()));
     let mut fx = FoxgloveClient::connect(d.fox, Duration::from_secs(30));
@@ -42,7 +42,7 @@ fn with_a_token_a_client_operates_only_after_giving_it_and_estop_is_always_reach
         .wait_status(Duration::from_secs(5), "e-stopped", |s| {
             s["mode"] == "e_stop"
         });
-    fx.call("auth", json!({"token": "correct-horse"}))
+    fx.call("auth", json!({"token": "correct-horse-battery"}))
         .expect("the right token");
     fx.call("arm", json!({})).expect("arm once authorised");
     assert_eq!(

@@ -13,7 +13,9 @@ use rig::{Client, Proc, exe};
 use serde_json::{Value, json};
 
 mod access;
+mod config;
 mod drive;
+mod listener;
 mod tune;
 mod viewers;
 
@@ -33,6 +35,12 @@ pub(super) struct Daemon {
 
 /// `snaked --emulated` on flat ground, operating from Foxglove with `extra` config.
 pub(super) fn daemon(extra: &str) -> Daemon {
+    daemon_with(extra, |_| {})
+}
+
+/// As [`daemon`], its command prepared by `setup` before it starts (a lower file limit,
+/// its log to a file).
+pub(super) fn daemon_with(extra: &str, setup: impl FnOnce(&mut std::process::Command)) -> Daemon {
     let dir = tempfile::tempdir().unwrap();
     let port = free_tcp_port();
     let config = dir.path().join("snaked.toml");
@@ -43,7 +51,7 @@ pub(super) fn daemon(extra: &str) -> Daemon {
     .unwrap();
     let sock = dir.path().join("s.sock");
     let world = concat!(env!("CARGO_MANIFEST_DIR"), "/scenarios/flat.toml");
-    let proc = Proc::spawn(
+    let proc = Proc::spawn_with(
         "snaked",
         &exe("snaked"),
         &[
@@ -57,6 +65,7 @@ pub(super) fn daemon(extra: &str) -> Daemon {
             "--record".into(),
             dir.path().join("run.mcap").display().to_string(),
         ],
+        setup,
     );
     let mut c = Client::connect(&sock, Duration::from_secs(30));
     c.wait_status(Duration::from_secs(30), "running", |s| {
