@@ -1,8 +1,9 @@
 //! Issue 44's probes of the station, as tests: the dead-man stops the joints within its
 //! own time whatever the blend time; one operator drives at a time; an e-stop freezes
 //! what runs after `arm`.
-use super::{daemon, slithering_speed};
+use super::{daemon, daemon_with, slithering_speed};
 use crate::support::foxglove_ws::{FoxgloveClient, twist};
+use crate::support::rig::wait_log;
 
 use std::time::{Duration, Instant};
 
@@ -181,7 +182,11 @@ fn one_operator_drives_at_a_time_and_another_takes_over_only_explicitly() {
 
 #[test]
 fn an_estop_refuses_changes_until_arm_and_arm_resumes_what_ran_before() {
-    let mut d = daemon("");
+    let logs = tempfile::tempdir().unwrap();
+    let log = logs.path().join("snaked.log");
+    let mut d = daemon_with("", |c| {
+        c.stderr(std::fs::File::create(&log).expect("log file"));
+    });
     let mut fx = FoxgloveClient::connect(d.fox, Duration::from_secs(30));
     fx.call("gait.set", json!({"gait": "slithering"}))
         .expect("gait.set");
@@ -217,6 +222,15 @@ fn an_estop_refuses_changes_until_arm_and_arm_resumes_what_ran_before() {
         fx.wait_status_message("e-stop", Duration::from_secs(2)),
         "teleop is told: {:?}",
         fx.statuses
+    );
+    // Refused operator requests are logged, naming the client and why.
+    wait_log(
+        &log,
+        &[
+            "station: foxglove client 1's params.set refused",
+            "e-stop is latched",
+            "teleop gait.resume refused",
+        ],
     );
     fx.call("arm", json!({})).expect("arm");
     d.sock.wait_status(Duration::from_secs(10), "running", |s| {

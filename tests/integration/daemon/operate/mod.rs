@@ -15,6 +15,7 @@ use serde_json::{Value, json};
 mod access;
 mod config;
 mod drive;
+mod drivers;
 mod listener;
 mod tune;
 mod viewers;
@@ -80,6 +81,12 @@ pub(super) fn daemon_with(extra: &str, setup: impl FnOnce(&mut std::process::Com
 }
 
 impl Daemon {
+    /// A connection of its own to the control socket (one operator, say `snakectl`):
+    /// it drives only while it is connected.
+    pub(super) fn once(&self) -> Client {
+        Client::connect(&self.dir.path().join("s.sock"), Duration::from_secs(10))
+    }
+
     /// SIGTERM, exit 0, and the `/operator` events of the recording.
     pub(super) fn stop(self) -> Vec<Value> {
         self.stop_with(&["/operator"]).remove(0)
