@@ -522,7 +522,27 @@ fn print_status(r: &Value) {
     println!("torque    {}", joined(&j["torque_nm"], 2));
     controller::print_status(&r["controller"]);
     print_navigator(&r["navigator"], &r["progress"]);
+    print_record(&r["record"]);
     println!("daemon    snaked {}", text(&d["version"]));
+}
+
+/// The recorder's line: what it does with its file, how big, what it could not keep;
+/// why the file failed on the next.
+fn print_record(r: &Value) {
+    let mut line = format!("record    {}", text(&r["state"]));
+    if let Some(path) = r["path"].as_str() {
+        line += &format!(" {path}  {} bytes", r["bytes"]);
+    }
+    if let Some(n) = r["dropped"].as_u64() {
+        line += &format!("  dropped {n}");
+    }
+    if r["lost"].as_u64().is_some_and(|n| n > 0) {
+        line += &format!("  lost {}", r["lost"]);
+    }
+    println!("{line}");
+    if let Some(e) = r["error"].as_str() {
+        println!("          {e}");
+    }
 }
 
 /// The navigator's line: what it runs and why, or why it stopped; and the stuck signal.
@@ -603,6 +623,8 @@ fn print_stats(r: &Value) {
     for (k, v) in &rows {
         println!("  {k:<width$}  {v:>12}");
     }
+    println!();
+    print_record(&r["record"]);
 }
 
 fn telemetry_line(p: &Value) -> String {

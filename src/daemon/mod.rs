@@ -155,6 +155,11 @@ pub fn run(cfg: Config, emulated: bool) -> Result<()> {
         ctrlc::set_handler(move || stop.store(true, Ordering::Relaxed))
             .context("installing the SIGINT/SIGTERM handler")?;
     }
+    // Past a file-size limit (`LimitFSIZE=`, `ulimit -f`) a write must fail with EFBIG,
+    // which the recorder reports (the file unfinished, the robot driven on), not kill the
+    // daemon with SIGXFSZ before its safe stop.
+    // SAFETY: only sets the signal's disposition; no handler runs.
+    unsafe { libc::signal(libc::SIGXFSZ, libc::SIG_IGN) };
 
     // The configuration's check refused caps that do not fit below the hard limit.
     match files::raise_file_limit() {
@@ -229,6 +234,10 @@ pub fn run(cfg: Config, emulated: bool) -> Result<()> {
     let heartbeat = Arc::new(AtomicU64::new(0));
 
     let mut server_cfg = server_config(&cfg);
+    server_cfg.record = recorder.as_ref().map(|(_, r)| {
+        let probe = r.probe();
+        socket::RecordView::new(move || serde_json::json!(probe.status()))
+    });
     if cfg.control.tcp_port != 0 {
         if cfg.control.tcp_token_file.as_os_str().is_empty() {
             anyhow::bail!(

@@ -28,10 +28,13 @@
 //!     fn finish(self) -> Result<RecordSummary, RecordError>;  // drain, summary + index, join;
 //!                     // RecordError::Unfinished { path, complete_s, reason } if it could not
 //!     fn live_addr(&self) -> Option<SocketAddr>;
-//!     fn status(&self) -> RecorderStatus;  // items, messages_written, dropped, bytes,
-//!                                          // capped: Option<CapReason>, live_clients,
-//!                                          // file: Option<FileState>, complete_s
+//!     fn status(&self) -> RecorderStatus;  // state: RecordState, path, error, lost, items,
+//!                                          // messages_written, dropped, bytes, capped:
+//!                                          // Option<CapReason>, file: Option<FileState>,
+//!                                          // complete_s, live_clients (Serialize)
+//!     fn probe(&self) -> RecorderProbe;    // Clone + Send + Sync: .status() from anywhere
 //! }
+//! RecordState   { Off, Recording, Capped, Failed, Finished }
 //! RecordSummary { path, items, messages_written, per_topic, dropped, bytes, capped }
 //! FileState     { Writing, Finished, Unfinished }
 //!
@@ -81,9 +84,9 @@ pub use file::MIN_MAX_BYTES;
 pub use loop_recorder::{LoopRecorder, LoopRecording};
 pub use options::{
     CapReason, DEFAULT_CHUNK_DURATION_S, DEFAULT_LIVE_PORT, FileState, LiveOptions, McapOptions,
-    RecordOptions, RecordSummary, RecorderStatus, RecordingInfo,
+    RecordOptions, RecordState, RecordSummary, RecorderStatus, RecordingInfo,
 };
-pub use recorder::{Recorder, start};
+pub use recorder::{Recorder, RecorderProbe, start};
 pub use recover::{RECOVER_MAX_CHUNK_BYTES, RecoverError, Recovery, recover, recovered_path};
 pub use ring::RecordTx;
 pub use scene::{BODY_FRAME, WORLD_FRAME, link_frame};

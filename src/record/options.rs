@@ -142,9 +142,36 @@ pub enum FileState {
     Unfinished,
 }
 
-/// A snapshot of a running recorder.
-#[derive(Debug, Clone, PartialEq)]
+/// What the recorder does with its file, in one word (`status` and `stats`' `record`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RecordState {
+    /// No file (the live view alone, or nothing).
+    Off,
+    /// Writing the file.
+    Recording,
+    /// A size or duration cap was reached: the file is finished, later items are not
+    /// written.
+    Capped,
+    /// A write failed (a full disk, a file-size limit): the file is unfinished
+    /// ([`RecorderStatus::error`] says why and what it holds), later items are lost
+    /// ([`RecorderStatus::lost`]).
+    Failed,
+    /// The file is finished (the recorder has stopped).
+    Finished,
+}
+
+/// A snapshot of a running recorder. Serialised as the control socket's `record`.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct RecorderStatus {
+    pub state: RecordState,
+    /// The file (`None`: no file).
+    pub path: Option<PathBuf>,
+    /// Why the file failed: the unfinished file's error, with how to recover it.
+    pub error: Option<String>,
+    /// Items taken from the ring after a failed write stopped the file: lost to the
+    /// file (the live view still had them).
+    pub lost: u64,
     /// Items taken from the ring.
     pub items: u64,
     /// Messages written to the MCAP file.
@@ -162,6 +189,19 @@ pub struct RecorderStatus {
     pub complete_s: f64,
     /// Live-view clients connected now.
     pub live_clients: usize,
+}
+
+impl RecordState {
+    /// The state a file in `file` (`None`: no file), stopped by `capped`, is in.
+    pub fn of(file: Option<FileState>, capped: Option<CapReason>) -> Self {
+        match (file, capped) {
+            (None, _) => Self::Off,
+            (Some(FileState::Unfinished), _) | (_, Some(CapReason::WriteError)) => Self::Failed,
+            (Some(FileState::Writing), _) => Self::Recording,
+            (Some(FileState::Finished), Some(_)) => Self::Capped,
+            (Some(FileState::Finished), None) => Self::Finished,
+        }
+    }
 }
 
 /// What a finished recording holds.

@@ -7,7 +7,7 @@ use std::thread::JoinHandle;
 
 use super::error::RecordError;
 use super::live::Latch;
-use super::options::{RecordOptions, RecordSummary, RecorderStatus, RecordingInfo};
+use super::options::{RecordOptions, RecordState, RecordSummary, RecorderStatus, RecordingInfo};
 use super::ring::{CloseOnDrop, RecordTx, Ring};
 use super::writer::{Shared, Writer};
 
@@ -94,14 +94,42 @@ impl Recorder {
     }
 
     pub fn status(&self) -> RecorderStatus {
+        self.probe().status()
+    }
+
+    /// A handle that reads [`Recorder::status`] from anywhere, for as long as it is
+    /// held (after [`Recorder::finish`] too).
+    pub fn probe(&self) -> RecorderProbe {
+        RecorderProbe {
+            shared: self.shared.clone(),
+            latch: self.latch.clone(),
+        }
+    }
+}
+
+/// Reads a recorder's [`RecorderStatus`] (the control socket's `record`).
+#[derive(Clone)]
+pub struct RecorderProbe {
+    shared: Arc<Shared>,
+    latch: Option<Arc<Latch>>,
+}
+
+impl RecorderProbe {
+    pub fn status(&self) -> RecorderStatus {
+        let s = &self.shared;
+        let (file, capped) = (s.file(), s.capped());
         RecorderStatus {
-            items: self.shared.items.load(Ordering::Relaxed),
-            messages_written: self.shared.written.load(Ordering::Relaxed),
-            dropped: self.shared.ring.dropped(),
-            bytes: self.shared.bytes.load(Ordering::Relaxed),
-            capped: self.shared.capped(),
-            file: self.shared.file(),
-            complete_s: self.shared.complete_ns.load(Ordering::Relaxed) as f64 * 1e-9,
+            state: RecordState::of(file, capped),
+            path: s.path.get().cloned(),
+            error: s.error.get().cloned(),
+            lost: s.lost.load(Ordering::Relaxed),
+            items: s.items.load(Ordering::Relaxed),
+            messages_written: s.written.load(Ordering::Relaxed),
+            dropped: s.ring.dropped(),
+            bytes: s.bytes.load(Ordering::Relaxed),
+            capped,
+            file,
+            complete_s: s.complete_ns.load(Ordering::Relaxed) as f64 * 1e-9,
             live_clients: self.latch.as_ref().map_or(0, |l| l.clients()),
         }
     }
@@ -129,5 +157,7 @@ mod tests {
         sync::<RecordTx>();
         send::<Recorder>();
         send::<RecordError>();
+        send::<RecorderProbe>();
+        sync::<RecorderProbe>();
     }
 }

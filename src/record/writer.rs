@@ -3,8 +3,9 @@
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::net::SocketAddr;
-use std::sync::Arc;
+use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, AtomicU8, AtomicU64, Ordering};
+use std::sync::{Arc, OnceLock};
 use std::time::{Duration, SystemTime, UNIX_EPOCH};
 
 use foxglove::Context;
@@ -43,6 +44,12 @@ pub(crate) struct Shared {
     capped: AtomicU8,
     /// 0: no file, else `1 + FileState as u8`.
     file: AtomicU8,
+    /// The file's path, once created.
+    pub path: OnceLock<PathBuf>,
+    /// Why the file failed (the unfinished file's error).
+    pub error: OnceLock<String>,
+    /// Items taken from the ring after a failed write stopped the file.
+    pub lost: AtomicU64,
 }
 
 impl Shared {
@@ -56,6 +63,9 @@ impl Shared {
             complete_ns: AtomicU64::new(0),
             capped: AtomicU8::new(0),
             file: AtomicU8::new(0),
+            path: OnceLock::new(),
+            error: OnceLock::new(),
+            lost: AtomicU64::new(0),
         }
     }
 
@@ -159,6 +169,7 @@ impl Writer {
         if let Some(f) = &file {
             tracing::info!(path = %f.path().display(), "recorder: writing MCAP");
             shared.set_file(f);
+            let _ = shared.path.set(f.path().to_path_buf());
         }
         channels.file_open = file.is_some();
         channels.latch = live.as_ref().map(|l| l.latch.clone());
@@ -226,6 +237,10 @@ impl Writer {
 
     pub fn handle(&mut self, item: &RecordItem) {
         self.items += 1;
+        if self.shared.capped() == Some(CapReason::WriteError) {
+            // The live view still gets it; the file never will.
+            self.shared.lost.fetch_add(1, Ordering::Relaxed);
+        }
         // A chunk due is closed before this item, so it spans less than its duration.
         if let Some(file) = self.file.as_mut().filter(|f| f.is_open()) {
             let t_ns = item.t_ns();
@@ -348,7 +363,11 @@ impl Writer {
                 "recorder: cap reached; the file is finished (summary and index), \
                  later items are not written"
             ),
-            Err(e) => tracing::error!(?reason, "recorder: {e}; later items are not written"),
+            Err(e) => {
+                // Shown by `status` before the log says it.
+                let _ = self.shared.error.set(e.to_string());
+                tracing::error!(?reason, "recorder: {e}; later items are not written");
+            }
         }
     }
 
@@ -382,6 +401,9 @@ impl Writer {
         };
         if let Some(live) = &mut self.live {
             live.stop();
+        }
+        if let Err(e) = &closed {
+            let _ = self.shared.error.set(e.to_string());
         }
         closed?;
         let per_topic = Topic::ALL

@@ -82,6 +82,9 @@ pub struct ServerConfig {
     /// A driver that sends no driving request for this long no longer holds the drive
     /// (`socket::driver`).
     pub driver_timeout: Duration,
+    /// The recorder's state, `record` in `status` and `stats` (`None`: no recorder,
+    /// `{"state": "off"}`).
+    pub record: Option<RecordView>,
 }
 
 impl Default for ServerConfig {
@@ -96,7 +99,36 @@ impl Default for ServerConfig {
             idle_timeout: Some(Duration::from_secs(300)),
             tcp_token: None,
             driver_timeout: driver::DEFAULT_DRIVER_TIMEOUT,
+            record: None,
         }
+    }
+}
+
+/// Reads the recorder's state as JSON when `status` or `stats` asks: the daemon's
+/// wiring hands it in (the socket knows nothing of the recorder).
+#[derive(Clone)]
+pub struct RecordView(std::sync::Arc<dyn Fn() -> serde_json::Value + Send + Sync>);
+
+impl RecordView {
+    pub fn new(read: impl Fn() -> serde_json::Value + Send + Sync + 'static) -> Self {
+        Self(std::sync::Arc::new(read))
+    }
+
+    /// What `view` reads, `{"state": "off"}` without one.
+    pub(crate) fn read(view: Option<&Self>) -> serde_json::Value {
+        view.map_or_else(|| serde_json::json!({ "state": "off" }), |v| (v.0)())
+    }
+}
+
+impl std::fmt::Debug for RecordView {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("RecordView")
+    }
+}
+
+impl PartialEq for RecordView {
+    fn eq(&self, other: &Self) -> bool {
+        std::sync::Arc::ptr_eq(&self.0, &other.0)
     }
 }
 

@@ -180,6 +180,7 @@ pub fn start(cfg: ServerConfig, handle: LoopHandle) -> Result<RunningServer, Ser
         controller_change: tokio::sync::Mutex::new(()),
         navigation: Default::default(),
         driver: super::driver::DriverLease::new(cfg.driver_timeout),
+        record: cfg.record.clone(),
     });
     let clients = Clients::new(cfg.max_clients);
     let (closing_tx, closing) = tokio::sync::watch::channel(false);

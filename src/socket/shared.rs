@@ -30,9 +30,16 @@ pub(crate) struct Shared {
     pub(crate) driver: super::driver::DriverLease,
     /// The navigator's task while it runs (`navigate`).
     pub(crate) navigation: super::navigate::Navigation,
+    /// The recorder's state, if there is a recorder.
+    pub(crate) record: Option<super::RecordView>,
 }
 
 impl Shared {
+    /// The recorder's state: `record` in `status` and `stats`.
+    pub(crate) fn record(&self) -> serde_json::Value {
+        super::RecordView::read(self.record.as_ref())
+    }
+
     /// Drops the controllers the loop replaced (freeing is off the loop's thread).
     pub(crate) fn free_retired(&self) {
         while let Ok(old) = self.retired.try_recv() {

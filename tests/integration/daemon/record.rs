@@ -300,15 +300,21 @@ fn a_killed_recording_is_recovered_and_read_with_the_documented_recipe() {
     assert!(text.contains("snaked.recovery"), "the recovery is noted");
 }
 
+/// Under a file-size limit with the default signal handling (`LimitFSIZE=`, `ulimit -f`):
+/// SIGXFSZ used to kill the daemon 0.7 s into the recording (no safe stop, no log, the
+/// socket left behind). It ignores the signal, so the write fails (EFBIG) and the
+/// recorder says the file is unfinished; the robot is driven on, `status` and `stats`
+/// show the recorder failed and count what it lost, SIGTERM stops it cleanly, and the
+/// file recovers.
 #[test]
-fn a_full_disk_is_reported_as_an_unfinished_file_that_recovers() {
+fn a_file_size_limit_is_reported_as_an_unfinished_file_that_recovers() {
     use std::io::{BufRead, BufReader};
     use std::os::unix::process::CommandExt;
 
     let dir = tempfile::tempdir().unwrap();
     let sock = dir.path().join("s.sock");
     let file = dir.path().join("run.mcap");
-    // The disk is full at 1 MB for the daemon: past it a write fails (EFBIG).
+    // The file may not grow past 1 MB.
     let limit: u64 = 1_000_000;
     let mut cmd = Command::new(exe("snaked"));
     cmd.args(["--emulated", "--socket"])
@@ -326,7 +332,8 @@ fn a_full_disk_is_reported_as_an_unfinished_file_that_recovers() {
                 rlim_max: limit,
             };
             libc::setrlimit(libc::RLIMIT_FSIZE, &lim);
-            libc::signal(libc::SIGXFSZ, libc::SIG_IGN);
+            // What a service gets: the default action, which kills the process.
+            libc::signal(libc::SIGXFSZ, libc::SIG_DFL);
             Ok(())
         });
     }
@@ -347,11 +354,43 @@ fn a_full_disk_is_reported_as_an_unfinished_file_that_recovers() {
         while !log.iter().any(|l| l.contains(needle)) {
             match rx.recv_timeout(Duration::from_secs(60)) {
                 Ok(l) => log.push(l),
-                Err(_) => panic!("no {needle:?} in the log:\n{}", log.join("\n")),
+                Err(e) => panic!("no {needle:?} in the log ({e}):\n{}", log.join("\n")),
             }
         }
     };
     wait(&mut log, "was not finished");
+
+    // Still driving, and saying what became of the recording.
+    let mut c = Client::connect(&sock, Duration::from_secs(30));
+    let status = c.call("status", json!({}));
+    assert_eq!(status["mode"], "running", "{status}");
+    let record = &status["record"];
+    assert_eq!(record["state"], "failed", "{record}");
+    assert_eq!(record["path"], file.display().to_string(), "{record}");
+    let error = record["error"].as_str().unwrap_or_default();
+    assert!(
+        error.contains("File too large") && error.contains("snaked --recover"),
+        "{record}"
+    );
+    assert!(record["bytes"].as_u64().unwrap() <= limit, "{record}");
+    let lost = |c: &mut Client| c.call("stats", json!({}))["record"]["lost"].as_u64();
+    let before = lost(&mut c).expect("stats counts the items lost");
+    std::thread::sleep(Duration::from_millis(300));
+    let after = lost(&mut c).unwrap();
+    assert!(
+        after > before,
+        "lost {before} then {after}: every item since is lost"
+    );
+    let shown = Command::new(exe("snakectl"))
+        .arg("--socket")
+        .arg(&sock)
+        .arg("status")
+        .output()
+        .unwrap();
+    let shown = String::from_utf8_lossy(&shown.stdout);
+    assert!(shown.contains("record    failed"), "{shown}");
+    drop(c);
+
     d.signal(libc::SIGTERM);
     assert!(d.wait(Duration::from_secs(30)).success(), "exit 0");
     log.extend(rx.try_iter());
@@ -359,6 +398,10 @@ fn a_full_disk_is_reported_as_an_unfinished_file_that_recovers() {
     assert!(!text.contains("file is finished"), "{text}");
     assert!(!text.contains("recording finished"), "{text}");
     assert!(text.contains("snaked --recover"), "{text}");
+    assert!(
+        !sock.exists(),
+        "the socket file is removed at the safe stop"
+    );
     let size = std::fs::metadata(&file).unwrap().len();
     assert!(size <= limit, "{size} bytes");
 

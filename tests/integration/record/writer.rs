@@ -7,8 +7,8 @@ use crate::support::record_fixture as fixture;
 use fixture::*;
 use foxglove::schemas::{FrameTransforms, SceneUpdate};
 use snaked::record::{
-    CapReason, FileState, LiveOptions, McapOptions, RecordError, RecordOptions, RecordSummary,
-    start,
+    CapReason, FileState, LiveOptions, McapOptions, RecordError, RecordOptions, RecordState,
+    RecordSummary, start,
 };
 
 fn record(items: &[snaked::record::RecordItem], opts: RecordOptions, world: bool) -> RecordSummary {
@@ -251,12 +251,19 @@ fn a_size_cap_finishes_a_valid_file_and_keeps_draining() {
     assert_eq!(summary.dropped, 0, "push_wait waits instead");
     let file = read_mcap(&path);
     let joints = file.counts["/joints"];
-    assert!(joints > 0 && joints <= k, "{joints} /joints messages of {}", 2 * k);
+    assert!(
+        joints > 0 && joints <= k,
+        "{joints} /joints messages of {}",
+        2 * k
+    );
     assert_eq!(summary.per_topic, file.counts);
     let size = std::fs::metadata(&path).expect("size").len();
     assert!(size >= cap, "stopped at {size} bytes, before the cap");
     // Past the cap by at most a chunk (1/8 of it) and the summary.
-    assert!(size < cap + cap / 8 + 64 * 1024, "{size} bytes: far over the cap");
+    assert!(
+        size < cap + cap / 8 + 64 * 1024,
+        "{size} bytes: far over the cap"
+    );
     assert_eq!(file.metadata["snaked.status"]["capped"], "max_bytes");
 }
 
@@ -298,6 +305,9 @@ fn status_reports_progress_and_the_cap() {
         ..options(100)
     };
     let (tx, rec) = start(opts, info(catalog, false)).expect("start");
+    let s = rec.status();
+    assert_eq!(s.state, RecordState::Recording);
+    assert_eq!(s.path.as_deref(), Some(path.as_path()));
     let items: Vec<_> = (0..100).map(|k| cycle(k, id, false)).collect();
     push_all(&tx, &items);
     // Wait (bounded) for the writer to drain: it polls, nothing wakes it.
@@ -312,6 +322,13 @@ fn status_reports_progress_and_the_cap() {
     assert_eq!(s.capped, Some(CapReason::MaxDuration));
     // Closed at the cap with its summary: finished, and all of it complete.
     assert_eq!(s.file, Some(FileState::Finished));
+    assert_eq!(s.state, RecordState::Capped);
+    // Not written, but not lost to a failure either.
+    assert_eq!((s.error, s.lost), (None, 0));
+    // What the control socket shows.
+    let shown = serde_json::to_value(rec.probe().status()).expect("JSON");
+    assert_eq!(shown["state"], "capped");
+    assert_eq!(shown["capped"], "max_duration");
     assert_eq!(s.complete_s, 0.010);
     // Joints, commands, IMU, body estimate, navigation, signals a cycle over 0..=10 ms,
     // and the 3-D pair at 0 ms.
