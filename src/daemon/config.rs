@@ -212,6 +212,9 @@ pub struct ControlConfig {
     /// The token TCP clients must present (`auth`): a file readable by the operators'
     /// group, not by every user. Required when `tcp_port` is set.
     pub tcp_token_file: PathBuf,
+    /// One operator drives at a time: a driver that sends no driving request for this
+    /// long no longer holds the drive, s (docs/control-socket.md, "One operator drives").
+    pub driver_timeout_s: f64,
 }
 
 impl Default for ControlConfig {
@@ -225,6 +228,7 @@ impl Default for ControlConfig {
             ack_timeout_s: 1.0,
             idle_timeout_s: 300.0,
             tcp_token_file: PathBuf::new(),
+            driver_timeout_s: crate::socket::driver::DEFAULT_DRIVER_TIMEOUT.as_secs_f64(),
         }
     }
 }

@@ -246,6 +246,8 @@ impl Config {
         range("loop.rate_hz", self.loop_.rate_hz, 1.0, 10_000.0)?;
         let fx = &self.foxglove;
         range("foxglove.teleop_timeout_s", fx.teleop_timeout_s, 0.05, 10.0)?;
+        let (lo, hi) = crate::rt::gait_clock::STOP_TIME_RANGE_S;
+        range("foxglove.teleop_stop_s", fx.teleop_stop_s, lo, hi)?;
         range(
             "foxglove.teleop_hold_after_s",
             fx.teleop_hold_after_s,
@@ -387,6 +389,12 @@ impl Config {
             self.control.idle_timeout_s,
             0.0,
             86400.0,
+        )?;
+        range(
+            "control.driver_timeout_s",
+            self.control.driver_timeout_s,
+            0.1,
+            3600.0,
         )?;
         range("emulator.modules", self.emulator.modules as f64, 2.0, 64.0)?;
         range("record.max_mb", self.record.max_mb, 0.0, 1e7)?;

@@ -111,8 +111,10 @@ pub struct FoxgloveConfig {
     pub token_file: PathBuf,
     /// The channel twists are published on (Foxglove's Teleop panel: `/cmd_vel`).
     pub teleop_topic: String,
-    /// Twists expire after this long, s: the gait runs on at zero speed...
+    /// Twists expire after this long, s: the gait makes a controlled stop...
     pub teleop_timeout_s: f64,
+    /// ...which brings the body to rest within this long, s, whatever the blend time...
+    pub teleop_stop_s: f64,
     /// ...and the robot holds this much later, s (`arm` resumes).
     pub teleop_hold_after_s: f64,
     /// Temporal frequency per unit of the twist's `linear.x`, rad/s.
@@ -140,6 +142,7 @@ impl Default for FoxgloveConfig {
             token_file: PathBuf::new(),
             teleop_topic: t.topic,
             teleop_timeout_s: t.timeout_s,
+            teleop_stop_s: t.stop_s,
             teleop_hold_after_s: t.hold_after_s,
             teleop_speed_rad_s: t.speed_rad_s,
             teleop_max_speed_rad_s: t.max_speed_rad_s,
@@ -166,6 +169,7 @@ impl FoxgloveConfig {
         crate::station::TeleopConfig {
             topic: self.teleop_topic.clone(),
             timeout_s: self.teleop_timeout_s,
+            stop_s: self.teleop_stop_s,
             hold_after_s: self.teleop_hold_after_s,
             speed_rad_s: self.teleop_speed_rad_s,
             max_speed_rad_s: self.teleop_max_speed_rad_s,

@@ -442,6 +442,7 @@ fn server_config(cfg: &Config) -> ServerConfig {
         ack_timeout: Duration::from_secs_f64(cfg.control.ack_timeout_s),
         idle_timeout: (cfg.control.idle_timeout_s > 0.0)
             .then(|| Duration::from_secs_f64(cfg.control.idle_timeout_s)),
+        driver_timeout: Duration::from_secs_f64(cfg.control.driver_timeout_s),
         ..ServerConfig::default()
     }
 }
