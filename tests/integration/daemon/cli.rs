@@ -388,11 +388,15 @@ fn emulated_daemon_drives_the_physics_world() {
 #[test]
 fn logs_carry_no_colour_codes_off_a_terminal() {
     let dir = tempfile::tempdir().unwrap();
-    let bad = dir.path().join("missing").join("run.mcap");
-    let sock = dir.path().join("s.sock");
+    // A failure after start-up (the configuration's check cannot see it): the socket's
+    // directory is writable by every user.
+    let open = dir.path().join("open");
+    std::fs::create_dir(&open).unwrap();
+    std::fs::set_permissions(&open, std::os::unix::fs::PermissionsExt::from_mode(0o777)).unwrap();
+    let sock = open.join("s.sock");
     let run = |journal: bool| {
         let mut cmd = Command::new(exe("snaked"));
-        cmd.args(["--emulated", "--record", bad.to_str().unwrap()])
+        cmd.arg("--emulated")
             .args(["--socket", sock.to_str().unwrap()])
             .env("RUST_LOG", "info")
             .env_remove("JOURNAL_STREAM");
@@ -406,7 +410,7 @@ fn logs_carry_no_colour_codes_off_a_terminal() {
         assert!(!stderr.contains('\u{1b}'), "no colour codes: {stderr:?}");
         assert!(stderr.contains("group ready"), "{stderr}");
         assert!(
-            stderr.contains("directory") && stderr.contains("missing"),
+            stderr.contains("directory") && stderr.contains("writable by every user"),
             "{stderr}"
         );
         stderr
