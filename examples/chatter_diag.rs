@@ -1,7 +1,7 @@
 //! One controller on one world through the daemon's loop (the lab's trial), printing what
 //! it asks of the actuators (`lab::strain`: guard-limited cycles, joint speeds, time at
 //! the torque limit) and the range of chosen controller signals in every 2 s: the data
-//! behind docs/measurements.md, "Chatter among pegs" (issue 25).
+//! behind docs/measurements/sidewinding.md, "Chatter among pegs" (issue 25).
 //!     cargo run --release --example chatter_diag -- SCENARIO.toml START GAIT CONTROLLER [SECONDS]
 //! CONTROLLER: a name (`ac_sfc`) or a variant `LABEL=JSON`. Environment: SIGNALS
 //! (comma-separated signal names, default the amplitude and spatial frequency), HZ (the

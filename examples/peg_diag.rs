@@ -2,7 +2,7 @@
 //! loop): how far the body's centre goes along its start heading, and what touches it
 //! (contact pairs with the ground and the pegs, their normal force, the lateral joints'
 //! mean |torque| and the share of them near the 7 N·m limit), every 5 s. The data behind
-//! docs/measurements.md, "Slithering among pegs: the nominal shape".
+//! docs/measurements/slithering.md, "Slithering among pegs: the nominal shape".
 //!     cargo run --release --example peg_diag -- [SCENARIO.toml] [START]
 //! Environment: SECS (60), AMP, WS, WT (the gait's lateral amplitude, spatial and
 //! temporal frequency; default the daemon's), MU, PEG_MU (friction).

@@ -7,7 +7,7 @@
 //! so a busy hour slows them alike. Fidelity is
 //! judged by the validation tests (`cargo test --release --lib emu::world::physics --
 //! --nocapture` with the setting as the default) and the joint-speed diagnostic
-//! (`cargo run --release --example joint_speed_diag`); docs/measurements.md has them
+//! (`cargo run --release --example joint_speed_diag`); docs/measurements/physics.md has them
 //! side by side.
 //!     cargo run --release --example physics_tuning
 use snaked::emu::Plant;

@@ -30,6 +30,6 @@ pub fn body_heading_for(gait: GaitKind, travel_rad: f64, sidewind_drift_rad: f64
 /// How far to the left of where it faces (less 90°) anti-compliant sidewinding travels
 /// among obstacles, rad: its lateral wave pushes on them as slithering's does, which
 /// drives the body along its axis as well as across it. Measured on the crossing
-/// boards (docs/measurements.md, "Sidewinding bends left among obstacles"): side exits
-/// went left in 24 of 28 trials.
+/// boards (docs/measurements/crossing.md, "Sidewinding goes head first among
+/// obstacles"): side exits went left in 24 of 28 trials.
 pub const SIDEWINDING_DRIFT_RAD: f64 = 0.0;

@@ -6,7 +6,7 @@
 //! requests would be: `controller.set`, `gait.set` (the selector's blend and the
 //! takeover), `controller.heading`.
 //!
-//! The plan, from the crossing experiment's single controllers (docs/measurements.md,
+//! The plan, from the crossing experiment's single controllers (docs/measurements/crossing.md,
 //! "Getting across"): anti-compliant sidewinding aimed across is the only gait that makes
 //! way on open ground at the bare skin's friction; slithering cannot move on open ground
 //! with isotropic friction (it repeats, so the monitor says stuck) but crosses from

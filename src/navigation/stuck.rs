@@ -4,7 +4,7 @@
 //! cycle (its centre repeats each gait cycle to the millimetre; its joint torques
 //! repeat to the sensors' noise), while a body making way among irregular pegs meets
 //! a new arrangement every cycle and its torques change. Measured on the sleeve board
-//! (docs/measurements.md, "Knowing it is stuck"): cycles moving more than 0.1 m have
+//! (docs/measurements/crossing.md, "Knowing it is stuck"): cycles moving more than 0.1 m have
 //! a repeat error (below) of 0.8-5, jammed ones 0.15-0.4. What it cannot tell: a body
 //! that repeats while it moves (open ground, a lattice of pegs matched to its wave),
 //! which the daemon, with no odometry, cannot see move either (proprioceptive

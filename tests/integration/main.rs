@@ -1,6 +1,6 @@
 //! The integration tests, one binary: linking the daemon, rapier and foxglove once
 //! rather than once per test file is most of what a cold CI run spends
-//! (docs/measurements.md). A folder per concern; `support` is shared.
+//! (docs/measurements/lab-and-ci.md). A folder per concern; `support` is shared.
 //!
 //! One group: `cargo test --test integration socket::`; one test: its full path.
 

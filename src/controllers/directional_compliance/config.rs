@@ -286,7 +286,7 @@ const OFFSET_MAX_RAD: f64 = 0.5;
 impl DirectionalComplianceConfig {
     /// The preset: planar (lateral wave only) or 3-D, with `strategy`. Gains as
     /// compliant slithering's amplitude; thresholds tuned in the lab
-    /// (docs/measurements.md, "Directional compliance").
+    /// (docs/measurements/directional-compliance.md).
     pub fn preset(strategy: Strategy, three_d: bool) -> Self {
         let amplitude = |min, max| AdmittanceGains {
             mass: 1.0,
@@ -301,7 +301,7 @@ impl DirectionalComplianceConfig {
             strategy,
             // Up to 1.5 rad (joint reach under the π/2 limit), not compliant
             // slithering's 1.2: the peg terrains need nominals of 1.2 rad and more
-            // (docs/measurements.md, "Slithering among pegs"), and a range that ends at
+            // (docs/measurements/slithering.md, "Slithering among pegs"), and a range that ends at
             // the nominal lets no window open wider, so NDC would never be entered.
             lateral: amplitude(0.1, 1.5),
             dorsal: DorsalWave {
@@ -315,8 +315,9 @@ impl DirectionalComplianceConfig {
             },
             // The reference's compliance acts on the amplitude alone; planar, that
             // measures best here too; in 3-D the compliant phase keeps the body from
-            // colliding with itself (docs/measurements.md, "Directional compliance on
-            // the corrected friction"). [`Self::over_full_compliance`] adds the rest.
+            // colliding with itself (docs/measurements/directional-compliance.md,
+            // "Directional compliance on the corrected friction").
+            // [`Self::over_full_compliance`] adds the rest.
             phase: PhaseCompliance {
                 enabled: three_d,
                 gains: AdmittanceGains {
@@ -330,8 +331,9 @@ impl DirectionalComplianceConfig {
                 },
             },
             spatial_freq: SpatialFreqCompliance::OFF,
-            // Tuned on peg-array layouts 500-519 (docs/measurements.md); the fixed
-            // strategies are the reference's bare filters.
+            // Tuned on peg-array layouts 500-519
+            // (docs/measurements/directional-compliance.md); the fixed strategies are the
+            // reference's bare filters.
             thresholds: Thresholds {
                 low_rad_s: -1.2,
                 high_rad_s: 1.2,
@@ -368,7 +370,7 @@ impl DirectionalComplianceConfig {
     /// The same directional amplitude over the thesis's full compliance: the phase and
     /// the windows' spatial frequency comply too (the `dc_full_*` presets; planar,
     /// 0.1 self-contacts a trial among pegs instead of 14 and as fast; docs/
-    /// measurements.md, "Directional compliance over the full compliance").
+    /// measurements/directional-compliance.md, "Directional compliance over the full compliance").
     pub fn over_full_compliance(mut self) -> Self {
         self.phase.enabled = true;
         self.spatial_freq.enabled = true;

@@ -76,7 +76,7 @@ impl SidewindingConfig {
                 // slew-limited 8 % of cycles and the body chattered (issue 25). Damping
                 // 3 and the cap keep it within the motors; the stiffness stays low so ωS
                 // may sit at a bound while it squeezes through (stiffer did worse:
-                // docs/measurements.md, "Chatter among pegs").
+                // docs/measurements/sidewinding.md, "Chatter among pegs").
                 gains: AdmittanceGains {
                     mass: 0.05,
                     damping: 3.0,
@@ -98,7 +98,7 @@ impl SidewindingConfig {
             // (through a steep step at 90°, no hysteresis, `ReversalConfig::bistable`)
             // instead of holding its well until 110°. It got `ac_sfc` through the peg
             // array more often, with the gait's δ = π/2 too (the tallies:
-            // docs/measurements.md, "Sidewinding with the presets' K_h 6", and
+            // docs/measurements/sidewinding.md, "Why δ = π/2 and K_h 6", and
             // docs/lab-results/sidewinding/REPORT.md); the thesis's snap between the
             // wells is lost.
             reversal: ReversalConfig {
@@ -111,7 +111,7 @@ impl SidewindingConfig {
 
     /// `ac_sfc_lead`'s lead: crossing boards of pegs, on layouts no evaluation uses
     /// (seed-base 100, bare skin, three families), 0.4 rad crossed 28 of 60 against
-    /// ac_sfc's 19, +0.15 ± 0.07 paired, and 0.7 rad 25 (docs/measurements.md,
+    /// ac_sfc's 19, +0.15 ± 0.07 paired, and 0.7 rad 25 (docs/measurements/crossing.md,
     /// "Sidewinding goes head first among obstacles").
     pub const LEAD_RAD: f64 = 0.4;
 

@@ -52,8 +52,8 @@ pub struct HeadingConfig {
     /// direction of travel (mirrored when the gait is reversed), rad. Among obstacles
     /// the lateral wave pushes on them as slithering's does and the body also goes
     /// head first along its axis; a head turned forward makes that axial motion carry
-    /// it across instead of sideways (docs/measurements.md, "Sidewinding goes head
-    /// first among obstacles"). 0 holds the nominal itself.
+    /// it across instead of sideways (docs/measurements/crossing.md, "Sidewinding goes
+    /// head first among obstacles"). 0 holds the nominal itself.
     #[serde(default)]
     pub lead_rad: f64,
 }

@@ -6,7 +6,7 @@
 //! `controller.heading` commands.
 //!
 //! Why the offset: it turns the body nearly linearly with its size on open ground
-//! (docs/measurements.md: −4.3 / −8.2 / −14.7° per cycle at 0.05 / 0.1 / 0.2 rad with
+//! (docs/measurements/slithering.md: −4.3 / −8.2 / −14.7° per cycle at 0.05 / 0.1 / 0.2 rad with
 //! the default wave, 5-6× that with the sleeve's one wave of A 1.1), its sign the same
 //! for both waves (a positive offset turns the body clockwise), and it keeps the wave
 //! itself untouched, so the compliance above it sees the same shape.

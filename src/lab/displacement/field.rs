@@ -1,8 +1,8 @@
 //! What ends a displacement trial early: the body's centre has left the obstacle field.
 //! Past the field's edge the snake travels on open ground, and a trial that ran on
 //! would score open-ground speed as speed through the obstacles (on the rock pile such
-//! trials made most of the spread: docs/measurements.md, "Directional compliance per
-//! body section").
+//! trials made most of the spread: the measurements' history, `git show
+//! fcea847:docs/measurements.md`, "Directional compliance per body section").
 
 use crate::emu::Plant;
 use crate::emu::world::WorldSpec;

@@ -7,7 +7,7 @@
 //! the phase runs late) and the shape-forces are non-zero. It no longer asserts that the
 //! body gets through: that came from the old speed-clamped servo loop's shaking
 //! (docs/emulator.md, "The servo loop"); with the stable loop neither controller
-//! slithers forward on the thesis board (docs/measurements.md). Whether one beats the
+//! slithers forward on the thesis board (docs/measurements/slithering.md). Whether one beats the
 //! other is a statistic the lab measures over many trials (docs/lab.md). This test
 //! prints both runs' figures.
 use crate::support::rig;

@@ -31,7 +31,8 @@ fn peg_array_defaults_to_the_evaluated_protocol() {
         md.contains("Protocol: `scenarios/protocols/peg-array.toml (built in)`"),
         "{md}"
     );
-    // The nominal of the documented evaluation (docs/measurements.md), not the daemon's.
+    // The nominal of the documented evaluation
+    // (docs/measurements/directional-compliance.md), not the daemon's.
     assert!(
         md.contains(
             "amplitude_lat_rad 1.2, amplitude_dor_rad 0, spatial_freq_rad 6.283185307179586"

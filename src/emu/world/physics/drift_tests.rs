@@ -1,5 +1,5 @@
 //! Slithering's drift on isotropic ground: the physics against the quasi-static Coulomb
-//! model (docs/measurements.md, "Slithering on open ground"): the validation test, and
+//! model (docs/measurements/physics.md, "Slithering on open ground"): the validation test, and
 //! the diagnostic that prints the model with the physics' own joint angles and loads.
 
 use std::f64::consts::PI;

@@ -62,7 +62,7 @@ pub struct PhysicsConfig {
     /// Rigid-body steps per plant step; the actuator torques are recomputed for each.
     pub substeps: usize,
     /// Solver iterations per rigid-body step (rapier's default is 4; each is a TGS
-    /// substep with its own integration). See docs/measurements.md for the trade-off.
+    /// substep with its own integration). See docs/measurements/physics.md for the trade-off.
     pub solver_iterations: usize,
     /// Projected Gauss-Seidel sweeps inside each solver iteration (rapier's
     /// `num_internal_pgs_iterations`): cheaper than whole iterations, no re-integration.

@@ -9,7 +9,7 @@
 //! 30° on average (measured, independent of iterations, substeps and softness), and
 //! open-loop slithering on isotropic ground drifted backwards 0.058 m per cycle where
 //! the quasi-static Coulomb model of the same shapes and loads says 0.041
-//! (docs/measurements.md, "Slithering on open ground"). So, per skin contact and
+//! (docs/measurements/physics.md, "Slithering on open ground"). So, per skin contact and
 //! substep, with `v` the slip at the contact point and `s` = [`slide_share`]`(|v|)` of
 //! the slip under the link's centre
 //! (0 below [`STICK_BELOW_M_S`], 1 above [`SLIDE_ABOVE_M_S`]):
