@@ -2,7 +2,8 @@
 """Folder-level import cycles of the crate: which top-level folders of src/ name each
 other (`crate::FOLDER::` or `use crate::{FOLDER, ..}` in any file under another folder),
 and the cycles that makes. Test code is left out (files named *tests.rs and everything
-after a file's first `#[cfg(test)]`): tests may reach across. Usage:
+after a file's first `#[cfg(test)]`): tests may reach across. Exits 1 when there is a
+cycle (tests/integration/structure.rs runs it). Usage:
 scripts/folder-cycles.py [SRC_DIR] (default src)."""
 import os, re, sys, itertools
 
@@ -49,3 +50,4 @@ tangled = [c for c in sccs if len(c) > 1]
 print(f"{len(folders)} folders, {sum(len(e) for e in edges.values())} folder-to-folder dependencies")
 print(f"mutual pairs ({len(pairs)}): " + ", ".join(f"{a} <-> {b}" for a, b in pairs))
 print(f"cycles (strongly connected groups of folders, {len(tangled)}): " + "; ".join(" ".join(c) for c in tangled))
+sys.exit(1 if tangled else 0)

@@ -14,7 +14,12 @@
 //! - [`safety`]: the failsafe state machine.
 //! - [`rt`]: pacing, the 1 kHz loop, statistics, telemetry.
 //! - [`socket`]: the JSON control socket.
-//! - [`record`]: MCAP recording and the Foxglove live view.
+//! - [`station`]: operating from Foxglove (services, teleop, parameters).
+//! - [`record`]: MCAP recording.
+//! - [`live`]: the Foxglove live view (WebSocket server) the recorder starts; it carries
+//!   the station.
+//! - [`foxglove_json`]: JSON channels on a foxglove context (shared by `live` and
+//!   `station`).
 //! - [`lab`]: controller comparisons in simulation (`snake-lab`).
 //! - [`daemon`]: configuration and wiring of the service.
 //! - [`num`]: numbers as people read them, angles wrapped.
@@ -25,8 +30,10 @@ pub mod controllers;
 pub mod daemon;
 pub mod emu;
 pub mod estimation;
+pub mod foxglove_json;
 pub mod gait;
 pub mod lab;
+pub mod live;
 pub mod module;
 pub mod navigation;
 pub mod num;

@@ -160,7 +160,7 @@ impl Config {
             .check()
             .map_err(|e| bad("foxglove", "teleop settings".into(), e))?;
         // The recorder's channels, and the live view's and the station's own.
-        use crate::record::viewers::TOPIC as VIEWERS;
+        use crate::live::viewers::TOPIC as VIEWERS;
         use crate::station::actions::TOPIC as OPERATOR;
         let recorder = crate::record::Topic::ALL.iter().map(|t| t.name());
         if let Some(own) = recorder

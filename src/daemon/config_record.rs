@@ -137,7 +137,7 @@ impl Default for FoxgloveConfig {
         Self {
             enabled: false,
             host: std::net::IpAddr::V4(std::net::Ipv4Addr::LOCALHOST),
-            port: crate::record::DEFAULT_LIVE_PORT,
+            port: crate::live::DEFAULT_LIVE_PORT,
             operate: false,
             token_file: PathBuf::new(),
             teleop_topic: t.topic,

@@ -25,7 +25,7 @@ impl LogStyle {
 }
 
 /// Installs the global subscriber: `RUST_LOG` if set, else `default` (e.g. "info"), for
-/// what is written; the slow-viewer layer (`record::viewers`) sees the `foxglove`
+/// what is written; the slow-viewer layer (`live::viewers`) sees the `foxglove`
 /// server's lines whatever the level.
 pub fn init(default: &str) {
     use tracing_subscriber::Layer;
@@ -41,7 +41,7 @@ pub fn init(default: &str) {
     } else {
         fmt.without_time().boxed()
     };
-    let viewers = crate::record::viewers::SlowViewerLayer.with_filter(
+    let viewers = crate::live::viewers::SlowViewerLayer.with_filter(
         tracing_subscriber::filter::Targets::new().with_target("foxglove", tracing::Level::INFO),
     );
     let _ = tracing_subscriber::registry()

@@ -7,8 +7,8 @@ use std::sync::Arc;
 use foxglove::schemas::{FrameTransforms, SceneUpdate};
 use foxglove::{Context, Encode, FoxgloveError, PartialMetadata, RawChannel, Schema};
 
-use super::live::Latch;
 use super::schemas;
+use crate::live::Latch;
 
 /// Every topic the recorder writes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -219,22 +219,6 @@ impl Channels {
 fn proto<T: Encode>() -> (Schema, String) {
     let schema = T::get_schema().expect("foxglove's well-known types carry their schema");
     (schema, T::get_message_encoding())
-}
-
-/// A JSON channel `topic` with the JSON Schema `schema` named `name` on `ctx` (`None`,
-/// and a warning, if it cannot be made: what it would carry is then not logged).
-pub fn json_channel(
-    ctx: &Arc<Context>,
-    topic: &str,
-    name: &str,
-    schema: &'static [u8],
-) -> Option<Arc<RawChannel>> {
-    ctx.channel_builder(topic)
-        .message_encoding("json")
-        .schema(Schema::new(name, "jsonschema", schema))
-        .build_raw()
-        .map_err(|e| tracing::warn!("no {topic} channel: {e}"))
-        .ok()
 }
 
 #[cfg(test)]

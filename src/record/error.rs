@@ -73,3 +73,13 @@ impl RecordError {
         }
     }
 }
+
+/// The live view's errors as the recorder's (their messages unchanged).
+impl From<crate::live::LiveError> for RecordError {
+    fn from(e: crate::live::LiveError) -> Self {
+        match e {
+            crate::live::LiveError::Bind { addr, reason } => Self::Live { addr, reason },
+            crate::live::LiveError::Runtime(e) => Self::Runtime(e),
+        }
+    }
+}

@@ -1,6 +1,6 @@
 //! Recording every run: the loop pushes `Copy` items ([`RecordItem`]) into a bounded
-//! lock-free ring; a writer thread encodes them as MCAP and serves them live over the
-//! Foxglove WebSocket protocol. Channels, rates, caps and how to read a file:
+//! lock-free ring; a writer thread encodes them as MCAP and, when asked, starts the live
+//! view (`crate::live`, the Foxglove WebSocket server) on the same channels. Channels, rates, caps and how to read a file:
 //! `docs/recording.md`.
 //!
 //! # API
@@ -14,7 +14,7 @@
 //!                 chunk_duration_s: f64 /* 1: a chunk reaches the disk whole at least this often */ } // ::new(path)
 //!     fn check(&self) -> Result<(), RecordError>;  // what start refuses before creating the file;
 //!                                                  // RecordError::mcap_field names the field
-//! LiveOptions   { addr: SocketAddr /* 127.0.0.1:8765; port 0 = any */ }            // Default
+//! live::LiveOptions { addr: SocketAddr /* 127.0.0.1:8765; port 0 = any */, station, caps } // Default
 //! RecordingInfo { source: String /* "snaked" | "snake-lab" */, module_names: Vec<String>,
 //!                 layout: BodyLayout, world: Option<WorldSpec>, catalog: Catalog,
 //!                 metadata: Vec<(String, String)> }
@@ -55,7 +55,7 @@
 //! `ring` (loop ↔ writer), `recorder` (start, finish, status), `writer` (the thread,
 //! caps), `channels` (topics), `encode` + `schemas` (JSON bodies and their schemas),
 //! `scene` + `kinematics` (3-D), `file` (MCAP, append only), `recover` (a finished file
-//! from an unfinished one), `live` (WebSocket server).
+//! from an unfinished one), `urdf` (the robot's model, served by the live view).
 
 mod channels;
 pub mod cycle;
@@ -63,7 +63,6 @@ mod encode;
 mod error;
 mod file;
 pub mod kinematics;
-mod live;
 mod loop_recorder;
 mod options;
 mod recorder;
@@ -72,10 +71,9 @@ mod ring;
 mod scene;
 mod schemas;
 pub mod urdf;
-pub mod viewers;
 mod writer;
 
-pub use channels::{Topic, json_channel};
+pub use channels::Topic;
 pub use cycle::{
     CycleRecord, JointSample, RECORD_MAX_LINKS, RECORD_MAX_MODULES, RecordEvent, RecordItem,
 };
@@ -83,8 +81,8 @@ pub use error::RecordError;
 pub use file::MIN_MAX_BYTES;
 pub use loop_recorder::{LoopRecorder, LoopRecording};
 pub use options::{
-    CapReason, DEFAULT_CHUNK_DURATION_S, DEFAULT_LIVE_PORT, FileState, LiveOptions, McapOptions,
-    RecordOptions, RecordState, RecordSummary, RecorderStatus, RecordingInfo,
+    CapReason, DEFAULT_CHUNK_DURATION_S, FileState, McapOptions, RecordOptions, RecordState,
+    RecordSummary, RecorderStatus, RecordingInfo,
 };
 pub use recorder::{Recorder, RecorderProbe, start};
 pub use recover::{RECOVER_MAX_CHUNK_BYTES, RecoverError, Recovery, recover, recovered_path};

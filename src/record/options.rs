@@ -2,15 +2,12 @@
 //! ([`RecordingInfo`]), and what it reports back ([`RecorderStatus`], [`RecordSummary`]).
 
 use std::collections::BTreeMap;
-use std::net::{Ipv4Addr, SocketAddr};
 use std::path::PathBuf;
 
 use crate::controller_interface::catalog::Catalog;
 use crate::emu::world::WorldSpec;
 use crate::gait::BodyLayout;
-
-/// Port the Foxglove app connects to by default.
-pub const DEFAULT_LIVE_PORT: u16 = 8765;
+use crate::live::LiveOptions;
 
 /// A chunk is closed (and reaches the disk whole) at least this often, s of loop time:
 /// what a crash can lose of the file beyond what the ring held.
@@ -64,37 +61,6 @@ impl McapOptions {
             max_bytes: None,
             max_duration_s: None,
             chunk_duration_s: DEFAULT_CHUNK_DURATION_S,
-        }
-    }
-}
-
-/// Where the live view listens.
-#[derive(Debug, Clone, PartialEq)]
-pub struct LiveOptions {
-    /// Default `127.0.0.1:8765` (loopback: watching needs no authentication). Port 0
-    /// picks a free port ([`super::Recorder::live_addr`] tells which).
-    pub addr: SocketAddr,
-    /// Operating from Foxglove (services, teleop; `[foxglove] operate`): `None`, the
-    /// view is for watching only.
-    pub station: Option<crate::station::Station>,
-    /// Connections the server holds at once, counted from accept (one still in its
-    /// handshake counts); one more is closed at once, with a warning. `None`: no cap.
-    pub max_connections: Option<usize>,
-    /// ...of which from one IP address.
-    pub max_connections_per_address: Option<usize>,
-    /// A connection that has not completed its WebSocket handshake and taken the server's
-    /// first message within this long is closed. `None`: no timeout.
-    pub handshake_timeout: Option<std::time::Duration>,
-}
-
-impl Default for LiveOptions {
-    fn default() -> Self {
-        Self {
-            addr: SocketAddr::from((Ipv4Addr::LOCALHOST, DEFAULT_LIVE_PORT)),
-            station: None,
-            max_connections: None,
-            max_connections_per_address: None,
-            handshake_timeout: None,
         }
     }
 }

@@ -6,10 +6,10 @@ use std::sync::atomic::Ordering;
 use std::thread::JoinHandle;
 
 use super::error::RecordError;
-use super::live::Latch;
 use super::options::{RecordOptions, RecordState, RecordSummary, RecorderStatus, RecordingInfo};
 use super::ring::{CloseOnDrop, RecordTx, Ring};
 use super::writer::{Shared, Writer};
+use crate::live::Latch;
 
 /// Starts recording: allocates the ring, creates the file (if asked), starts the live
 /// view (if asked) and the writer thread `snaked-record`. Errors (a path that cannot be

@@ -20,11 +20,12 @@ use super::encode::{
 };
 use super::error::RecordError;
 use super::file::McapFile;
-use super::live::{Latch, Live};
 use super::options::{CapReason, FileState, RecordOptions, RecordSummary, RecordingInfo};
 use super::ring::Ring;
 use super::scene::{BodyDrawer, world_scene};
+use super::urdf::{URDF_URI, urdf};
 use crate::controller_interface::catalog::{Catalog, ControllerInfo, NO_CONTROLLER};
+use crate::live::{Asset, Latch, Live};
 use crate::rt::stats::LoopStats;
 
 /// How long the writer sleeps when the ring is empty. The loop never wakes it (that
@@ -159,7 +160,15 @@ impl Writer {
         let live = opts
             .live
             .as_ref()
-            .map(|l| Live::start(l, &ctx, &info))
+            .map(|l| {
+                // The robot's model, for the 3-D panel's URDF layer (and anything that
+                // fetches it).
+                let model = Asset {
+                    uri: URDF_URI,
+                    body: urdf(&info.layout, &info.module_names),
+                };
+                Live::start(l, &ctx, info.source.clone(), model)
+            })
             .transpose()?;
         let file = opts
             .mcap

@@ -6,7 +6,7 @@ use std::sync::Arc;
 
 use foxglove::{Context, RawChannel};
 
-use crate::record::json_channel;
+use crate::foxglove_json::json_channel;
 use serde_json::{Value, json};
 
 /// The channel's topic.

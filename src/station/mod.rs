@@ -1,5 +1,5 @@
 //! The operator's station: driving and tuning the robot from Foxglove (issue 29). The
-//! live view's WebSocket server (`record::live`) carries it when `[foxglove] operate`
+//! live view's WebSocket server (`live::server`) carries it when `[foxglove] operate`
 //! is on: services for the socket's methods that change state, a teleop channel in the
 //! shape Foxglove's Teleop panel publishes, with a dead-man, and who may do either.
 //! Everything an operator asks goes through the control socket's own methods

@@ -12,6 +12,7 @@ mod lab;
 mod protocol;
 mod record;
 mod socket;
+mod structure;
 mod support;
 mod systemd;
 mod world;

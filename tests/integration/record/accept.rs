@@ -11,7 +11,8 @@ use std::net::{SocketAddr, TcpStream};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-use snaked::record::{LiveOptions, RecordOptions, start};
+use snaked::live::LiveOptions;
+use snaked::record::{RecordOptions, start};
 use tungstenite::client::IntoClientRequest;
 use tungstenite::stream::MaybeTlsStream;
 use tungstenite::{Message, WebSocket};

@@ -11,7 +11,8 @@ use std::net::TcpStream;
 use std::time::{Duration, Instant};
 
 use fixture::*;
-use snaked::record::{LiveOptions, RecordOptions, Topic, start};
+use snaked::live::LiveOptions;
+use snaked::record::{RecordOptions, Topic, start};
 use tungstenite::client::IntoClientRequest;
 use tungstenite::stream::MaybeTlsStream;
 use tungstenite::{Message, WebSocket};
@@ -107,8 +108,8 @@ fn a_client_sees_the_channels_and_receives_joints_and_the_latched_world() {
     let mut ws = connect(addr);
     let topics = advertised(&mut ws);
     let mut expected: Vec<&str> = Topic::ALL.iter().map(|t| t.name()).collect();
-    // The live view's own: slow viewers reported (record::viewers).
-    expected.push(snaked::record::viewers::TOPIC);
+    // The live view's own: slow viewers reported (live::viewers).
+    expected.push(snaked::live::viewers::TOPIC);
     assert_eq!(topics.keys().map(String::as_str).collect::<Vec<_>>(), {
         let mut e = expected.clone();
         e.sort_unstable();

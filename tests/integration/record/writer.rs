@@ -6,9 +6,10 @@ use crate::support::record_fixture as fixture;
 
 use fixture::*;
 use foxglove::schemas::{FrameTransforms, SceneUpdate};
+use snaked::live::LiveOptions;
 use snaked::record::{
-    CapReason, FileState, LiveOptions, McapOptions, RecordError, RecordOptions, RecordState,
-    RecordSummary, start,
+    CapReason, FileState, McapOptions, RecordError, RecordOptions, RecordState, RecordSummary,
+    start,
 };
 
 fn record(items: &[snaked::record::RecordItem], opts: RecordOptions, world: bool) -> RecordSummary {

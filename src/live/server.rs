@@ -1,97 +1,27 @@
-//! The live view: foxglove's WebSocket server (subprotocol `foxglove.sdk.v1`) on the
+//! The server: foxglove's WebSocket server (subprotocol `foxglove.sdk.v1`) on the
 //! recorder's context, so live clients get the same channels as the file. It runs on a
-//! one-worker tokio runtime of its own, owned by the writer thread (so the recorder
-//! works the same whether or not its caller is inside a runtime). Messages that are
-//! published once (the world, controller infos) are latched: re-sent to each client
-//! that subscribes later.
+//! one-worker tokio runtime of its own, owned by the recorder's writer thread (so the
+//! recorder works the same whether or not its caller is inside a runtime). Messages that
+//! are published once (the world, controller infos) are latched ([`Latch`]): re-sent to
+//! each client that subscribes later. When operating, it carries the station: services,
+//! parameters and the teleop channel.
 
-use std::collections::HashMap;
 use std::net::{IpAddr, SocketAddr};
 use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::{Arc, Mutex, MutexGuard, PoisonError, Weak};
+use std::sync::{Arc, Weak};
 use std::time::Duration;
 
 use foxglove::websocket::{Capability, ChannelView, Client, ClientChannel, ServerListener, Status};
-use foxglove::{ChannelId, Context, PartialMetadata, RawChannel, WebSocketServerHandle};
+use foxglove::{Context, WebSocketServerHandle};
 
-use super::error::RecordError;
-use super::options::{LiveOptions, RecordingInfo};
-use super::urdf::{URDF_URI, urdf};
+use super::latch::Latch;
 use super::viewers::{ViewerReports, take_reports};
+use super::{Asset, LiveError, LiveOptions};
 use crate::station::access::Access;
 use crate::station::actions::Actions;
 use crate::station::drive::Drive;
 use crate::station::parameters::{Parameters, publish_changes};
 use crate::station::services::{Operating, services};
-
-/// A latched message: its channel, a key (a newer message of the same key replaces
-/// it), the payload and its log time.
-struct Latched {
-    channel: Arc<RawChannel>,
-    key: u64,
-    payload: Vec<u8>,
-    log_time: u64,
-}
-
-/// The server's listener: counts clients and re-sends latched messages on subscribe.
-#[derive(Default)]
-pub struct Latch {
-    clients: AtomicUsize,
-    latched: Mutex<HashMap<ChannelId, Vec<Latched>>>,
-}
-
-impl Latch {
-    /// Poisoning is shrugged off: a latched message is still worth showing.
-    fn latched(&self) -> MutexGuard<'_, HashMap<ChannelId, Vec<Latched>>> {
-        self.latched.lock().unwrap_or_else(PoisonError::into_inner)
-    }
-
-    /// Keeps `payload` for clients that subscribe to `channel` later.
-    pub fn keep(&self, channel: &Arc<RawChannel>, key: u64, payload: &[u8], log_time: u64) {
-        let mut map = self.latched();
-        let list = map.entry(channel.id()).or_default();
-        let entry = Latched {
-            channel: channel.clone(),
-            key,
-            payload: payload.to_vec(),
-            log_time,
-        };
-        match list.iter_mut().find(|l| l.key == key) {
-            Some(l) => *l = entry,
-            None => list.push(entry),
-        }
-    }
-
-    pub fn clients(&self) -> usize {
-        self.clients.load(Ordering::Relaxed)
-    }
-}
-
-impl ServerListener for Latch {
-    fn on_subscribe(&self, client: Client, channel: ChannelView) {
-        // The subscription is registered before this callback, so the client's sink
-        // receives what is logged to it here.
-        let map = self.latched();
-        for l in map.get(&channel.id()).into_iter().flatten() {
-            let meta = PartialMetadata {
-                log_time: Some(l.log_time),
-            };
-            l.channel
-                .log_with_meta_to_sink(&l.payload, meta, client.sink_id());
-        }
-    }
-
-    fn on_client_connect(&self) {
-        self.clients.fetch_add(1, Ordering::Relaxed);
-    }
-
-    fn on_client_disconnect(&self) {
-        // Saturating: never wraps even if the server reported an unmatched disconnect.
-        let _ = self
-            .clients
-            .fetch_update(Ordering::Relaxed, Ordering::Relaxed, |n| n.checked_sub(1));
-    }
-}
 
 /// The one encoding clients may publish in (the server's `supportedEncodings`).
 const CLIENT_ENCODING: &str = "json";
@@ -161,7 +91,7 @@ impl ServerListener for Listener {
     }
 }
 
-/// Every slow viewer the server reported (`record::viewers`): a `/live/viewers`
+/// Every slow viewer the server reported (`live::viewers`): a `/live/viewers`
 /// message and a warning status to every viewer. Runs until aborted.
 async fn report_slow_viewers(reports: ViewerReports, server: Weak<WebSocketServerHandle>) {
     let mut tick = tokio::time::interval(Duration::from_millis(200));
@@ -200,24 +130,23 @@ impl Live {
     pub fn start(
         opts: &LiveOptions,
         ctx: &Arc<Context>,
-        info: &RecordingInfo,
-    ) -> Result<Self, RecordError> {
+        name: String,
+        model: Asset,
+    ) -> Result<Self, LiveError> {
         let runtime = tokio::runtime::Builder::new_multi_thread()
             .worker_threads(1)
             .thread_name("snaked-live")
             .enable_all()
             .build()
-            .map_err(RecordError::Runtime)?;
+            .map_err(LiveError::Runtime)?;
         let latch = Arc::new(Latch::default());
         let host = match opts.addr.ip() {
             IpAddr::V4(ip) => ip.to_string(),
             IpAddr::V6(ip) => format!("[{ip}]"),
         };
-        // The robot's model, for the 3-D panel's URDF layer (and anything that fetches it).
-        let model = urdf(&info.layout, &info.module_names);
         let mut server = ctx
             .websocket_server()
-            .name(info.source.clone())
+            .name(name)
             .bind(host, opts.addr.port());
         // Admission (the patched crate, third_party/foxglove): caps counted from accept,
         // a handshake timeout; a failed accept is retried, never the end of the server.
@@ -231,10 +160,10 @@ impl Live {
             server = server.handshake_timeout(t);
         }
         let mut server = server.fetch_asset_handler_blocking_fn(move |_client, uri: String| {
-            if uri == URDF_URI {
-                Ok(model.clone().into_bytes())
+            if uri == model.uri {
+                Ok(model.body.clone().into_bytes())
             } else {
-                Err(format!("no asset {uri:?} (this server has {URDF_URI})"))
+                Err(format!("no asset {uri:?} (this server has {})", model.uri))
             }
         });
         let mut drive = None;
@@ -272,7 +201,7 @@ impl Live {
         // Inside `block_on` the server finds this runtime as the current one.
         let handle = runtime
             .block_on(server.start())
-            .map_err(|source| RecordError::Live {
+            .map_err(|source| LiveError::Bind {
                 addr: opts.addr,
                 reason: source,
             })?;

@@ -11,7 +11,7 @@ use std::sync::OnceLock;
 use crossbeam_channel::{Receiver, Sender, bounded};
 use foxglove::{Context, RawChannel};
 
-use super::channels::json_channel;
+use crate::foxglove_json::json_channel;
 use tracing::field::{Field, Visit};
 use tracing_subscriber::layer::{Context as LayerContext, Layer};
 
