@@ -6,7 +6,7 @@
 use std::path::Path;
 
 use libfuzzer_sys::fuzz_target;
-use snaked::daemon::config::{Config, ConfigError};
+use snaked::daemon::config::{Config, ConfigFileError};
 
 fuzz_target!(|data: &[u8]| {
     let Ok(text) = std::str::from_utf8(data) else {
@@ -30,19 +30,19 @@ fuzz_target!(|data: &[u8]| {
     }
 });
 
-fn check_error(e: &ConfigError) {
+fn check_error(e: &ConfigFileError) {
     let msg = e.to_string();
     assert!(msg.starts_with("fuzz.toml: "), "{msg}");
     match e {
-        ConfigError::Read { .. } => panic!("read nothing: {msg}"),
-        ConfigError::Parse { message, .. } => {
+        ConfigFileError::Read { .. } => panic!("read nothing: {msg}"),
+        ConfigFileError::Parse { message, .. } => {
             assert!(message.contains("at line "), "no place: {msg}")
         }
-        ConfigError::Invalid { key, .. } => assert!(msg.contains(key), "{msg}"),
-        ConfigError::GaitParams { gait, .. } => {
+        ConfigFileError::Invalid { key, .. } => assert!(msg.contains(key), "{msg}"),
+        ConfigFileError::GaitParams { gait, .. } => {
             assert!(msg.contains(&format!("[gait.params.{gait}]")), "{msg}")
         }
-        ConfigError::Controller { gait, source, .. } => {
+        ConfigFileError::Controller { gait, source, .. } => {
             assert!(msg.contains(&format!("[gait.controllers.{gait}]")), "{msg}");
             use snaked::controller_interface::ConfigError as C;
             if let C::Field { path: f, .. }

@@ -258,7 +258,7 @@ impl Default for EmulatorConfig {
 }
 
 #[derive(Debug, thiserror::Error)]
-pub enum ConfigError {
+pub enum ConfigFileError {
     #[error("cannot read {path}: {source}")]
     Read {
         path: PathBuf,
@@ -288,8 +288,8 @@ pub enum ConfigError {
 }
 
 impl Config {
-    pub fn load(path: &Path) -> Result<Config, ConfigError> {
-        let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Read {
+    pub fn load(path: &Path) -> Result<Config, ConfigFileError> {
+        let text = std::fs::read_to_string(path).map_err(|source| ConfigFileError::Read {
             path: path.to_owned(),
             source,
         })?;
@@ -297,8 +297,8 @@ impl Config {
     }
 
     /// Parse and validate; `path` only labels the messages.
-    pub fn parse(text: &str, path: &Path) -> Result<Config, ConfigError> {
-        let cfg: Config = toml::from_str(text).map_err(|e| ConfigError::Parse {
+    pub fn parse(text: &str, path: &Path) -> Result<Config, ConfigFileError> {
+        let cfg: Config = toml::from_str(text).map_err(|e| ConfigFileError::Parse {
             path: path.to_owned(),
             message: e.to_string(),
         })?;

@@ -3,14 +3,14 @@
 //! `snaked --check-config` finds everything that would stop the daemon later.
 use std::path::Path;
 
-use super::{Config, ConfigError, LookupBy, parse_mac};
+use super::{Config, ConfigFileError, LookupBy, parse_mac};
 use crate::gait::GaitKind;
 use crate::num::Num;
 
 impl Config {
     /// The default gait parameters with `[gait.params.*]` applied, every gait checked
     /// for this body's module length (as the daemon checks the table when it starts).
-    pub fn gait_table(&self, path: &Path) -> Result<crate::gait::GaitTable, ConfigError> {
+    pub fn gait_table(&self, path: &Path) -> Result<crate::gait::GaitTable, ConfigFileError> {
         let l = self.body.module_length_m;
         let mut table = crate::gait::GaitTable::default();
         let mut kinds: Vec<_> = self.gait.params.keys().copied().collect();
@@ -19,7 +19,7 @@ impl Config {
             let p = table
                 .get(kind)
                 .patched_for(kind, &self.gait.params[&kind], l)
-                .map_err(|source| ConfigError::GaitParams {
+                .map_err(|source| ConfigFileError::GaitParams {
                     path: path.to_owned(),
                     gait: kind.name(),
                     source,
@@ -30,7 +30,7 @@ impl Config {
         // longer module can take one out of range (rolling_helix's from about 0.1 m).
         table
             .validate_for(l)
-            .map_err(|(kind, source)| ConfigError::GaitParams {
+            .map_err(|(kind, source)| ConfigFileError::GaitParams {
                 path: path.to_owned(),
                 gait: kind.name(),
                 source,
@@ -40,8 +40,8 @@ impl Config {
 
     /// Checks between keys, and of what the keys name (targets, the world file), so
     /// that `--check-config` finds everything that would stop the daemon later.
-    fn cross_checks(&self, path: &Path) -> Result<(), ConfigError> {
-        let bad = |key: &'static str, value: String, why: String| ConfigError::Invalid {
+    fn cross_checks(&self, path: &Path) -> Result<(), ConfigFileError> {
+        let bad = |key: &'static str, value: String, why: String| ConfigFileError::Invalid {
             path: path.to_owned(),
             key,
             value,
@@ -139,8 +139,8 @@ impl Config {
     /// `[foxglove]` against the rest, and what the daemon reads for it when it starts: the
     /// token file, the teleop settings, a port of its own, a teleop topic that is none of
     /// the daemon's own channels, and the connections it lets in below the file limit.
-    fn foxglove_checks(&self, path: &Path) -> Result<(), ConfigError> {
-        let bad = |key: &'static str, value: String, why: String| ConfigError::Invalid {
+    fn foxglove_checks(&self, path: &Path) -> Result<(), ConfigFileError> {
+        let bad = |key: &'static str, value: String, why: String| ConfigFileError::Invalid {
             path: path.to_owned(),
             key,
             value,
@@ -203,7 +203,7 @@ impl Config {
 
     /// Builds every configured controller once (for a body of `emulator.modules`
     /// modules) so a bad one is named before the daemon starts.
-    fn check_gaits(&self, path: &Path) -> Result<(), ConfigError> {
+    fn check_gaits(&self, path: &Path) -> Result<(), ConfigFileError> {
         let table = self.gait_table(path)?;
         let layout = crate::gait::BodyLayout::alternating(
             self.emulator.modules.max(2),
@@ -218,7 +218,7 @@ impl Config {
             };
             let sel = self.controller_selection(gait);
             crate::controller_interface::registry::build(crate::controllers::REGISTRY, &sel, &ctx)
-                .map_err(|source| ConfigError::Controller {
+                .map_err(|source| ConfigFileError::Controller {
                     path: path.to_owned(),
                     gait: gait.name(),
                     source,
@@ -227,8 +227,8 @@ impl Config {
         Ok(())
     }
 
-    pub fn validate(&self, path: &Path) -> Result<(), ConfigError> {
-        let bad = |key: &'static str, value: String, why: &str| ConfigError::Invalid {
+    pub fn validate(&self, path: &Path) -> Result<(), ConfigFileError> {
+        let bad = |key: &'static str, value: String, why: &str| ConfigFileError::Invalid {
             path: path.to_owned(),
             key,
             value,

@@ -4,7 +4,7 @@ use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
 
-use super::config::ConfigError;
+use super::config::ConfigFileError;
 use crate::num::Num;
 use crate::record::McapOptions;
 
@@ -68,7 +68,7 @@ impl RecordConfig {
 
     /// What the recorder would refuse when the daemon starts it, by the recorder's own
     /// check ([`McapOptions::check`]), as the configuration's error naming the key.
-    pub(super) fn check(&self, file: &Path) -> Result<(), ConfigError> {
+    pub(super) fn check(&self, file: &Path) -> Result<(), ConfigFileError> {
         let Some(opts) = self.mcap_options() else {
             return Ok(());
         };
@@ -85,7 +85,7 @@ impl RecordConfig {
                 ),
                 _ => ("record.path", format!("{:?}", self.path)),
             };
-            ConfigError::Invalid {
+            ConfigFileError::Invalid {
                 path: file.to_owned(),
                 key,
                 value,

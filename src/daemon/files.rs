@@ -5,7 +5,7 @@
 //! anything else.
 use std::path::Path;
 
-use super::config::{Config, ConfigError};
+use super::config::{Config, ConfigFileError};
 
 /// Files the daemon holds besides the connections it caps: the standard streams, the
 /// listeners, the tokio runtimes' descriptors, the bus's or the emulator's sockets, the
@@ -68,7 +68,7 @@ impl Config {
     }
 
     /// Refuses caps that do not fit below `limit` open files.
-    pub(super) fn check_file_limit(&self, path: &Path, limit: u64) -> Result<(), ConfigError> {
+    pub(super) fn check_file_limit(&self, path: &Path, limit: u64) -> Result<(), ConfigFileError> {
         let needed = self.files_needed();
         if needed <= limit {
             return Ok(());
@@ -84,7 +84,7 @@ impl Config {
         } else {
             String::new()
         };
-        Err(ConfigError::Invalid {
+        Err(ConfigFileError::Invalid {
             path: path.to_owned(),
             key,
             value: value.to_string(),

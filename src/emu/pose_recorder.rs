@@ -8,7 +8,7 @@
 use std::path::Path;
 
 use super::Plant;
-use super::recorder::{CsvSink, RecordError};
+use super::recorder::{CsvError, CsvSink};
 
 /// Buffered CSV writer of body poses and contacts.
 pub struct PoseRecorder {
@@ -18,7 +18,7 @@ pub struct PoseRecorder {
 
 impl PoseRecorder {
     /// Create (truncate) `path` and write the header for `links` bodies.
-    pub fn create(path: &Path, links: usize) -> Result<Self, RecordError> {
+    pub fn create(path: &Path, links: usize) -> Result<Self, CsvError> {
         let sink = CsvSink::create(path, |out| {
             write!(out, "t_s")?;
             for k in 0..links {
@@ -32,7 +32,7 @@ impl PoseRecorder {
     }
 
     /// Append the row of one physics step.
-    pub fn row(&mut self, plant: &dyn Plant) -> Result<(), RecordError> {
+    pub fn row(&mut self, plant: &dyn Plant) -> Result<(), CsvError> {
         let links = self.links;
         self.sink.row(|out| {
             write!(out, "{:.6}", plant.time_s())?;
@@ -51,7 +51,7 @@ impl PoseRecorder {
     }
 
     /// Flush everything written so far.
-    pub fn flush(&mut self) -> Result<(), RecordError> {
+    pub fn flush(&mut self) -> Result<(), CsvError> {
         self.sink.flush()
     }
 }

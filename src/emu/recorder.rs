@@ -16,7 +16,7 @@ pub const FLUSH_EVERY_ROWS: u32 = 1000;
 
 #[derive(Debug, thiserror::Error)]
 #[error("recording {path}: {source}")]
-pub struct RecordError {
+pub struct CsvError {
     pub path: PathBuf,
     #[source]
     pub source: io::Error,
@@ -35,8 +35,8 @@ impl CsvSink {
     pub fn create(
         path: &Path,
         header: impl FnOnce(&mut dyn Write) -> io::Result<()>,
-    ) -> Result<Self, RecordError> {
-        let wrap = |source| RecordError {
+    ) -> Result<Self, CsvError> {
+        let wrap = |source| CsvError {
             path: path.to_owned(),
             source,
         };
@@ -58,7 +58,7 @@ impl CsvSink {
     pub fn row(
         &mut self,
         fill: impl FnOnce(&mut dyn Write) -> io::Result<()>,
-    ) -> Result<(), RecordError> {
+    ) -> Result<(), CsvError> {
         let written = fill(&mut self.out).and_then(|()| {
             self.rows_since_flush += 1;
             if self.rows_since_flush >= FLUSH_EVERY_ROWS {
@@ -71,13 +71,13 @@ impl CsvSink {
     }
 
     /// Flush everything written so far.
-    pub fn flush(&mut self) -> Result<(), RecordError> {
+    pub fn flush(&mut self) -> Result<(), CsvError> {
         self.rows_since_flush = 0;
         self.out.flush().map_err(|source| self.error(source))
     }
 
-    fn error(&self, source: io::Error) -> RecordError {
-        RecordError {
+    fn error(&self, source: io::Error) -> CsvError {
+        CsvError {
             path: self.path.clone(),
             source,
         }
@@ -92,7 +92,7 @@ pub struct Recorder {
 
 impl Recorder {
     /// Create (truncate) `path` and write the header for `modules` joints.
-    pub fn create(path: &Path, modules: usize) -> Result<Self, RecordError> {
+    pub fn create(path: &Path, modules: usize) -> Result<Self, CsvError> {
         let sink = CsvSink::create(path, |out| {
             write!(out, "t_s")?;
             for kind in ["cmd", "pos", "torque"] {
@@ -110,7 +110,7 @@ impl Recorder {
     }
 
     /// Append the row of one physics step.
-    pub fn row(&mut self, plant: &dyn Plant, applied: &[Command]) -> Result<(), RecordError> {
+    pub fn row(&mut self, plant: &dyn Plant, applied: &[Command]) -> Result<(), CsvError> {
         let modules = self.modules;
         self.sink.row(|out| {
             write!(out, "{:.6}", plant.time_s())?;
@@ -129,7 +129,7 @@ impl Recorder {
     }
 
     /// Flush everything written so far.
-    pub fn flush(&mut self) -> Result<(), RecordError> {
+    pub fn flush(&mut self) -> Result<(), CsvError> {
         self.sink.flush()
     }
 }

@@ -43,7 +43,7 @@ impl Default for Scenario {
 }
 
 #[derive(Debug, thiserror::Error)]
-pub enum ScenarioError {
+pub enum EmuScenarioError {
     #[error("scenario {path}: {source}")]
     Read {
         path: PathBuf,
@@ -60,12 +60,12 @@ pub enum ScenarioError {
 
 impl Scenario {
     /// Read and parse `path` (unknown keys are errors).
-    pub fn load(path: &Path) -> Result<Self, ScenarioError> {
-        let text = std::fs::read_to_string(path).map_err(|source| ScenarioError::Read {
+    pub fn load(path: &Path) -> Result<Self, EmuScenarioError> {
+        let text = std::fs::read_to_string(path).map_err(|source| EmuScenarioError::Read {
             path: path.to_owned(),
             source,
         })?;
-        Self::parse(&text).map_err(|source| ScenarioError::Parse {
+        Self::parse(&text).map_err(|source| EmuScenarioError::Parse {
             path: path.to_owned(),
             source,
         })

@@ -29,7 +29,7 @@ use super::module::{
     EMULATOR_FIRMWARE, Module, ModuleConfig, ModuleIdentity, ModuleTime, Outgoing,
 };
 use super::pose_recorder::PoseRecorder;
-use super::recorder::{RecordError, Recorder};
+use super::recorder::{CsvError, Recorder};
 use crate::protocol::{
     Command, DecodeError, Feedback, Key, MAX_DATAGRAM, Message, Name, VERSION_1,
 };
@@ -93,7 +93,7 @@ impl Default for ServerConfig {
 }
 
 #[derive(Debug, thiserror::Error)]
-pub enum ServerError {
+pub enum EmuServerError {
     #[error("cannot bind module {module} to {addr}: {source}")]
     Bind {
         module: usize,
@@ -104,7 +104,7 @@ pub enum ServerError {
     #[error("socket error: {0}")]
     Io(#[from] std::io::Error),
     #[error(transparent)]
-    Record(#[from] RecordError),
+    Record(#[from] CsvError),
     #[error(transparent)]
     Faults(#[from] FaultError),
     #[error("invalid configuration: {0}")]
@@ -204,28 +204,28 @@ pub struct Server {
 
 impl Server {
     /// Bind one socket per plant module and set everything up; nothing runs yet.
-    pub fn new(config: ServerConfig, plant: Box<dyn Plant>) -> Result<Self, ServerError> {
+    pub fn new(config: ServerConfig, plant: Box<dyn Plant>) -> Result<Self, EmuServerError> {
         if !(config.physics_dt_s.is_finite() && config.physics_dt_s > 0.0) {
-            return Err(ServerError::Config("physics_dt_s must be > 0"));
+            return Err(EmuServerError::Config("physics_dt_s must be > 0"));
         }
         if !(config.lockstep_timeout_s.is_finite() && config.lockstep_timeout_s > 0.0) {
-            return Err(ServerError::Config("lockstep_timeout_s must be > 0"));
+            return Err(EmuServerError::Config("lockstep_timeout_s must be > 0"));
         }
         let n = plant.module_count();
         if n == 0 {
-            return Err(ServerError::Config("the plant has no modules"));
+            return Err(EmuServerError::Config("the plant has no modules"));
         }
         let endpoints = if config.gateway { 1 } else { n };
         if config.base_port != 0
             && usize::from(config.base_port) + endpoints - 1 > usize::from(u16::MAX)
         {
-            return Err(ServerError::Config("base_port + modules exceeds 65535"));
+            return Err(EmuServerError::Config("base_port + modules exceeds 65535"));
         }
         if n > usize::from(u16::MAX) + 1 {
-            return Err(ServerError::Config("more modules than units"));
+            return Err(EmuServerError::Config("more modules than units"));
         }
-        let family =
-            Name::new(&config.family).map_err(|_| ServerError::Config("family name too long"))?;
+        let family = Name::new(&config.family)
+            .map_err(|_| EmuServerError::Config("family name too long"))?;
         let faults = Faults::new(config.faults.clone(), n)?;
         let mut sockets = Vec::with_capacity(endpoints);
         for i in 0..endpoints {
@@ -235,7 +235,7 @@ impl Server {
                 config.base_port + i as u16
             };
             let addr = SocketAddr::new(config.bind_ip, port);
-            let bind_err = |source| ServerError::Bind {
+            let bind_err = |source| EmuServerError::Bind {
                 module: i,
                 addr,
                 source,
@@ -285,7 +285,7 @@ impl Server {
     }
 
     /// Address of each endpoint: one per module, module 0 first, or the gateway's.
-    pub fn local_addrs(&self) -> Result<Vec<SocketAddr>, ServerError> {
+    pub fn local_addrs(&self) -> Result<Vec<SocketAddr>, EmuServerError> {
         Ok(self
             .sockets
             .iter()
@@ -317,7 +317,7 @@ impl Server {
 
     /// Serve until `stop` is set or `duration_s` of simulated time has passed; flushes
     /// the recording on the way out and returns the counters.
-    pub fn run(&mut self, stop: &AtomicBool) -> Result<ServerCounters, ServerError> {
+    pub fn run(&mut self, stop: &AtomicBool) -> Result<ServerCounters, EmuServerError> {
         self.start_ns = sys::monotonic_ns();
         let result = match self.config.mode {
             Mode::Realtime => self.run_realtime(stop),
@@ -351,7 +351,7 @@ impl Server {
         sys::monotonic_ns().saturating_sub(self.start_ns) as f64 * 1e-9
     }
 
-    fn run_realtime(&mut self, stop: &AtomicBool) -> Result<(), ServerError> {
+    fn run_realtime(&mut self, stop: &AtomicBool) -> Result<(), EmuServerError> {
         let period_ns = (self.config.physics_dt_s * 1e9).round() as u64;
         let mut deadline_ns = sys::monotonic_ns();
         while !self.done(stop) {
@@ -377,7 +377,7 @@ impl Server {
         Ok(())
     }
 
-    fn run_lockstep(&mut self, stop: &AtomicBool) -> Result<(), ServerError> {
+    fn run_lockstep(&mut self, stop: &AtomicBool) -> Result<(), EmuServerError> {
         let timeout_s = self.config.lockstep_timeout_s;
         let mut last_step_wall_s = self.wall_s();
         while !self.done(stop) {
@@ -424,7 +424,7 @@ impl Server {
     }
 
     /// One physics step with the commands each module applies right now.
-    fn step(&mut self) -> Result<(), ServerError> {
+    fn step(&mut self) -> Result<(), EmuServerError> {
         let t = self.plant.time_s();
         for (c, m) in self.applied.iter_mut().zip(&self.modules) {
             *c = m.applied_command(t);

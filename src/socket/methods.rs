@@ -12,7 +12,7 @@ use super::session::Session;
 use super::shared::Shared;
 use super::views;
 use crate::controller_interface::Selection;
-use crate::gait::{GaitKind, ParamPatch};
+use crate::gait::{BLEND_TIME_RANGE_S, GaitKind, ParamPatch};
 use crate::rt::gait_clock::{DEFAULT_STOP_S, STOP_TIME_RANGE_S};
 use crate::rt::messages::LoopRequest;
 
@@ -43,8 +43,6 @@ pub const METHODS: [&str; 23] = [
     "ping",
 ];
 
-/// Blend time limits, s.
-pub const BLEND_TIME_RANGE_S: (f64, f64) = (0.1, 30.0);
 /// Telemetry stream rate limits and default, Hz.
 pub const RATE_RANGE_HZ: (f64, f64) = (1.0, 200.0);
 pub const DEFAULT_RATE_HZ: f64 = 10.0;

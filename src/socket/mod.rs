@@ -50,9 +50,7 @@ use crate::rt::controller_slots::Installed;
 use crate::rt::messages::{Ack, Envelope};
 use crate::rt::telemetry::TelemetryReader;
 
-pub use methods::{
-    BLEND_TIME_RANGE_S, DEFAULT_RATE_HZ, METHODS, RATE_RANGE_HZ, controller_set_params,
-};
+pub use methods::{DEFAULT_RATE_HZ, METHODS, RATE_RANGE_HZ, controller_set_params};
 pub use server::{RunningServer, ServerError, start};
 
 /// The system service's socket (see [`paths`] for how "auto" resolves).
