@@ -317,7 +317,6 @@ pub fn parse_mac(s: &str) -> Option<[u8; 6]> {
     parts.next().is_none().then_some(out)
 }
 
-#[path = "config_check.rs"]
 mod check;
 
 #[cfg(test)]

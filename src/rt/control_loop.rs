@@ -553,7 +553,6 @@ impl ControlLoop {
     }
 }
 
-#[path = "control_loop_io.rs"]
 mod io;
 
 #[cfg(test)]
