@@ -19,7 +19,6 @@ use std::os::unix::ffi::OsStrExt;
 use std::os::unix::fs::{FileTypeExt, OpenOptionsExt};
 use std::path::{Path, PathBuf};
 
-#[path = "recover_copy.rs"]
 mod copy;
 
 /// Largest record outside a chunk (a compressed chunk, a metadata record, an attachment)
