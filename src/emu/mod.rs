@@ -7,12 +7,12 @@
 pub mod faults;
 pub mod module;
 pub mod plant;
-pub mod pose_recorder;
-pub mod recorder;
+pub mod pose_csv;
 pub mod scenario;
 pub mod server;
 pub mod servo;
 pub mod sim_bus;
+pub mod truth_csv;
 pub mod world;
 
 use crate::module::{Command, Feedback};

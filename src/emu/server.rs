@@ -28,8 +28,8 @@ use super::faults::{DelayQueue, FaultConfig, FaultError, Faults};
 use super::module::{
     EMULATOR_FIRMWARE, Module, ModuleConfig, ModuleIdentity, ModuleTime, Outgoing,
 };
-use super::pose_recorder::PoseRecorder;
-use super::recorder::{CsvError, Recorder};
+use super::pose_csv::PoseCsv;
+use super::truth_csv::{CsvError, TruthCsv};
 use crate::protocol::{
     Command, DecodeError, Feedback, Key, MAX_DATAGRAM, Message, Name, VERSION_1,
 };
@@ -64,9 +64,9 @@ pub struct ServerConfig {
     pub firmware: u32,
     pub module: ModuleConfig,
     pub faults: FaultConfig,
-    /// Ground-truth CSV (see [`super::recorder`]).
+    /// Ground-truth CSV (see [`super::truth_csv`]).
     pub record: Option<PathBuf>,
-    /// Body poses and contacts CSV (see [`super::pose_recorder`]).
+    /// Body poses and contacts CSV (see [`super::pose_csv`]).
     pub record_poses: Option<PathBuf>,
     /// Stop after this much simulated time, s.
     pub duration_s: Option<f64>,
@@ -193,8 +193,8 @@ pub struct Server {
     faults: Faults,
     delayed: DelayQueue<Delayed>,
     applied: Vec<Command>,
-    recorder: Option<Recorder>,
-    pose_recorder: Option<PoseRecorder>,
+    truth_csv: Option<TruthCsv>,
+    pose_csv: Option<PoseCsv>,
     counters: ServerCounters,
     recv_buf: Vec<u8>,
     /// One per endpoint.
@@ -252,12 +252,12 @@ impl Server {
                 )
             })
             .collect();
-        let recorder = match &config.record {
-            Some(path) => Some(Recorder::create(path, n)?),
+        let truth_csv = match &config.record {
+            Some(path) => Some(TruthCsv::create(path, n)?),
             None => None,
         };
-        let pose_recorder = match &config.record_poses {
-            Some(path) => Some(PoseRecorder::create(path, plant.link_count())?),
+        let pose_csv = match &config.record_poses {
+            Some(path) => Some(PoseCsv::create(path, plant.link_count())?),
             None => None,
         };
         Ok(Self {
@@ -269,8 +269,8 @@ impl Server {
             modules,
             plant,
             faults,
-            recorder,
-            pose_recorder,
+            truth_csv,
+            pose_csv,
             counters: ServerCounters::default(),
             recv_buf: vec![0; 2 * MAX_DATAGRAM],
             outboxes: (0..endpoints)
@@ -323,10 +323,10 @@ impl Server {
             Mode::Realtime => self.run_realtime(stop),
             Mode::Lockstep => self.run_lockstep(stop),
         };
-        if let Some(r) = self.recorder.as_mut() {
+        if let Some(r) = self.truth_csv.as_mut() {
             r.flush()?;
         }
-        if let Some(r) = self.pose_recorder.as_mut() {
+        if let Some(r) = self.pose_csv.as_mut() {
             r.flush()?;
         }
         result.map(|()| self.counters())
@@ -431,10 +431,10 @@ impl Server {
         }
         self.plant.step(self.config.physics_dt_s, &self.applied);
         self.counters.steps += 1;
-        if let Some(r) = self.recorder.as_mut() {
+        if let Some(r) = self.truth_csv.as_mut() {
             r.row(self.plant.as_ref(), &self.applied)?;
         }
-        if let Some(r) = self.pose_recorder.as_mut() {
+        if let Some(r) = self.pose_csv.as_mut() {
             r.row(self.plant.as_ref())?;
         }
         Ok(())

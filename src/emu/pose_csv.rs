@@ -8,15 +8,15 @@
 use std::path::Path;
 
 use super::Plant;
-use super::recorder::{CsvError, CsvSink};
+use super::truth_csv::{CsvError, CsvSink};
 
 /// Buffered CSV writer of body poses and contacts.
-pub struct PoseRecorder {
+pub struct PoseCsv {
     sink: CsvSink,
     links: usize,
 }
 
-impl PoseRecorder {
+impl PoseCsv {
     /// Create (truncate) `path` and write the header for `links` bodies.
     pub fn create(path: &Path, links: usize) -> Result<Self, CsvError> {
         let sink = CsvSink::create(path, |out| {
@@ -75,7 +75,7 @@ mod tests {
             },
         )
         .unwrap();
-        let mut rec = PoseRecorder::create(&path, plant.link_count()).unwrap();
+        let mut rec = PoseCsv::create(&path, plant.link_count()).unwrap();
         for _ in 0..3 {
             plant.step(1e-3, &[Command::position(0.0); 2]);
             rec.row(&plant).unwrap();

@@ -23,7 +23,7 @@ pub struct CsvError {
 }
 
 /// A buffered CSV file flushed every [`FLUSH_EVERY_ROWS`] rows and on request, whose
-/// I/O errors name the file. The recorders write their own columns into it.
+/// I/O errors name the file. [`TruthCsv`] and `pose_csv::PoseCsv` write their own columns into it.
 pub struct CsvSink {
     path: PathBuf,
     out: BufWriter<File>,
@@ -85,12 +85,12 @@ impl CsvSink {
 }
 
 /// Buffered CSV writer of the ground truth.
-pub struct Recorder {
+pub struct TruthCsv {
     sink: CsvSink,
     modules: usize,
 }
 
-impl Recorder {
+impl TruthCsv {
     /// Create (truncate) `path` and write the header for `modules` joints.
     pub fn create(path: &Path, modules: usize) -> Result<Self, CsvError> {
         let sink = CsvSink::create(path, |out| {
@@ -148,7 +148,7 @@ mod tests {
             ..PlantConfig::new(2)
         })
         .unwrap();
-        let mut rec = Recorder::create(&path, 2).unwrap();
+        let mut rec = TruthCsv::create(&path, 2).unwrap();
         let cmds = [Command::position(0.5), Command::LIMP];
         for _ in 0..3 {
             plant.step(1e-3, &cmds);
