@@ -1,7 +1,7 @@
 //! Recording every run: the loop pushes `Copy` items ([`RecordItem`]) into a bounded
 //! lock-free ring; a writer thread encodes them as MCAP and, when asked, starts the live
-//! view (`crate::live`, the Foxglove WebSocket server) on the same channels. Channels, rates, caps and how to read a file:
-//! `docs/recording.md`.
+//! view (`crate::live`, the Foxglove WebSocket server) on the same channels. Channels,
+//! rates, caps and how to read a file: `docs/recording.md`.
 //!
 //! # API
 //! ```text
@@ -53,11 +53,10 @@
 //!
 //! # Files
 //! `ring` (loop ↔ writer), `recorder` (start, finish, status), `writer` (the thread,
-//! caps), `channels` (topics), `encode` + `schemas` (JSON bodies and their schemas),
+//! caps), `topics` (the topics and their foxglove channels), `encode` + `schemas` (JSON bodies and their schemas),
 //! `scene` + `kinematics` (3-D), `file` (MCAP, append only), `recover` (a finished file
 //! from an unfinished one), `urdf` (the robot's model, served by the live view).
 
-mod channels;
 pub mod cycle;
 mod encode;
 mod error;
@@ -70,10 +69,10 @@ mod recover;
 mod ring;
 mod scene;
 mod schemas;
+mod topics;
 pub mod urdf;
 mod writer;
 
-pub use channels::Topic;
 pub use cycle::{
     CycleRecord, JointSample, RECORD_MAX_LINKS, RECORD_MAX_MODULES, RecordEvent, RecordItem,
 };
@@ -88,3 +87,4 @@ pub use recorder::{Recorder, RecorderProbe, start};
 pub use recover::{RECOVER_MAX_CHUNK_BYTES, RecoverError, Recovery, recover, recovered_path};
 pub use ring::RecordTx;
 pub use scene::{BODY_FRAME, WORLD_FRAME, link_frame};
+pub use topics::Topic;

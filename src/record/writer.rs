@@ -12,7 +12,6 @@ use foxglove::Context;
 use foxglove::schemas::Timestamp;
 use serde_json::json;
 
-use super::channels::{Channels, Topic};
 use super::cycle::{CycleRecord, RecordEvent, RecordItem};
 use super::encode::{
     BodyEstimateMsg, Commands, ControllerSignals, ControllerWindows, Imu, Joints, NavigationMsg,
@@ -23,6 +22,7 @@ use super::file::McapFile;
 use super::options::{CapReason, FileState, RecordOptions, RecordSummary, RecordingInfo};
 use super::ring::Ring;
 use super::scene::{BodyDrawer, world_scene};
+use super::topics::{Channels, Topic};
 use super::urdf::{URDF_URI, urdf};
 use crate::controller_interface::catalog::{Catalog, ControllerInfo, NO_CONTROLLER};
 use crate::live::{Asset, Latch, Live};
