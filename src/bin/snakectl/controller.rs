@@ -4,7 +4,7 @@
 use clap::Subcommand;
 use serde_json::{Map, Value, json};
 
-use super::{num, text};
+use super::print::{num, text};
 
 #[derive(Subcommand, Debug)]
 pub enum ControllerCmd {
