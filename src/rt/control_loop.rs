@@ -205,11 +205,6 @@ impl ControlLoop {
         self.navigator
     }
 
-    /// The gait clock (controlled stops).
-    pub fn gait_clock(&self) -> &GaitClock {
-        &self.clock
-    }
-
     /// The controller slots (which one drives, its last report).
     pub fn controllers(&self) -> &ControllerSlots {
         &self.slots
@@ -272,7 +267,6 @@ impl ControlLoop {
             Output::Resync => {
                 // From rest (the measured pose): the blend in starts at zero speed.
                 self.clock.run();
-                let tau = self.clock.advance(t_s);
                 self.p.selector.resync(&self.measured, tau);
                 self.slots.pause();
                 self.guard.forget();

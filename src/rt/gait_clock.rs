@@ -93,13 +93,8 @@ impl GaitClock {
         t_s - self.offset_s
     }
 
-    /// The gait time of the last advance (the loop's time before the first).
-    pub fn now(&self, t_s: f64) -> f64 {
-        t_s - self.offset_s
-    }
-
     /// The rate at loop time `t_s`, 0..1.
-    pub fn rate_at(&self, t_s: f64) -> f64 {
+    fn rate_at(&self, t_s: f64) -> f64 {
         self.ramp.map_or(self.rate, |r| r.rate(t_s))
     }
 
@@ -133,6 +128,9 @@ impl GaitClock {
     pub fn run(&mut self) {
         self.ramp = None;
         self.rate = 1.0;
+        if let Some((t, _)) = self.last {
+            self.last = Some((t, 1.0));
+        }
     }
 
     fn ramp_to(&mut self, t_s: f64, to: f64, within_s: f64) {

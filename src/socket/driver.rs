@@ -120,11 +120,6 @@ impl DriverLease {
         *self.lock() = None;
     }
 
-    /// Whether `who` holds the drive now.
-    pub fn holds(&self, who: &str, now: Instant) -> bool {
-        self.driver(now).is_some_and(|d| d.who == who)
-    }
-
     /// Who drives at `now`, if anyone.
     pub fn driver(&self, now: Instant) -> Option<Driver> {
         let h = self.lock();
@@ -154,9 +149,14 @@ mod tests {
         lease.claim("a", s(4.0)).unwrap();
         assert!(lease.claim("b", s(8.0)).is_err(), "a drove again at 4 s");
         lease.claim("b", s(9.5)).unwrap();
-        assert!(lease.holds("b", s(9.5)) && !lease.holds("a", s(9.5)));
+        let holder = |at: f64| lease.driver(s(at)).map(|d| d.who);
+        assert_eq!(holder(9.5).as_deref(), Some("b"));
         lease.release("a");
-        assert!(lease.holds("b", s(9.6)), "only the holder releases");
+        assert_eq!(
+            holder(9.6).as_deref(),
+            Some("b"),
+            "only the holder releases"
+        );
         lease.release("b");
         lease.claim("a", s(10.0)).unwrap();
         lease.stopped();
