@@ -201,9 +201,31 @@ impl CommandRefused {
     }
 }
 
+/// Why a driving controller does not take a change in place (built without
+/// allocating): the loop hands the joints back to the selector, which blends into the
+/// change, and the controller takes over afresh when the blend ends.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+#[error("{0}")]
+pub struct CannotFollow(pub &'static str);
+
+impl CannotFollow {
+    /// The default: the controller declares no following.
+    pub const NOT_DECLARED: CannotFollow =
+        CannotFollow("this controller does not follow changes while it drives");
+    /// A reconfiguration by a controller of another kind.
+    pub const OTHER_KIND: CannotFollow = CannotFollow("another controller");
+}
+
+/// `new` as a controller of kind `T` (for [`Controller::reconfigure`]).
+pub fn same_kind<T: Controller>(new: &mut dyn Controller) -> Result<&mut T, CannotFollow> {
+    let any: &mut dyn std::any::Any = new;
+    any.downcast_mut::<T>().ok_or(CannotFollow::OTHER_KIND)
+}
+
 /// A controller the loop can run. Every method but construction runs in the loop
-/// thread: none may allocate, lock, block or read a clock.
-pub trait Controller: Send {
+/// thread: none may allocate, lock, block or read a clock. `Any`: a controller can
+/// recognise another of its own kind ([`Controller::reconfigure`]).
+pub trait Controller: Send + std::any::Any {
     /// Whether the controller can follow these nominal parameters of its gait.
     fn accepts(&self, params: &GaitParams) -> Result<(), NominalMismatch>;
     /// Forgets everything learnt and starts from `handover` (called at every takeover;
@@ -224,6 +246,24 @@ pub trait Controller: Send {
     /// Most controllers take over when the selector's blend ends.
     fn takes_over_at_switch(&self) -> bool {
         false
+    }
+    /// While it drives, follow a change of the gait's nominal parameters from `t_s` on
+    /// (they have passed [`Controller::accepts`]), keeping what it has learnt, as
+    /// ros2_control's controllers take parameter updates: the shape moves to them
+    /// smoothly (see [`super::nominal::Nominal::follow`]). `Err`: the change needs a
+    /// fresh takeover (the loop hands back; nothing jumps either way).
+    fn follow(&mut self, t_s: f64, params: &GaitParams) -> Result<(), CannotFollow> {
+        let _ = (t_s, params);
+        Err(CannotFollow::NOT_DECLARED)
+    }
+    /// Take `new`'s configuration in place (gains, thresholds, limits), keeping what
+    /// this one has learnt and its engagement; `new` is a controller just built with the
+    /// changed configuration and is retired after. Swap, don't clone: nothing may
+    /// allocate. `Err`: the change needs `new` installed and engaged afresh (another
+    /// kind, another structure).
+    fn reconfigure(&mut self, new: &mut dyn Controller) -> Result<(), CannotFollow> {
+        let _ = new;
+        Err(CannotFollow::NOT_DECLARED)
     }
     /// An operator's command; it takes effect at the controller's next step. Most
     /// controllers have none.

@@ -13,8 +13,8 @@ pub mod report;
 
 pub use config::ConfigError;
 pub use interface::{
-    BodyEstimate, CommandRefused, Controller, ControllerCommand, Estimator, Handover, Imu,
-    NominalMismatch, Observation, Tick, TickClock,
+    BodyEstimate, CannotFollow, CommandRefused, Controller, ControllerCommand, Estimator, Handover, Imu,
+    NominalMismatch, Observation, Tick, TickClock, same_kind,
 };
 pub use registry::{BuildContext, Built, ControllerKind, Family, Selection};
 pub mod testing;

@@ -7,7 +7,7 @@ use crate::emu::LinkPose;
 use crate::gait::GaitKind;
 use crate::navigation::progress::ProgressReport;
 use crate::navigation::state::NavigatorState;
-use crate::rt::messages::{LoopRequest, Rejection};
+use crate::rt::messages::LoopRequest;
 use crate::rt::stats::LoopStats;
 use crate::safety::failsafe::{Mode, Reason};
 
@@ -111,7 +111,7 @@ pub enum RecordEvent {
     Request {
         ticket: u64,
         request: LoopRequest,
-        result: Result<(), Rejection>,
+        result: crate::rt::messages::LoopResult,
     },
     /// A controller took over the joints from the selector.
     Engaged { gait: GaitKind, controller_id: u64 },

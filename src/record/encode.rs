@@ -350,6 +350,10 @@ enum EventBody<'a> {
         #[serde(flatten)]
         request: &'a LoopRequest,
         applied: bool,
+        /// What became of the gait's controller (a change of its parameters or
+        /// controller).
+        #[serde(flatten)]
+        continuity: Option<crate::rt::messages::Continuity>,
         /// Why it was refused.
         error: Option<String>,
     },
@@ -395,6 +399,7 @@ pub fn write_event(
             ticket: *ticket,
             request,
             applied: result.is_ok(),
+            continuity: result.ok().flatten(),
             error: result.err().map(|e| e.to_string()),
         },
         RecordEvent::Engaged {

@@ -127,7 +127,7 @@ fn requests_are_recorded_as_defined() {
         let e = RecordEvent::Request {
             ticket: 1,
             request,
-            result: Ok(()),
+            result: Ok(None),
         };
         write_event(&mut out, 0, &e, |_| None).expect("encodes");
         let mut v: Value = serde_json::from_slice(&out).expect("json");

@@ -10,7 +10,7 @@ use super::{
 };
 use crate::emu::sim_bus::SimBus;
 use crate::gait::GaitKind;
-use crate::rt::messages::{LoopRequest, Rejection};
+use crate::rt::messages::LoopRequest;
 use crate::rt::observer::{CycleObserver, CycleView};
 use crate::safety::failsafe::{Mode, Reason};
 
@@ -157,7 +157,7 @@ impl CycleObserver for LoopRecorder {
         t_ns: u64,
         ticket: u64,
         request: LoopRequest,
-        result: Result<(), Rejection>,
+        result: crate::rt::messages::LoopResult,
     ) {
         let event = RecordEvent::Request {
             ticket,

@@ -18,7 +18,9 @@ use crate::navigation::state::NavigatorState;
 use crate::navigation::stuck::StuckConfig;
 use crate::rt::controller_slots::{ControllerSlots, Installed};
 use crate::rt::gait_clock::{DEFAULT_STOP_S, GaitClock, STOP_TIME_RANGE_S};
-use crate::rt::messages::{Ack, Envelope, LoopRequest, Refusal, Rejection};
+use crate::rt::messages::{
+    Ack, Continuity, Envelope, LoopRequest, LoopResult, Refusal, Rejection,
+};
 use crate::rt::observer::CycleObserver;
 use crate::rt::pacer::{Cycle, Pacer};
 use crate::rt::setpoint_guard::{NonFiniteSetpoint, SetpointGuard};
@@ -142,7 +144,7 @@ impl ControlLoop {
             started: false,
             pending_acks: [Ack {
                 ticket: 0,
-                result: Ok(()),
+                result: Ok(None),
             }; MAX_REQUESTS_PER_CYCLE],
             pending: 0,
         }
@@ -327,7 +329,7 @@ impl ControlLoop {
         now_s: f64,
         t_s: f64,
         tau: f64,
-    ) -> Result<(), Rejection> {
+    ) -> LoopResult {
         // E-stop freezes intent: what would run after `arm` changes only before the stop.
         if self.p.failsafe.mode() == Mode::EStop && !allowed_while_estopped(&req) {
             if let Some(c) = controller {
@@ -342,8 +344,7 @@ impl ControlLoop {
             LoopRequest::SetController { gait: kind } => {
                 let c = controller.ok_or(Rejection::NoController)?;
                 let (selector, commanded) = (&mut self.p.selector, &self.positions);
-                self.slots.install(kind, c, selector, commanded, tau);
-                return Ok(());
+                return Ok(Some(self.slots.install(kind, c, selector, commanded, tau)));
             }
             _ => {
                 if let Some(c) = controller {
@@ -352,7 +353,7 @@ impl ControlLoop {
             }
         }
         let fs = &mut self.p.failsafe;
-        match req {
+        let done = match req {
             LoopRequest::SetGait { gait: kind } => {
                 // Setting a gait also arms a held or limp robot, never an e-stopped one:
                 // only an explicit arm releases the e-stop.
@@ -406,19 +407,22 @@ impl ControlLoop {
             LoopRequest::SetParams { .. } | LoopRequest::SetController { .. } => {
                 unreachable!("handled above")
             }
-        }
+        };
+        done.map(|()| None)
     }
 
     /// A gait's new parameters, and maybe a new controller for it, at this cycle
-    /// boundary. The controller that will run the gait must accept them; a driving
-    /// controller hands back so the selector blends into them, then takes over again.
+    /// boundary. The controller that will run the gait must accept them. The selector
+    /// blends into them; a driving controller follows them where it can, else hands
+    /// back and takes over again when the blend ends (`ControllerSlots::follow`). The
+    /// answer says which; with a new controller, what became of that.
     fn set_params(
         &mut self,
         kind: GaitKind,
         patch: &ParamPatch,
         controller: Option<Installed>,
         t_s: f64,
-    ) -> Result<(), Rejection> {
+    ) -> LoopResult {
         let selector = &self.p.selector;
         let length = selector.layout().module_length_m;
         let checked = match selector.table().get(kind).patched_for(kind, patch, length) {
@@ -439,13 +443,18 @@ impl ControlLoop {
         selector
             .set_params(kind, patch, t_s)
             .map_err(|_| Rejection::InvalidParams)?;
-        if self.slots.engaged() == Some(kind) {
-            self.slots.hand_back(selector, commanded, t_s);
-        }
-        if let Some(c) = controller {
-            self.slots.install(kind, c, selector, commanded, t_s);
-        }
-        Ok(())
+        let next = *selector.table().get(kind);
+        let followed = self.slots.follow(kind, &next, selector, commanded, t_s);
+        let Some(c) = controller else {
+            return Ok(Some(followed));
+        };
+        let installed = self.slots.install(kind, c, selector, commanded, t_s);
+        // The new configuration taken in place by a controller that had to hand back
+        // still waits for the blend: say the hand-back.
+        Ok(Some(match (followed, installed) {
+            (Continuity::HandedBack { .. }, Continuity::Reconfigured) => followed,
+            _ => installed,
+        }))
     }
 
     /// Runs the gait (selector, estimators, controller, guard) into the commands, the

@@ -7,6 +7,10 @@
 //!   and set-points of this cycle (a [`Handover`]) and the gait's nominal parameters;
 //!   one that makes its own way into its gait (`takes_over_at_switch`) is engaged at
 //!   the blend's first cycle instead of its end.
+//! - **Continuity.** A change of the gait's parameters or of the controller's
+//!   configuration while it drives is taken in place where the controller can
+//!   ([`Controller::follow`], [`Controller::reconfigure`]): it keeps driving and
+//!   keeps what it has learnt. The answer says which ([`Continuity`]).
 //! - **Hand back.** The selector's output continues from the set-points sent last
 //!   cycle: their difference from the selector's own fades out over the blend time
 //!   while the gait keeps moving; the controller takes over again after that.
@@ -19,7 +23,8 @@ use serde::Serialize;
 use crate::controller_interface::catalog::NO_CONTROLLER;
 use crate::controller_interface::report::ControllerReport;
 use crate::controller_interface::{
-    Controller, ControllerCommand, Handover, NominalMismatch, Observation, TickClock,
+    CannotFollow, Controller, ControllerCommand, Handover, NominalMismatch, Observation,
+    TickClock,
 };
 use crate::gait::{GaitKind, GaitParams, GaitSelector};
 use crate::rt::messages::Rejection;
@@ -37,6 +42,26 @@ impl std::fmt::Debug for Installed {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(f, "Installed({})", self.id)
     }
+}
+
+/// What became of a change for the gait's controller (the operator's answer says it).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(tag = "continuity", rename_all = "snake_case")]
+pub enum Continuity {
+    /// No controller drove the gait: the selector blends into the change, and the
+    /// gait's controller (if any) takes over when the blend ends.
+    Blended,
+    /// The driving controller follows the new parameters, keeping what it learnt.
+    Followed,
+    /// The controller took the new configuration in place, keeping what it learnt
+    /// (and driving, if it drove).
+    Reconfigured,
+    /// The driving controller could not take the change in place (`why`): the
+    /// selector blends into it and the controller takes over afresh at the blend's end.
+    HandedBack { why: &'static str },
+    /// A new controller is installed (another kind, or a change its predecessor could
+    /// not take in place: `why`); it takes over when the selector's blend ends.
+    Installed { why: &'static str },
 }
 
 /// Whether the active gait's controller drives the joints.
@@ -116,24 +141,64 @@ impl ControllerSlots {
         }
     }
 
-    /// Installs `new` for `gait` at a cycle boundary. If `gait`'s old controller was
-    /// driving, the joints go back to the selector first (from `commanded`, the
-    /// set-points sent last cycle); the new one takes over when the selector's blend
-    /// ends. The old controller is retired.
+    /// Installs `new` for `gait` at a cycle boundary. Where `gait`'s controller can
+    /// take `new`'s configuration in place ([`Controller::reconfigure`]) it does, keeps
+    /// its state (and drives on, if it drove) and takes `new`'s id; `new` is retired.
+    /// Otherwise, if the old controller was driving, the joints go back to the
+    /// selector first (from `commanded`, the set-points sent last cycle); `new` takes
+    /// over when the selector's blend ends, and the old one is retired.
     pub fn install(
         &mut self,
         gait: GaitKind,
-        new: Installed,
+        mut new: Installed,
         selector: &mut GaitSelector,
         commanded: &[f64],
         t_s: f64,
-    ) {
+    ) -> Continuity {
+        let why = match self.slots[gait.index()].as_mut() {
+            None => "no controller before",
+            Some(old) => match old.controller.reconfigure(new.controller.as_mut()) {
+                Ok(()) => {
+                    old.id = new.id;
+                    self.retire(new);
+                    return Continuity::Reconfigured;
+                }
+                Err(CannotFollow(why)) => why,
+            },
+        };
         if self.engaged == Some(gait) {
             self.hand_back(selector, commanded, t_s);
         }
         self.takeovers[gait.index()] = 0;
         if let Some(old) = self.slots[gait.index()].replace(new) {
             self.retire(old);
+        }
+        Continuity::Installed { why }
+    }
+
+    /// The gait's parameters changed to `params` at `t_s` (the selector has them):
+    /// a driving controller follows them where it can ([`Controller::follow`]), else
+    /// hands the joints back (see [`ControllerSlots::hand_back`]).
+    pub fn follow(
+        &mut self,
+        gait: GaitKind,
+        params: &GaitParams,
+        selector: &mut GaitSelector,
+        commanded: &[f64],
+        t_s: f64,
+    ) -> Continuity {
+        if self.engaged != Some(gait) {
+            return Continuity::Blended;
+        }
+        let Some(slot) = self.slots[gait.index()].as_mut() else {
+            return Continuity::Blended;
+        };
+        match slot.controller.follow(t_s, params) {
+            Ok(()) => Continuity::Followed,
+            Err(CannotFollow(why)) => {
+                self.hand_back(selector, commanded, t_s);
+                Continuity::HandedBack { why }
+            }
         }
     }
 

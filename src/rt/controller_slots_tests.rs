@@ -59,6 +59,15 @@ fn request(
     request: LoopRequest,
     controller: Option<Installed>,
 ) -> Result<(), Rejection> {
+    answer(h, request, controller).map(|_| ())
+}
+
+/// [`request`], with what became of the gait's controller.
+fn answer(
+    h: &mut Harness,
+    request: LoopRequest,
+    controller: Option<Installed>,
+) -> crate::rt::messages::LoopResult {
     let envelope = Envelope {
         ticket: 7,
         request,

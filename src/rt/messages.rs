@@ -6,6 +6,7 @@ use serde::Serialize;
 
 use crate::controller_interface::{CommandRefused, ControllerCommand, NominalMismatch};
 use crate::gait::{GaitKind, ParamPatch};
+pub use crate::rt::controller_slots::Continuity;
 use crate::rt::controller_slots::Installed;
 pub use crate::safety::failsafe::Refusal;
 
@@ -95,9 +96,14 @@ pub enum Rejection {
     CommandRefused(CommandRefused),
 }
 
-/// The loop's answer to one envelope.
+/// What the loop did with a request: refused, or applied (and, for a change of a
+/// gait's parameters or controller, what became of its controller).
+pub type LoopResult = Result<Option<Continuity>, Rejection>;
+
+/// The loop's answer to one envelope: refused, or applied (and, for a change of a
+/// gait's parameters or controller, what became of its controller).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Ack {
     pub ticket: u64,
-    pub result: Result<(), Rejection>,
+    pub result: LoopResult,
 }

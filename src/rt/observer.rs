@@ -10,7 +10,7 @@ use crate::module::Command;
 use crate::navigation::progress::ProgressReport;
 use crate::navigation::state::NavigatorState;
 use crate::rt::controller_slots::ControllerSlots;
-use crate::rt::messages::{LoopRequest, Rejection};
+use crate::rt::messages::LoopRequest;
 use crate::rt::stats::LoopStats;
 use crate::safety::failsafe::{Mode, Reason};
 
@@ -44,7 +44,7 @@ pub trait CycleObserver: Send {
         t_ns: u64,
         ticket: u64,
         request: LoopRequest,
-        result: Result<(), Rejection>,
+        result: crate::rt::messages::LoopResult,
     );
     /// A non-finite set-point from `controller_id` at `joint` (the failsafe holds).
     fn setpoint_fault(&mut self, t_ns: u64, joint: usize, controller_id: u64);

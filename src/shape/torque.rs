@@ -46,6 +46,12 @@ impl TorqueFilter {
         }
     }
 
+    /// New settings, keeping the filtered torques.
+    pub fn set(&mut self, cutoff_hz: f64, deadband_nm: f64) {
+        self.cutoff_hz = cutoff_hz;
+        self.deadband_nm = deadband_nm;
+    }
+
     pub fn reset(&mut self) {
         self.filtered.fill(0.0);
     }

@@ -16,7 +16,7 @@ use crate::controllers::REGISTRY;
 use crate::gait::{BodyLayout, GaitKind, GaitParams, ParamPatch};
 use crate::rt::controller_slots::Engagement;
 use crate::rt::controller_slots::{ControllerTelemetry, Installed};
-use crate::rt::messages::{LoopRequest, Refusal, Rejection};
+use crate::rt::messages::{Continuity, LoopRequest, Refusal, Rejection};
 use crate::rt::telemetry::Snapshot;
 use crate::safety::failsafe::Reason;
 
@@ -132,8 +132,8 @@ pub(crate) async fn set(
         .call_with(LoopRequest::SetController { gait }, Some(installed))
         .await;
     shared.free_retired();
-    result?;
-    Ok(json!({ "gait": gait, "controller": info_view(&info) }))
+    let continuity = result?;
+    Ok(json!({ "gait": gait, "controller": with_continuity(info_view(&info), continuity) }))
 }
 
 /// Longest calibration the socket starts, s.
@@ -313,8 +313,21 @@ pub(crate) async fn set_compliance(
     };
     let result = shared.router.call_with(request, Some(installed)).await;
     shared.free_retired();
-    result?;
-    Ok(json!({ "gait": gait, "params": params, "controller": info_view(&info) }))
+    let continuity = result?;
+    Ok(json!({
+        "gait": gait,
+        "params": params,
+        "controller": with_continuity(info_view(&info), continuity),
+    }))
+}
+
+/// A controller's view with what became of it (`continuity`, and `why` where it
+/// could not take the change in place).
+fn with_continuity(mut view: Value, continuity: Option<Continuity>) -> Value {
+    if let (Value::Object(map), Ok(Value::Object(c))) = (&mut view, serde_json::to_value(continuity)) {
+        map.extend(c);
+    }
+    view
 }
 
 /// The `controller` part of `status` and telemetry: the active gait's controller,

@@ -320,11 +320,11 @@ async fn params_set(shared: &Shared, mut p: Params) -> Result<Value, RpcError> {
     let new = current
         .patched_for(gait, &patch, shared.layout.module_length_m)
         .map_err(|e| RpcError::invalid_params(format!("{}: {e}", gait.name())))?;
-    shared
+    let continuity = shared
         .router
         .call(LoopRequest::SetParams { gait, patch })
         .await?;
-    Ok(json!({ "gait": gait, "params": new }))
+    Ok(json!({ "gait": gait, "params": new, "controller": continuity }))
 }
 
 /// An optional boolean param (absent: false).

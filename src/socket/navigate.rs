@@ -167,7 +167,11 @@ async fn start(
 
 /// Tells the loop what the navigator does.
 async fn report(shared: &Shared, state: NavigatorState) -> Result<(), RpcError> {
-    shared.router.call(LoopRequest::Navigation { state }).await
+    shared
+        .router
+        .call(LoopRequest::Navigation { state })
+        .await
+        .map(|_| ())
 }
 
 async fn run(shared: Arc<Shared>, mut nav: Navigator) {

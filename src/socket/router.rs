@@ -21,9 +21,9 @@ use tokio::sync::oneshot;
 
 use super::api::{RpcError, code};
 use crate::rt::controller_slots::Installed;
-use crate::rt::messages::{Ack, Envelope, LoopRequest, Refusal, Rejection};
+use crate::rt::messages::{Ack, Continuity, Envelope, LoopRequest, LoopResult, Refusal, Rejection};
 
-type Pending = Arc<Mutex<HashMap<u64, oneshot::Sender<Result<(), Rejection>>>>>;
+type Pending = Arc<Mutex<HashMap<u64, oneshot::Sender<LoopResult>>>>;
 
 /// How often the ack thread looks at its stop flag while no ack arrives.
 const STOP_POLL: Duration = Duration::from_millis(50);
@@ -54,7 +54,7 @@ impl Drop for TicketGuard<'_> {
 
 fn lock(
     p: &Pending,
-) -> std::sync::MutexGuard<'_, HashMap<u64, oneshot::Sender<Result<(), Rejection>>>> {
+) -> std::sync::MutexGuard<'_, HashMap<u64, oneshot::Sender<LoopResult>>> {
     // A panic while holding this lock leaves the map consistent (single inserts/removes).
     p.lock().unwrap_or_else(|e| e.into_inner())
 }
@@ -111,8 +111,9 @@ impl AckRouter {
         })
     }
 
-    /// Send `request` to the loop and wait for its ack (at most `ack_timeout`).
-    pub(crate) async fn call(&self, request: LoopRequest) -> Result<(), RpcError> {
+    /// Send `request` to the loop and wait for its ack (at most `ack_timeout`); what
+    /// became of the gait's controller, for a change of its parameters or controller.
+    pub(crate) async fn call(&self, request: LoopRequest) -> Result<Option<Continuity>, RpcError> {
         self.call_with(request, None).await
     }
 
@@ -122,7 +123,7 @@ impl AckRouter {
         &self,
         request: LoopRequest,
         controller: Option<Installed>,
-    ) -> Result<(), RpcError> {
+    ) -> Result<Option<Continuity>, RpcError> {
         let ticket = self.next_ticket.fetch_add(1, Ordering::Relaxed);
         let (tx, rx) = oneshot::channel();
         lock(&self.pending).insert(ticket, tx);
@@ -149,7 +150,7 @@ impl AckRouter {
             }
         }
         match tokio::time::timeout(self.ack_timeout, rx).await {
-            Ok(Ok(Ok(()))) => Ok(()),
+            Ok(Ok(Ok(continuity))) => Ok(continuity),
             Ok(Ok(Err(rejection))) => Err(RpcError::new(
                 code::REFUSED,
                 format!("refused by the loop: {rejection}"),
@@ -241,7 +242,7 @@ mod tests {
         let fake = std::thread::spawn(move || {
             for (i, env) in req_rx.iter().take(2).enumerate() {
                 let result = if i == 0 {
-                    Ok(())
+                    Ok(None)
                 } else {
                     Err(Rejection::Failsafe(Refusal::EStopLatched))
                 };
@@ -254,7 +255,7 @@ mod tests {
             }
         });
         let rt = rt();
-        assert_eq!(rt.block_on(router.call(LoopRequest::Hold)), Ok(()));
+        assert_eq!(rt.block_on(router.call(LoopRequest::Hold)), Ok(None));
         let e = rt.block_on(router.call(LoopRequest::Arm)).unwrap_err();
         assert_eq!(e.code, code::REFUSED);
         assert!(e.message.contains("e-stop"), "{}", e.message);
@@ -299,7 +300,7 @@ mod tests {
                     taken.fetch_add(1, Ordering::SeqCst);
                     let ack = Ack {
                         ticket: env.ticket,
-                        result: Ok(()),
+                        result: Ok(None),
                     };
                     if loop_tx.try_send(ack).is_err() {
                         dropped.fetch_add(1, Ordering::SeqCst);

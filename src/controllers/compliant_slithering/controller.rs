@@ -8,7 +8,8 @@ use crate::controller_interface::report::{
     ControllerReport, MAX_WINDOWS as REPORT_WINDOWS, WindowField,
 };
 use crate::controller_interface::{
-    CommandRefused, Controller, ControllerCommand, Handover, NominalMismatch, Observation, Tick,
+    CannotFollow, CommandRefused, Controller, ControllerCommand, Handover, NominalMismatch,
+    Observation, Tick, same_kind,
 };
 use crate::controllers::steering::HeadingHold;
 use crate::gait::{BodyLayout, GaitParams, Plane};
@@ -325,6 +326,34 @@ impl CompliantSlithering {
 }
 
 impl CompliantSlithering {
+    /// Whether `next` can replace the configuration in place: the same shape (which
+    /// parameters comply, how each is spread, the windows' edges) and every complying
+    /// parameter's value now within its new range (else the next step would clamp it:
+    /// a jump).
+    fn config_fits(&self, next: &CompliantSlitheringConfig) -> Result<(), CannotFollow> {
+        let old = &self.config;
+        if old.edge_width_modules != next.edge_width_modules {
+            return Err(CannotFollow("the windows' edge width changes the shape"));
+        }
+        for p in Param::ALL {
+            let (a, b) = (old.param(p), next.param(p));
+            if a.centralization != b.centralization || a.enabled != b.enabled {
+                return Err(CannotFollow(
+                    "which parameters comply, or how they are spread, changes the shape",
+                ));
+            }
+            // Not stepped since construction or reset: nothing to keep in range.
+            let stepped = self.sigma.len() == self.shape.param_count();
+            let (lo, hi) = (b.gains.min, b.gains.max);
+            if b.enabled && stepped && !self.field(p).1.iter().all(|v| (lo..=hi).contains(v)) {
+                return Err(CannotFollow(
+                    "a parameter's value now lies outside its new range",
+                ));
+            }
+        }
+        Ok(())
+    }
+
     /// The largest lateral amplitude the controller may command with `params`, rad.
     fn reach(&self, params: &GaitParams) -> f64 {
         let a = &self.config.amplitude;
@@ -380,7 +409,31 @@ impl Controller for CompliantSlithering {
         self.reset();
     }
 
+    /// Any change the checks accept: the nominal ramps to it (`Nominal::follow`), the
+    /// windows and their states stay, and the steering's cycle follows the speed.
+    fn follow(&mut self, t_s: f64, params: &GaitParams) -> Result<(), CannotFollow> {
+        self.nominal.follow(t_s, params);
+        self.heading.follow(params);
+        Ok(())
+    }
+
+    /// Gains, rates, ranges that hold the values now, the torque filter, the sign and
+    /// the steering, in place; a change of which parameters comply or how they are
+    /// spread, or of the windows' edges, changes the shape itself: rebuilt.
+    fn reconfigure(&mut self, new: &mut dyn Controller) -> Result<(), CannotFollow> {
+        let new = same_kind::<Self>(new)?;
+        self.config_fits(&new.config)?;
+        std::mem::swap(&mut self.config, &mut new.config);
+        let c = &self.config;
+        self.filter.set(c.torque_cutoff_hz, c.torque_deadband_nm);
+        self.heading.set_config(c.steering);
+        Ok(())
+    }
+
     fn step(&mut self, tick: Tick, obs: &Observation<'_>, set_points_rad: &mut [f64]) {
+        self.nominal.advance(tick.t_s);
+        self.heading
+            .set_nominal_offset(self.nominal.params.offset_lat_rad);
         self.step_shape(tick, obs.torque_nm, set_points_rad);
         self.nominal.add_offsets(&self.layout, set_points_rad);
         self.heading.step(tick, obs.body, self.amplitude_now());

@@ -228,11 +228,7 @@ fn compare(
     let mut c = CompliantSlithering::new(layout, params, config);
     let t0 = 0.3;
     engage_at(&mut c, layout, params, t0);
-    let engaged = |t: f64| Nominal {
-        params: *params,
-        phase0_rad: params.temporal_freq_rad_s * t,
-        t0_s: t,
-    };
+    let engaged = |t: f64| Nominal::at_phase(params, params.temporal_freq_rad_s * t, t);
     let mut r = Reference::new(layout, engaged(t0), config);
     let (mut ours, mut theirs, mut tau) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
     let buf = ObservationBuf::new(n);

@@ -7,7 +7,9 @@
 use crate::controller_interface::config::{ConfigError, check_range};
 use crate::controller_interface::nominal::{Nominal, lateral_room, within};
 use crate::controller_interface::report::ControllerReport;
-use crate::controller_interface::{Controller, Handover, NominalMismatch, Observation, Tick};
+use crate::controller_interface::{
+    CannotFollow, Controller, Handover, NominalMismatch, Observation, Tick, same_kind,
+};
 use crate::gait::{BodyLayout, GaitParams, JOINT_LIMIT_RAD, Plane};
 use crate::shape::torque::TorqueFilter;
 
@@ -145,9 +147,32 @@ impl Controller for Cpg {
         self.reset();
     }
 
+    /// Any change the checks accept: the oscillators' drive (ωT, ωS, the amplitude they
+    /// relax to, the offsets) ramps to it; their phases and amplitudes stay.
+    fn follow(&mut self, t_s: f64, params: &GaitParams) -> Result<(), CannotFollow> {
+        self.nominal.follow(t_s, params);
+        Ok(())
+    }
+
+    /// Gains whose amplitude range holds the oscillators' amplitudes now, in place.
+    fn reconfigure(&mut self, new: &mut dyn Controller) -> Result<(), CannotFollow> {
+        let new = same_kind::<Self>(new)?;
+        let (lo, hi) = (new.gains.amplitude_min_rad, new.gains.amplitude_max_rad);
+        if !self.osc.iter().all(|o| (lo..=hi).contains(&o.amplitude)) {
+            return Err(CannotFollow(
+                "an oscillator's amplitude lies outside the new range",
+            ));
+        }
+        std::mem::swap(&mut self.gains, &mut new.gains);
+        let g = &self.gains;
+        self.filter.set(g.torque_cutoff_hz, g.torque_deadband_nm);
+        Ok(())
+    }
+
     fn step(&mut self, tick: Tick, obs: &Observation<'_>, set_points_rad: &mut [f64]) {
         let Tick { t_s, dt_s: dt } = tick;
         self.t = t_s;
+        self.nominal.advance(t_s);
         self.filter.update(dt, obs.torque_nm, &mut self.tau_ext);
         let g = self.gains;
         let (spatial_freq, temporal_freq, amplitude0) = (

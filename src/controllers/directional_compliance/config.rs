@@ -469,3 +469,40 @@ impl DirectionalComplianceConfig {
 pub fn clamp_offset(v: f64) -> f64 {
     v.clamp(-OFFSET_MAX_RAD, OFFSET_MAX_RAD)
 }
+
+/// Whether `next` can replace `old` in a running controller
+/// ([`crate::controller_interface::Controller::reconfigure`]): the same structure
+/// (strategy, sections, what complies, the windows' edges, the calibration) and every
+/// admittance's range holding the old one (the values now lie in the old range).
+pub fn fits_in_place(
+    old: &DirectionalComplianceConfig,
+    next: &DirectionalComplianceConfig,
+) -> Result<(), crate::controller_interface::CannotFollow> {
+    use crate::controller_interface::CannotFollow;
+    let same = old.strategy == next.strategy
+        && old.sections == next.sections
+        && old.hold == next.hold
+        && old.friction_offset == next.friction_offset
+        && old.edge_width_modules == next.edge_width_modules
+        && old.dorsal.enabled == next.dorsal.enabled
+        && old.dorsal.amplitude_rad == next.dorsal.amplitude_rad
+        && old.phase.enabled == next.phase.enabled
+        && old.spatial_freq.enabled == next.spatial_freq.enabled;
+    if !same {
+        return Err(CannotFollow(
+            "the strategy, the sections, what complies, the windows' edges or the \
+             calibration change the controller's structure",
+        ));
+    }
+    let holds = |a: &AdmittanceGains, b: &AdmittanceGains| b.min <= a.min && a.max <= b.max;
+    if !(holds(&old.lateral, &next.lateral)
+        && holds(&old.dorsal.gains, &next.dorsal.gains)
+        && holds(&old.phase.gains, &next.phase.gains)
+        && holds(&old.spatial_freq.gains, &next.spatial_freq.gains))
+    {
+        return Err(CannotFollow(
+            "a narrower range could leave a value outside it",
+        ));
+    }
+    Ok(())
+}

@@ -13,7 +13,8 @@ use super::sections::Sections;
 use crate::controller_interface::nominal::{Nominal, lateral_room, within};
 use crate::controller_interface::report::ControllerReport;
 use crate::controller_interface::{
-    CommandRefused, Controller, ControllerCommand, Handover, NominalMismatch, Observation, Tick,
+    CannotFollow, CommandRefused, Controller, ControllerCommand, Handover, NominalMismatch,
+    Observation, Tick, same_kind,
 };
 use crate::controllers::steering::HeadingHold;
 use crate::gait::{BodyLayout, GaitParams, JOINT_LIMIT_RAD, Plane};
@@ -472,9 +473,38 @@ impl Controller for DirectionalCompliance {
         self.reset();
     }
 
+    /// A change of amplitude, spatial frequency, speed or offsets: the nominal ramps to
+    /// it; the windows, the sections' modes and the calibration stay. A reversal of the
+    /// wave (its windows would run tail to head) is a fresh takeover.
+    fn follow(&mut self, t_s: f64, params: &GaitParams) -> Result<(), CannotFollow> {
+        let now = self.nominal.target().temporal_freq_rad_s;
+        if now * params.temporal_freq_rad_s < 0.0 {
+            return Err(CannotFollow("a reversal of the wave's direction"));
+        }
+        self.nominal.follow(t_s, params);
+        self.heading.follow(params);
+        Ok(())
+    }
+
+    /// Gains whose ranges hold the old ones, thresholds, the torque filter and the
+    /// steering, in place; the strategy, the sections, which parts comply, the windows'
+    /// edges or the calibration are a rebuild.
+    fn reconfigure(&mut self, new: &mut dyn Controller) -> Result<(), CannotFollow> {
+        let new = same_kind::<Self>(new)?;
+        super::config::fits_in_place(&self.config, &new.config)?;
+        std::mem::swap(&mut self.config, &mut new.config);
+        let c = &self.config;
+        self.filter.set(c.torque_cutoff_hz, c.torque_deadband_nm);
+        self.heading.set_config(c.steering);
+        Ok(())
+    }
+
     fn step(&mut self, tick: Tick, obs: &Observation<'_>, set_points_rad: &mut [f64]) {
         let Tick { t_s, dt_s: dt } = tick;
         self.t = t_s;
+        self.nominal.advance(t_s);
+        self.heading
+            .set_nominal_offset(self.nominal.params.offset_lat_rad);
         let d = &self.config.dorsal;
         let since = t_s - self.nominal.t0_s;
         self.ramp = if d.ramp_s > 0.0 {

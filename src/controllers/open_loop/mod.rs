@@ -5,9 +5,10 @@
 use serde::{Deserialize, Serialize};
 
 use crate::controller_interface::report::{ControllerReport, ReportSpec, SignalSpec};
+use crate::controller_interface::nominal::Nominal;
 use crate::controller_interface::{
-    BuildContext, CommandRefused, ConfigError, Controller, ControllerCommand, ControllerKind,
-    Handover, NominalMismatch, Observation, Tick,
+    BuildContext, CannotFollow, CommandRefused, ConfigError, Controller, ControllerCommand,
+    ControllerKind, Handover, NominalMismatch, Observation, Tick, same_kind,
 };
 use crate::controllers::steering::{HeadingHold, SteeringConfig};
 use crate::gait::{BodyLayout, GaitKind, GaitParams, Serpenoid};
@@ -66,13 +67,12 @@ impl ControllerKind for OpenLoopKind {
     }
 }
 
-/// The serpenoid of `kind`, its phase `ψ₀ + ωT·(t − t₀)` from the handover.
+/// The serpenoid of `kind`, its phase `ψ₀ + ∫ωT dt` from the handover.
 pub struct OpenLoop {
     kind: GaitKind,
     layout: BodyLayout,
+    nominal: Nominal,
     wave: Serpenoid,
-    phase0: f64,
-    t0: f64,
     phase: f64,
     /// Slithering's heading hold.
     heading: Option<HeadingHold>,
@@ -83,9 +83,8 @@ impl OpenLoop {
         Self {
             kind,
             layout: layout.clone(),
+            nominal: Nominal::new(params),
             wave: Serpenoid::for_layout(kind, params, layout),
-            phase0: 0.0,
-            t0: 0.0,
             phase: 0.0,
             heading: None,
         }
@@ -99,9 +98,8 @@ impl Controller for OpenLoop {
     }
 
     fn engage(&mut self, h: &Handover<'_>) {
+        self.nominal = Nominal::engaged(h);
         self.wave = Serpenoid::for_layout(self.kind, h.params, &self.layout);
-        self.phase0 = h.phase_rad;
-        self.t0 = h.t_s;
         self.phase = h.phase_rad;
         if let Some(heading) = &mut self.heading {
             heading.engage(h.params);
@@ -110,12 +108,37 @@ impl Controller for OpenLoop {
 
     fn step(&mut self, tick: Tick, obs: &Observation<'_>, set_points_rad: &mut [f64]) {
         let t_s = tick.t_s;
-        self.phase = self.phase0 + self.wave.temporal_freq_rad_s * (t_s - self.t0);
+        if self.nominal.ramping(t_s) || self.nominal.params != *self.nominal.target() {
+            self.nominal.advance(t_s);
+            self.wave = Serpenoid::for_layout(self.kind, &self.nominal.params, &self.layout);
+        }
+        self.phase = self.nominal.phase_at(t_s);
         self.wave.evaluate(&self.layout, self.phase, set_points_rad);
         if let Some(heading) = &mut self.heading {
+            heading.set_nominal_offset(self.nominal.params.offset_lat_rad);
             heading.step(tick, obs.body, self.wave.lateral.amplitude_rad.abs());
             heading.add_to(&self.layout, set_points_rad);
         }
+    }
+
+    /// Any change: the serpenoid ramps to it (`Nominal::follow`).
+    fn follow(&mut self, t_s: f64, params: &GaitParams) -> Result<(), CannotFollow> {
+        self.nominal.follow(t_s, params);
+        if let Some(heading) = &mut self.heading {
+            heading.follow(params);
+        }
+        Ok(())
+    }
+
+    /// Only the steering has settings: in place.
+    fn reconfigure(&mut self, new: &mut dyn Controller) -> Result<(), CannotFollow> {
+        let new = same_kind::<Self>(new)?;
+        match (&mut self.heading, &new.heading) {
+            (Some(mine), Some(theirs)) => mine.set_config(*theirs.config()),
+            (None, None) => {}
+            _ => return Err(CannotFollow("another gait")),
+        }
+        Ok(())
     }
 
     fn report(&self, out: &mut ControllerReport) {

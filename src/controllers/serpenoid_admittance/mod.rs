@@ -10,8 +10,10 @@ use serde::{Deserialize, Serialize};
 
 use crate::controller_interface::config::{ConfigError, check_range};
 use crate::controller_interface::report::{ControllerReport, ReportSpec, SignalSpec};
+use crate::controller_interface::nominal::Nominal;
 use crate::controller_interface::{
-    BuildContext, Controller, ControllerKind, Handover, NominalMismatch, Observation, Tick,
+    BuildContext, CannotFollow, Controller, ControllerKind, Handover, NominalMismatch,
+    Observation, Tick, same_kind,
 };
 use crate::gait::{
     BodyLayout, GaitKind, GaitParams, JOINT_LIMIT_RAD, Plane, SEA_MAX_JOINT_SPEED_RAD_S, Serpenoid,
@@ -165,8 +167,7 @@ pub struct SerpenoidAdmittance {
     force: [f64; 2],
     filter: TorqueFilter,
     tau_ext: Vec<f64>,
-    phase0: f64,
-    t0: f64,
+    nominal: Nominal,
     phase: f64,
 }
 
@@ -194,8 +195,7 @@ impl SerpenoidAdmittance {
             force: [0.0; 2],
             filter: TorqueFilter::new(n, config.torque_cutoff_hz, config.torque_deadband_nm),
             tau_ext: vec![0.0; n],
-            phase0: 0.0,
-            t0: 0.0,
+            nominal: Nominal::new(params),
             phase: 0.0,
         }
     }
@@ -242,14 +242,42 @@ impl Controller for SerpenoidAdmittance {
         self.scale = [ParamState::default(); 2];
         self.force = [0.0; 2];
         self.filter.reset();
-        self.phase0 = h.phase_rad;
-        self.t0 = h.t_s;
+        self.nominal = Nominal::engaged(h);
         self.phase = h.phase_rad;
+    }
+
+    /// Any change the checks accept: the wave ramps to it, the scales stay.
+    fn follow(&mut self, t_s: f64, params: &GaitParams) -> Result<(), CannotFollow> {
+        self.nominal.follow(t_s, params);
+        Ok(())
+    }
+
+    /// Gains, ranges that hold the scales now, the sign and the filter in place;
+    /// switching a plane's compliance on or off is a rebuild.
+    fn reconfigure(&mut self, new: &mut dyn Controller) -> Result<(), CannotFollow> {
+        let new = same_kind::<Self>(new)?;
+        for plane in [Plane::Lateral, Plane::Dorsal] {
+            let (a, b) = (self.config.plane(plane), new.config.plane(plane));
+            if a.enabled != b.enabled {
+                return Err(CannotFollow("switching a plane's compliance on or off"));
+            }
+            if b.enabled && !(b.gains.min..=b.gains.max).contains(&self.scale(plane)) {
+                return Err(CannotFollow("a scale now lies outside its new range"));
+            }
+        }
+        std::mem::swap(&mut self.config, &mut new.config);
+        let c = &self.config;
+        self.filter.set(c.torque_cutoff_hz, c.torque_deadband_nm);
+        Ok(())
     }
 
     fn step(&mut self, tick: Tick, obs: &Observation<'_>, set_points_rad: &mut [f64]) {
         let Tick { t_s, dt_s: dt } = tick;
-        self.phase = self.phase0 + self.wave.temporal_freq_rad_s * (t_s - self.t0);
+        if self.nominal.ramping(t_s) || self.nominal.params != *self.nominal.target() {
+            self.nominal.advance(t_s);
+            self.wave = Serpenoid::for_layout(self.kind, &self.nominal.params, &self.layout);
+        }
+        self.phase = self.nominal.phase_at(t_s);
         self.filter.update(dt, obs.torque_nm, &mut self.tau_ext);
         // The nominal wave: its joints' deviation from the plane's offset is ∂θ/∂k.
         self.wave.evaluate(&self.layout, self.phase, set_points_rad);

@@ -11,7 +11,8 @@ use super::reversal::{Reversal, wrap_pi};
 use crate::controller_interface::nominal::{Nominal, lateral_room, within};
 use crate::controller_interface::report::ControllerReport;
 use crate::controller_interface::{
-    CommandRefused, Controller, ControllerCommand, Handover, NominalMismatch, Observation, Tick,
+    CannotFollow, CommandRefused, Controller, ControllerCommand, Handover, NominalMismatch,
+    Observation, Tick, same_kind,
 };
 use crate::controllers::compliant_slithering::CompliantSlithering;
 use crate::gait::{BodyLayout, GaitParams, JOINT_LIMIT_RAD, Plane};
@@ -152,8 +153,33 @@ impl Controller for AntiCompliantSidewinding {
         self.heading = None;
     }
 
+    /// A change of speed, amplitudes, spatial frequency, phase shift or offsets: both
+    /// waves ramp to it, the windows, β, the trim and the held heading stay. A reversal
+    /// of the wave swaps the sense of the reversal's wells: a fresh takeover.
+    fn follow(&mut self, t_s: f64, params: &GaitParams) -> Result<(), CannotFollow> {
+        let now = self.nominal.target().temporal_freq_rad_s;
+        if now * params.temporal_freq_rad_s < 0.0 {
+            return Err(CannotFollow("a reversal of the wave's direction"));
+        }
+        self.lateral.follow(t_s, params)?;
+        self.nominal.follow(t_s, params);
+        self.adjust
+            .set_cycle(TAU / params.temporal_freq_rad_s.abs());
+        Ok(())
+    }
+
+    /// The lateral engine's gains (as compliant slithering takes them), the heading's
+    /// filter, the reversal's and the heading adjustment's settings, in place.
+    fn reconfigure(&mut self, new: &mut dyn Controller) -> Result<(), CannotFollow> {
+        let new = same_kind::<Self>(new)?;
+        self.lateral.reconfigure(&mut new.lateral)?;
+        std::mem::swap(&mut self.config, &mut new.config);
+        Ok(())
+    }
+
     fn step(&mut self, tick: Tick, obs: &Observation<'_>, set_points_rad: &mut [f64]) {
         let dt = tick.dt_s;
+        self.nominal.advance(tick.t_s);
         self.lateral.step(tick, obs, set_points_rad);
         self.track_heading(dt, obs);
         let h = self.relative_heading();

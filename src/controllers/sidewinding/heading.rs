@@ -111,6 +111,14 @@ impl Default for HeadingAdjust {
 }
 
 impl HeadingAdjust {
+    /// The gait's period is now `cycle_s` (a followed change of speed); the trim and
+    /// the cycle under way stay.
+    pub fn set_cycle(&mut self, cycle_s: f64) {
+        if cycle_s.is_finite() && cycle_s > 0.0 {
+            self.cycle_s = cycle_s;
+        }
+    }
+
     /// At rest, for a gait of period `cycle_s`.
     pub fn new(cycle_s: f64) -> Self {
         Self {

@@ -30,6 +30,12 @@ impl CycleMean {
         }
     }
 
+    /// The cycle is now `cycle_s` long (> 0): samples are taken that far apart from
+    /// now on; those taken keep their weight until they age out.
+    pub fn set_cycle(&mut self, cycle_s: f64) {
+        self.every_s = cycle_s / SLOTS as f64;
+    }
+
     /// The angle `angle_rad` after `dt_s` more seconds.
     pub fn push(&mut self, dt_s: f64, angle_rad: f64) {
         self.since_s += dt_s;

@@ -173,6 +173,11 @@ struct CycleTurn {
     losing: bool,
 }
 
+/// A gait cycle of a wave at `omega` rad/s, s (a stopped wave counts as 2π s).
+fn cycle_of(omega: f64) -> f64 {
+    if omega.abs() > 1e-6 { TAU / omega.abs() } else { TAU }
+}
+
 /// A cycle whose |heading error| grew by this much was lost to the terrain, rad.
 const LOSING_RAD: f64 = 0.05;
 
@@ -201,11 +206,7 @@ impl HeadingHold {
     /// survives a takeover; `hold_at_engage` takes the heading now.
     pub fn engage(&mut self, params: &GaitParams) {
         let omega = params.temporal_freq_rad_s;
-        let cycle_s = if omega.abs() > 1e-6 {
-            TAU / omega.abs()
-        } else {
-            TAU
-        };
+        let cycle_s = cycle_of(omega);
         self.mean = CycleMean::new(cycle_s);
         self.cycle = CycleTurn {
             cycle_s,
@@ -221,6 +222,38 @@ impl HeadingHold {
             self.take_here = true;
         }
         self.state = SteeringState::Off;
+    }
+
+    /// The wave changes to `params` while it drives (a followed change): the cycle
+    /// its means span and the room the nominal offset leaves follow, what it has learnt
+    /// stays. A reversal of the wave reverses the turn's sign. The nominal offset
+    /// follows the ramp by [`HeadingHold::set_nominal_offset`].
+    pub fn follow(&mut self, params: &GaitParams) {
+        let omega = params.temporal_freq_rad_s;
+        let cycle_s = cycle_of(omega);
+        self.mean.set_cycle(cycle_s);
+        self.cycle.cycle_s = cycle_s;
+        if omega != 0.0 {
+            self.sign = self.config.turn_sign * omega.signum();
+        }
+    }
+
+    pub fn config(&self) -> &SteeringConfig {
+        &self.config
+    }
+
+    /// The nominal offset while a followed change ramps it, rad (each step).
+    pub fn set_nominal_offset(&mut self, offset_lat_rad: f64) {
+        self.nominal_offset_rad = offset_lat_rad.abs();
+    }
+
+    /// A new configuration in place (a gain edit), keeping the learnt sensitivity,
+    /// the integral and the nominal heading.
+    pub fn set_config(&mut self, config: SteeringConfig) {
+        self.config = config;
+        self.sensitivity = self
+            .sensitivity
+            .clamp(config.sensitivity_min, config.sensitivity_max);
     }
 
     /// `controller.heading`: hold `Some(h)`, or the heading now (`None`).
