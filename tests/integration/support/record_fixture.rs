@@ -126,7 +126,7 @@ pub fn events_at(k: u64, controller_id: u64) -> Vec<RecordItem> {
             RecordEvent::Request {
                 ticket: 1,
                 request: LoopRequest::SetGait { gait },
-                result: Ok(()),
+                result: Ok(None),
             },
         )],
         20 => vec![event(

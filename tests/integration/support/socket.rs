@@ -175,7 +175,7 @@ pub fn fake_loop(spec: LoopSpec) -> (FakeLoop, LoopHandle) {
                             }
                             let _ = ack_tx.send(Ack {
                                 ticket: env.ticket,
-                                result,
+                                result: result.map(|()| None),
                             });
                         }
                     }

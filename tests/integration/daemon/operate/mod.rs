@@ -14,6 +14,7 @@ use serde_json::{Value, json};
 
 mod access;
 mod config;
+mod continuity;
 mod drive;
 mod drivers;
 mod listener;
@@ -42,6 +43,15 @@ pub(super) fn daemon(extra: &str) -> Daemon {
 /// As [`daemon`], its command prepared by `setup` before it starts (a lower file limit,
 /// its log to a file).
 pub(super) fn daemon_with(extra: &str, setup: impl FnOnce(&mut std::process::Command)) -> Daemon {
+    daemon_in("flat.toml", extra, setup)
+}
+
+/// As [`daemon_with`], in `world` (a file of `scenarios/`).
+pub(super) fn daemon_in(
+    world: &str,
+    extra: &str,
+    setup: impl FnOnce(&mut std::process::Command),
+) -> Daemon {
     let dir = tempfile::tempdir().unwrap();
     let port = free_tcp_port();
     let config = dir.path().join("snaked.toml");
@@ -51,14 +61,14 @@ pub(super) fn daemon_with(extra: &str, setup: impl FnOnce(&mut std::process::Com
     )
     .unwrap();
     let sock = dir.path().join("s.sock");
-    let world = concat!(env!("CARGO_MANIFEST_DIR"), "/scenarios/flat.toml");
+    let world = format!("{}/scenarios/{world}", env!("CARGO_MANIFEST_DIR"));
     let proc = Proc::spawn_with(
         "snaked",
         &exe("snaked"),
         &[
             "--emulated".into(),
             "--world".into(),
-            world.into(),
+            world,
             "--config".into(),
             config.display().to_string(),
             "--socket".into(),
