@@ -53,8 +53,8 @@ pub enum Continuity {
     Blended,
     /// The driving controller follows the new parameters, keeping what it learnt.
     Followed,
-    /// The controller took the new configuration in place, keeping what it learnt
-    /// (and driving, if it drove).
+    /// The driving controller took the new configuration in place, keeping what it
+    /// learnt.
     Reconfigured,
     /// The driving controller could not take the change in place (`why`): the
     /// selector blends into it and the controller takes over afresh at the blend's end.
@@ -141,9 +141,9 @@ impl ControllerSlots {
         }
     }
 
-    /// Installs `new` for `gait` at a cycle boundary. Where `gait`'s controller can
-    /// take `new`'s configuration in place ([`Controller::reconfigure`]) it does, keeps
-    /// its state (and drives on, if it drove) and takes `new`'s id; `new` is retired.
+    /// Installs `new` for `gait` at a cycle boundary. Where `gait`'s controller drives
+    /// and can take `new`'s configuration in place ([`Controller::reconfigure`]) it
+    /// does, keeps its state, drives on and takes `new`'s id; `new` is retired.
     /// Otherwise, if the old controller was driving, the joints go back to the
     /// selector first (from `commanded`, the set-points sent last cycle); `new` takes
     /// over when the selector's blend ends, and the old one is retired.
@@ -155,7 +155,10 @@ impl ControllerSlots {
         commanded: &[f64],
         t_s: f64,
     ) -> Continuity {
+        let driving = self.engaged == Some(gait);
         let why = match self.slots[gait.index()].as_mut() {
+            // A controller that does not drive starts afresh at its takeover anyway.
+            _ if !driving => "the gait's controller was not driving",
             None => "no controller before",
             Some(old) => match old.controller.reconfigure(new.controller.as_mut()) {
                 Ok(()) => {
@@ -166,7 +169,7 @@ impl ControllerSlots {
                 Err(CannotFollow(why)) => why,
             },
         };
-        if self.engaged == Some(gait) {
+        if driving {
             self.hand_back(selector, commanded, t_s);
         }
         self.takeovers[gait.index()] = 0;

@@ -595,23 +595,31 @@ fn a_gain_change_is_taken_in_place() {
 #[test]
 fn what_cannot_be_taken_in_place_says_why() {
     let mut h = engaged_among_pegs("a_ws_omega");
-    // Another shape (the amplitude central, not windowed): installed afresh.
-    let c = build(&h, "a_ws_omega_central");
-    let answer_ = answer(&mut h, SET, Some(c));
-    assert!(
-        matches!(answer_, Ok(Some(Continuity::Installed { why })) if why.contains("spread")),
-        "{answer_:?}"
-    );
-    assert_eq!(engagement(&h), Engagement::Waiting);
     // Another kind.
     let c = build(&h, "open_loop");
-    let answer_ = answer(&mut h, SET, Some(c));
     assert_eq!(
-        answer_,
+        answer(&mut h, SET, Some(c)),
         Ok(Some(Continuity::Installed {
             why: "another controller"
         }))
     );
+    assert_eq!(engagement(&h), Engagement::Waiting);
+    // One that does not drive starts afresh anyway.
+    let c = build(&h, "open_loop");
+    let a = answer(&mut h, SET, Some(c));
+    assert!(
+        matches!(a, Ok(Some(Continuity::Installed { why })) if why.contains("not driving")),
+        "{a:?}"
+    );
+    // Another shape (the amplitude central, not windowed): installed afresh.
+    let mut h = engaged_among_pegs("a_ws_omega");
+    let c = build(&h, "a_ws_omega_central");
+    let a = answer(&mut h, SET, Some(c));
+    assert!(
+        matches!(a, Ok(Some(Continuity::Installed { why })) if why.contains("spread")),
+        "{a:?}"
+    );
+    assert_eq!(engagement(&h), Engagement::Waiting);
     // Directional compliance follows a speed change but not a reversal.
     let mut h = engaged_among_pegs("dc_switching");
     let gait = GaitKind::Slithering;
