@@ -169,3 +169,30 @@ fn requests_are_recorded_as_defined() {
         json!({"request": "estop", "args": null})
     );
 }
+
+/// Issue 45: what became of the gait's controller is recorded with the request.
+#[test]
+fn a_request_s_continuity_is_recorded() {
+    use crate::gait::ParamPatch;
+    use crate::rt::messages::Continuity;
+    let record = |result| {
+        let mut out = Vec::new();
+        let e = RecordEvent::Request {
+            ticket: 1,
+            request: LoopRequest::SetParams {
+                gait: GaitKind::Slithering,
+                patch: ParamPatch::default(),
+            },
+            result,
+        };
+        write_event(&mut out, 0, &e, |_| None).expect("encodes");
+        serde_json::from_slice::<Value>(&out).expect("json")
+    };
+    let v = record(Ok(Some(Continuity::Followed)));
+    assert_eq!(v["continuity"], "followed");
+    let why = "a reversal of the wave's direction";
+    let v = record(Ok(Some(Continuity::HandedBack { why })));
+    assert_eq!((v["continuity"].as_str(), v["why"].as_str()), (Some("handed_back"), Some(why)));
+    let v = record(Ok(None));
+    assert!(v.get("continuity").is_none(), "{v}");
+}
