@@ -1,6 +1,7 @@
 //! Every registered controller, with every preset, on every gait it runs, engages,
 //! steps and reports without allocating, with torques coming in and (for windowed
-//! ones) windows being born at the head and dropped at the tail: proved with a
+//! ones) windows being born at the head and dropped at the tail, and follows a change
+//! of its parameters and takes a configuration in place: proved with a
 //! counting global allocator (this test binary only).
 
 use snaked::controller_interface::TickClock;
@@ -33,6 +34,10 @@ fn no_registered_controller_allocates_per_step() {
         for family in for_gait(REGISTRY, gait) {
             for (preset, _) in family.presets() {
                 let mut built = family.build(preset, None, &ctx).expect("presets build");
+                // A twin to reconfigure from (built before counting: building allocates).
+                let mut twin = family.build(preset, None, &ctx).expect("presets build");
+                let mut faster = *params;
+                faster.temporal_freq_rad_s *= 1.2;
                 let c = built.controller.as_mut();
                 let (pos, mut tau, mut out) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
                 let buf = ObservationBuf::new(n);
@@ -44,6 +49,14 @@ fn no_registered_controller_allocates_per_step() {
                 // 8 s: more than a wave period, so windows are born and dropped.
                 for k in 0..8000 {
                     let t = k as f64 * 1e-3;
+                    // A followed change, then a configuration taken in place (issue 45);
+                    // whether the controller takes them or not, nothing allocates.
+                    if k == 3000 {
+                        let _ = c.follow(t, &faster);
+                    }
+                    if k == 5000 {
+                        let _ = c.reconfigure(twin.controller.as_mut());
+                    }
                     c.step(clock.tick(t), &buf.observe(&pos, &tau), &mut out);
                     for (i, x) in tau.iter_mut().enumerate() {
                         let on = (k / 500 + i) % 3 == 0;
