@@ -216,6 +216,26 @@ impl CannotFollow {
     pub const OTHER_KIND: CannotFollow = CannotFollow("another controller");
 }
 
+/// Where a controller's calibration stands.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CalibrationState {
+    None,
+    Running,
+    Calibrated,
+}
+
+/// What a controller offers the operator now, declared by the controller (published
+/// each cycle with its report): what operators read instead of a signal's name.
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
+pub struct Capabilities {
+    /// It steers by a nominal heading now: [`ControllerCommand::SetHeading`] turns it
+    /// (a teleop turn moves the heading, not the gait's steering knob).
+    pub steers_by_heading: bool,
+    /// It calibrates ([`ControllerCommand::Calibrate`]): where that stands.
+    pub calibration: Option<CalibrationState>,
+}
+
 /// `new` as a controller of kind `T` (for [`Controller::reconfigure`]).
 pub fn same_kind<T: Controller>(new: &mut dyn Controller) -> Result<&mut T, CannotFollow> {
     let any: &mut dyn std::any::Any = new;
@@ -264,6 +284,10 @@ pub trait Controller: Send + std::any::Any {
     fn reconfigure(&mut self, new: &mut dyn Controller) -> Result<(), CannotFollow> {
         let _ = new;
         Err(CannotFollow::NOT_DECLARED)
+    }
+    /// What it offers the operator now (after its last step).
+    fn capabilities(&self) -> Capabilities {
+        Capabilities::default()
     }
     /// An operator's command; it takes effect at the controller's next step. Most
     /// controllers have none.

@@ -13,7 +13,7 @@ pub mod report;
 
 pub use config::ConfigError;
 pub use interface::{
-    BodyEstimate, CannotFollow, CommandRefused, Controller, ControllerCommand, Estimator, Handover, Imu,
+    BodyEstimate, CalibrationState, CannotFollow, Capabilities, CommandRefused, Controller, ControllerCommand, Estimator, Handover, Imu,
     NominalMismatch, Observation, Tick, TickClock, same_kind,
 };
 pub use registry::{BuildContext, Built, ControllerKind, Family, Selection};

@@ -23,7 +23,7 @@ use serde::Serialize;
 use crate::controller_interface::catalog::NO_CONTROLLER;
 use crate::controller_interface::report::ControllerReport;
 use crate::controller_interface::{
-    CannotFollow, Controller, ControllerCommand, Handover, NominalMismatch, Observation,
+    CannotFollow, Capabilities, Controller, ControllerCommand, Handover, NominalMismatch, Observation,
     TickClock,
 };
 use crate::gait::{GaitKind, GaitParams, GaitSelector};
@@ -86,6 +86,8 @@ pub struct ControllerTelemetry {
     pub engagement: Engagement,
     /// Its report after its last step (cleared unless engaged).
     pub report: ControllerReport,
+    /// What it offers the operator (none unless engaged).
+    pub capabilities: Capabilities,
     /// Times the active gait's controller took over since it was installed.
     pub takeovers: u64,
     /// Replaced controllers the loop had to free itself because the retired channel was
@@ -100,6 +102,7 @@ impl Default for ControllerTelemetry {
             active_id: NO_CONTROLLER,
             engagement: Engagement::Off,
             report: ControllerReport::EMPTY,
+            capabilities: Capabilities::default(),
             takeovers: 0,
             freed_in_loop: 0,
         }
@@ -116,6 +119,7 @@ pub struct ControllerSlots {
     clock: TickClock,
     retired: Sender<Installed>,
     report: ControllerReport,
+    capabilities: Capabilities,
     freed_in_loop: u64,
 }
 
@@ -129,6 +133,7 @@ impl ControllerSlots {
             clock: TickClock::default(),
             retired,
             report: ControllerReport::EMPTY,
+            capabilities: Capabilities::default(),
             freed_in_loop: 0,
         }
     }
@@ -286,6 +291,7 @@ impl ControllerSlots {
         }
         slot.controller.step(self.clock.tick(t_s), obs, pos);
         slot.controller.report(&mut self.report);
+        self.capabilities = slot.controller.capabilities();
         true
     }
 
@@ -320,8 +326,10 @@ impl ControllerSlots {
         };
         if self.engaged.is_some() {
             out.report = self.report;
+            out.capabilities = self.capabilities;
         } else {
             out.report.clear();
+            out.capabilities = Capabilities::default();
         }
         out.takeovers = self.takeovers[active.index()];
         out.freed_in_loop = self.freed_in_loop;

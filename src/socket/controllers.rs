@@ -8,7 +8,7 @@ use serde_json::{Map, Value, json};
 use super::api::{RpcError, code};
 use super::session::Session;
 use super::shared::Shared;
-use crate::controller_interface::ControllerCommand;
+use crate::controller_interface::{CalibrationState, ControllerCommand};
 use crate::controller_interface::catalog::{Catalog, ControllerInfo, NO_CONTROLLER};
 use crate::controller_interface::config::merge;
 use crate::controller_interface::registry::{self, BuildContext, Selection};
@@ -190,14 +190,12 @@ pub(crate) async fn calibrate(
         .router
         .call(LoopRequest::ControllerCommand { gait, command: cmd })
         .await?;
-    let Some(at) = info
-        .report
-        .signals
-        .iter()
-        .position(|s| s.name == "calibration")
-    else {
+    // Whether it reports a calibration to wait for: its declared capabilities.
+    let declared = shared.telemetry.latest().controller;
+    let driving = declared.active_id == id && declared.engagement == Engagement::Engaged;
+    if driving && declared.capabilities.calibration.is_none() {
         return Ok(json!({ "gait": gait, "controller": info.controller, "seconds": seconds }));
-    };
+    }
     // Wall time: the loop runs in real time; a held loop or another gait makes no progress.
     let deadline =
         tokio::time::Instant::now() + std::time::Duration::from_secs_f64(seconds * 1.5 + 5.0);
@@ -228,7 +226,7 @@ pub(crate) async fn calibrate(
             ));
         }
         let driving = c.active_id == id && c.engagement == Engagement::Engaged;
-        if driving && c.report.signals[at] == 2.0 {
+        if driving && c.capabilities.calibration == Some(CalibrationState::Calibrated) {
             let view = telemetry_view(c, &shared.catalog);
             return Ok(json!({
                 "gait": gait,
@@ -341,6 +339,7 @@ pub(crate) fn telemetry_view(c: &ControllerTelemetry, catalog: &Catalog) -> Valu
         "state": c.engagement,
         "takeovers": c.takeovers,
         "freed_in_loop": c.freed_in_loop,
+        "capabilities": c.capabilities,
     });
     let Some(info) = info else {
         return v;

@@ -86,15 +86,12 @@ impl Drive {
 }
 
 /// The active gait, from `status`, and how a turn steers it: by the nominal heading
-/// where its engaged controller steers by one (it reports a `heading_nominal_rad`, as
-/// anti-compliant sidewinding does, or its heading hold is on: `steering` 1-3), else
-/// by the gait's knob.
+/// where its engaged controller declares it steers by one now (its `capabilities`:
+/// anti-compliant sidewinding, a heading hold that holds one), else by the gait's knob.
 async fn active_gait(op: &Operating) -> Option<(GaitKind, Steer)> {
     let s = op.station.call(STATION, "status", json!({})).await.ok()?;
     let gait: GaitKind = serde_json::from_value(s.get("gait")?.clone()).ok()?;
-    let signals = &s["controller"]["signals"];
-    let by_heading = signals["heading_nominal_rad"].as_f64().is_some()
-        || signals["steering"].as_f64().is_some_and(|x| x >= 1.0);
+    let by_heading = s["controller"]["capabilities"]["steers_by_heading"] == true;
     let steer = match (by_heading, s["body"]["heading_rad"].as_f64()) {
         (false, _) => Steer::Knob,
         (true, Some(h)) if s["body"]["valid"] == true => Steer::Heading(h),

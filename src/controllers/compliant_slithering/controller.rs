@@ -8,7 +8,7 @@ use crate::controller_interface::report::{
     ControllerReport, MAX_WINDOWS as REPORT_WINDOWS, WindowField,
 };
 use crate::controller_interface::{
-    CannotFollow, CommandRefused, Controller, ControllerCommand, Handover, NominalMismatch,
+    CannotFollow, Capabilities, CommandRefused, Controller, ControllerCommand, Handover, NominalMismatch,
     Observation, Tick, same_kind,
 };
 use crate::controllers::steering::HeadingHold;
@@ -438,6 +438,13 @@ impl Controller for CompliantSlithering {
         self.nominal.add_offsets(&self.layout, set_points_rad);
         self.heading.step(tick, obs.body, self.amplitude_now());
         self.heading.add_to(&self.layout, set_points_rad);
+    }
+
+    fn capabilities(&self) -> Capabilities {
+        Capabilities {
+            steers_by_heading: self.heading.holds_heading(),
+            calibration: None,
+        }
     }
 
     /// `SetHeading`: the direction the steering holds.

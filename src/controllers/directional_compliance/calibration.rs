@@ -130,6 +130,16 @@ impl Calibration {
         self.offsets
     }
 
+    /// Where it stands.
+    pub fn state(&self) -> crate::controller_interface::CalibrationState {
+        use crate::controller_interface::CalibrationState as S;
+        match self.state {
+            State::None => S::None,
+            State::Running => S::Running,
+            State::Calibrated => S::Calibrated,
+        }
+    }
+
     /// As reported in the `calibration` signal: 0 none, 1 running, 2 calibrated.
     pub fn state_code(&self) -> f64 {
         match self.state {

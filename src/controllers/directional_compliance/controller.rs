@@ -13,7 +13,7 @@ use super::sections::Sections;
 use crate::controller_interface::nominal::{Nominal, lateral_room, within};
 use crate::controller_interface::report::ControllerReport;
 use crate::controller_interface::{
-    CannotFollow, CommandRefused, Controller, ControllerCommand, Handover, NominalMismatch,
+    CannotFollow, Capabilities, CommandRefused, Controller, ControllerCommand, Handover, NominalMismatch,
     Observation, Tick, same_kind,
 };
 use crate::controllers::steering::HeadingHold;
@@ -532,6 +532,13 @@ impl Controller for DirectionalCompliance {
 
     fn report(&self, out: &mut ControllerReport) {
         self.fill_report(out);
+    }
+
+    fn capabilities(&self) -> Capabilities {
+        Capabilities {
+            steers_by_heading: self.heading.holds_heading(),
+            calibration: Some(self.calibration.state()),
+        }
     }
 
     fn command(&mut self, command: ControllerCommand) -> Result<(), CommandRefused> {

@@ -7,7 +7,7 @@ use serde::{Deserialize, Serialize};
 use crate::controller_interface::report::{ControllerReport, ReportSpec, SignalSpec};
 use crate::controller_interface::nominal::Nominal;
 use crate::controller_interface::{
-    BuildContext, CannotFollow, CommandRefused, ConfigError, Controller, ControllerCommand,
+    BuildContext, CannotFollow, Capabilities, CommandRefused, ConfigError, Controller, ControllerCommand,
     ControllerKind, Handover, NominalMismatch, Observation, Tick, same_kind,
 };
 use crate::controllers::steering::{HeadingHold, SteeringConfig};
@@ -146,6 +146,13 @@ impl Controller for OpenLoop {
         out.signals[0] = self.phase;
         if let Some(heading) = &self.heading {
             out.signals[1..5].copy_from_slice(&heading.signals());
+        }
+    }
+
+    fn capabilities(&self) -> Capabilities {
+        Capabilities {
+            steers_by_heading: self.heading.as_ref().is_some_and(|h| h.holds_heading()),
+            calibration: None,
         }
     }
 

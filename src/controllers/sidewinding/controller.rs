@@ -11,7 +11,7 @@ use super::reversal::{Reversal, wrap_pi};
 use crate::controller_interface::nominal::{Nominal, lateral_room, within};
 use crate::controller_interface::report::ControllerReport;
 use crate::controller_interface::{
-    CannotFollow, CommandRefused, Controller, ControllerCommand, Handover, NominalMismatch,
+    CannotFollow, Capabilities, CommandRefused, Controller, ControllerCommand, Handover, NominalMismatch,
     Observation, Tick, same_kind,
 };
 use crate::controllers::compliant_slithering::CompliantSlithering;
@@ -226,6 +226,15 @@ impl Controller for AntiCompliantSidewinding {
         ];
         out.signals.fill(0.0);
         out.signals[..SIGNALS].copy_from_slice(&signals);
+    }
+
+    /// It steers by its nominal heading once it has one (the operator's, or the first
+    /// valid heading after the takeover).
+    fn capabilities(&self) -> Capabilities {
+        Capabilities {
+            steers_by_heading: self.nominal_heading.is_some(),
+            calibration: None,
+        }
     }
 
     /// `SetHeading`: the nominal direction, or the heading now.

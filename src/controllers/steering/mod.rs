@@ -238,6 +238,11 @@ impl HeadingHold {
         }
     }
 
+    /// Whether it holds a nominal heading (given, or to take at the next estimate).
+    pub fn holds_heading(&self) -> bool {
+        self.nominal.is_some() || self.take_here
+    }
+
     pub fn config(&self) -> &SteeringConfig {
         &self.config
     }
