@@ -37,6 +37,7 @@ pub mod live;
 pub mod module;
 pub mod navigation;
 pub mod num;
+pub mod operator;
 pub mod protocol;
 pub mod record;
 pub mod rt;

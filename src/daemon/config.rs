@@ -228,7 +228,7 @@ impl Default for ControlConfig {
             ack_timeout_s: 1.0,
             idle_timeout_s: 300.0,
             tcp_token_file: PathBuf::new(),
-            driver_timeout_s: crate::socket::driver::DEFAULT_DRIVER_TIMEOUT.as_secs_f64(),
+            driver_timeout_s: crate::operator::driver::DEFAULT_DRIVER_TIMEOUT.as_secs_f64(),
         }
     }
 }

@@ -274,6 +274,40 @@ impl Field {
         *slot = value;
     }
 
+    /// Sets this field's value in `patch`.
+    pub fn set_in_patch(self, patch: &mut ParamPatch, value: f64) {
+        let slot = match self {
+            Field::AmplitudeLat => &mut patch.amplitude_lat_rad,
+            Field::AmplitudeDor => &mut patch.amplitude_dor_rad,
+            Field::OffsetLat => &mut patch.offset_lat_rad,
+            Field::OffsetDor => &mut patch.offset_dor_rad,
+            Field::SpatialFreq => &mut patch.spatial_freq_rad,
+            Field::TemporalFreq => &mut patch.temporal_freq_rad_s,
+            Field::PhaseShift => &mut patch.phase_shift_rad,
+            Field::Taper => &mut patch.taper,
+            Field::HelixRadius => &mut patch.helix_radius_m,
+            Field::HelixPitch => &mut patch.helix_pitch_m,
+        };
+        *slot = Some(value);
+    }
+
+    /// Removes this field from `patch`.
+    pub fn clear_in_patch(self, patch: &mut ParamPatch) {
+        let slot = match self {
+            Field::AmplitudeLat => &mut patch.amplitude_lat_rad,
+            Field::AmplitudeDor => &mut patch.amplitude_dor_rad,
+            Field::OffsetLat => &mut patch.offset_lat_rad,
+            Field::OffsetDor => &mut patch.offset_dor_rad,
+            Field::SpatialFreq => &mut patch.spatial_freq_rad,
+            Field::TemporalFreq => &mut patch.temporal_freq_rad_s,
+            Field::PhaseShift => &mut patch.phase_shift_rad,
+            Field::Taper => &mut patch.taper,
+            Field::HelixRadius => &mut patch.helix_radius_m,
+            Field::HelixPitch => &mut patch.helix_pitch_m,
+        };
+        *slot = None;
+    }
+
     /// The patch's value for this field, if it carries one.
     pub fn in_patch(self, patch: &ParamPatch) -> Option<f64> {
         match self {

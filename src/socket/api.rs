@@ -13,54 +13,7 @@ use serde_json::value::RawValue;
 use crate::gait::{GaitKind, ParamPatch};
 use crate::num::Num;
 
-/// Error codes (JSON-RPC 2.0 style). See `docs/control-socket.md`.
-pub mod code {
-    /// The line is not valid JSON.
-    pub const PARSE_ERROR: i64 = -32700;
-    /// Not an object, or `id` / `method` missing or of the wrong type.
-    pub const INVALID_REQUEST: i64 = -32600;
-    /// No such method.
-    pub const METHOD_NOT_FOUND: i64 = -32601;
-    /// A param has the wrong type, is unknown, out of range or not finite.
-    pub const INVALID_PARAMS: i64 = -32602;
-    /// The loop's request channel is full; try again.
-    pub const BUSY: i64 = -32000;
-    /// The loop did not answer within the server's ack timeout.
-    pub const LOOP_TIMEOUT: i64 = -32001;
-    /// The loop refused the request (or is not running).
-    pub const REFUSED: i64 = -32002;
-    /// The line exceeded `max_line_bytes`; it was discarded up to its newline.
-    pub const LINE_TOO_LONG: i64 = -32003;
-    /// The server already serves `max_clients` connections; it closes this one.
-    pub const TOO_MANY_CLIENTS: i64 = -32004;
-    /// A TCP client called a method before authenticating (`auth`), or with a wrong
-    /// token.
-    pub const UNAUTHORIZED: i64 = -32005;
-    /// Another client drives (`socket::driver`): a driving request is refused until
-    /// it stops, leaves or lapses, or this client calls `take_over`.
-    pub const DRIVEN_BY_OTHER: i64 = -32006;
-}
-
-/// An error answer: `{"code": .., "message": ".."}`.
-#[derive(Debug, Clone, PartialEq, Eq, Serialize, thiserror::Error)]
-#[error("error {code}: {message}")]
-pub struct RpcError {
-    pub code: i64,
-    pub message: String,
-}
-
-impl RpcError {
-    pub fn new(code: i64, message: impl Into<String>) -> Self {
-        Self {
-            code,
-            message: message.into(),
-        }
-    }
-
-    pub fn invalid_params(message: impl Into<String>) -> Self {
-        Self::new(code::INVALID_PARAMS, message)
-    }
-}
+pub use crate::operator::error::{OperatorError, code};
 
 /// A request's id exactly as the client wrote it (a JSON number or string), so the
 /// answer echoes it byte for byte: `123456789012345678901234567890` and `-0` come back
@@ -86,7 +39,7 @@ pub struct Request {
 #[derive(Debug)]
 pub struct BadRequest {
     pub id: RequestId,
-    pub error: RpcError,
+    pub error: OperatorError,
 }
 
 type RawMap = BTreeMap<String, Box<RawValue>>;
@@ -95,7 +48,7 @@ type RawMap = BTreeMap<String, Box<RawValue>>;
 pub fn parse_request(line: &[u8]) -> Result<Request, BadRequest> {
     let bad = |id: &RawValue, code: i64, message: String| BadRequest {
         id: id.to_owned(),
-        error: RpcError::new(code, message),
+        error: OperatorError::new(code, message),
     };
     let null = null_id();
     let null = null.as_ref();
@@ -200,12 +153,12 @@ pub struct Params {
 
 impl Params {
     /// From a JSON value that must be an object (an operator's call from elsewhere).
-    pub fn from_value(v: &Value) -> Result<Params, RpcError> {
+    pub fn from_value(v: &Value) -> Result<Params, OperatorError> {
         if !v.is_object() {
-            return Err(RpcError::invalid_params("`params` must be an object"));
+            return Err(OperatorError::invalid_params("`params` must be an object"));
         }
         let fields: RawMap = serde_json::from_str(&v.to_string())
-            .map_err(|e| RpcError::invalid_params(format!("`params`: {e}")))?;
+            .map_err(|e| OperatorError::invalid_params(format!("`params`: {e}")))?;
         Ok(Params { fields })
     }
 
@@ -219,29 +172,29 @@ impl Params {
 
     /// A number param: absent → `None`; not a number, or not finite as an f64
     /// (e.g. `1e999`) → an error naming the field.
-    pub fn take_f64(&mut self, name: &str) -> Result<Option<f64>, RpcError> {
+    pub fn take_f64(&mut self, name: &str) -> Result<Option<f64>, OperatorError> {
         let Some(raw) = self.fields.remove(name) else {
             return Ok(None);
         };
         let text = raw.get();
         if !matches!(text.as_bytes().first(), Some(b'-' | b'0'..=b'9')) {
             let what = json_kind(text);
-            return Err(RpcError::invalid_params(format!(
+            return Err(OperatorError::invalid_params(format!(
                 "`{name}` must be a number, got {what}"
             )));
         }
         match serde_json::from_str::<f64>(text) {
             Ok(v) if v.is_finite() => Ok(Some(v)),
-            _ => Err(RpcError::invalid_params(format!(
+            _ => Err(OperatorError::invalid_params(format!(
                 "`{name}` = {text} is not a finite number"
             ))),
         }
     }
 
     /// A number param that must lie in `min..=max`.
-    pub fn take_f64_in(&mut self, name: &str, min: f64, max: f64) -> Result<Option<f64>, RpcError> {
+    pub fn take_f64_in(&mut self, name: &str, min: f64, max: f64) -> Result<Option<f64>, OperatorError> {
         match self.take_f64(name)? {
-            Some(v) if !(min..=max).contains(&v) => Err(RpcError::invalid_params(format!(
+            Some(v) if !(min..=max).contains(&v) => Err(OperatorError::invalid_params(format!(
                 "`{name}` = {} is out of range [{}, {}]",
                 Num(v),
                 Num(min),
@@ -252,7 +205,7 @@ impl Params {
     }
 
     /// A string param: absent → `None`; another type → an error naming the field.
-    pub fn take_str(&mut self, name: &str) -> Result<Option<String>, RpcError> {
+    pub fn take_str(&mut self, name: &str) -> Result<Option<String>, OperatorError> {
         let Some(raw) = self.fields.remove(name) else {
             return Ok(None);
         };
@@ -260,13 +213,13 @@ impl Params {
             .map(Some)
             .map_err(|_| {
                 let what = json_kind(raw.get());
-                RpcError::invalid_params(format!("`{name}` must be a string, got {what}"))
+                OperatorError::invalid_params(format!("`{name}` must be a string, got {what}"))
             })
     }
 
     /// A param of any JSON type, parsed: absent → `None`; a number that is not a
     /// finite double (`1e999`) → an error naming the field.
-    pub fn take_json(&mut self, name: &str) -> Result<Option<Value>, RpcError> {
+    pub fn take_json(&mut self, name: &str) -> Result<Option<Value>, OperatorError> {
         let Some(raw) = self.fields.remove(name) else {
             return Ok(None);
         };
@@ -281,17 +234,17 @@ impl Params {
                 } else {
                     format!("{name}.{path}")
                 };
-                RpcError::invalid_params(format!("`{at}`: {}", e.inner()))
+                OperatorError::invalid_params(format!("`{at}`: {}", e.inner()))
             })
     }
 
     /// A gait name param.
-    pub fn take_gait(&mut self, name: &str) -> Result<Option<GaitKind>, RpcError> {
+    pub fn take_gait(&mut self, name: &str) -> Result<Option<GaitKind>, OperatorError> {
         match self.take_str(name)? {
             None => Ok(None),
             Some(s) => GaitKind::from_name(&s).map(Some).ok_or_else(|| {
                 let known: Vec<&str> = GaitKind::ALL.iter().map(|k| k.name()).collect();
-                RpcError::invalid_params(format!(
+                OperatorError::invalid_params(format!(
                     "`{name}`: unknown gait `{s}` (known: {})",
                     known.join(", ")
                 ))
@@ -300,7 +253,7 @@ impl Params {
     }
 
     /// Every `ParamPatch` field present, each a finite number.
-    pub fn take_patch(&mut self) -> Result<ParamPatch, RpcError> {
+    pub fn take_patch(&mut self) -> Result<ParamPatch, OperatorError> {
         let mut patch = ParamPatch::default();
         for name in PATCH_FIELDS {
             if let Some(v) = self.take_f64(name)? {
@@ -312,13 +265,13 @@ impl Params {
     }
 
     /// Refuse any field not taken yet; `expected` lists the method's fields.
-    pub fn finish(self, expected: &[&str]) -> Result<(), RpcError> {
+    pub fn finish(self, expected: &[&str]) -> Result<(), OperatorError> {
         match self.fields.keys().next() {
             None => Ok(()),
-            Some(extra) if expected.is_empty() => Err(RpcError::invalid_params(format!(
+            Some(extra) if expected.is_empty() => Err(OperatorError::invalid_params(format!(
                 "unknown field `{extra}` (this method takes no params)"
             ))),
-            Some(extra) => Err(RpcError::invalid_params(format!(
+            Some(extra) => Err(OperatorError::invalid_params(format!(
                 "unknown field `{extra}` (expected one of: {})",
                 expected.join(", ")
             ))),
@@ -426,11 +379,11 @@ pub fn result_line(id: &RawValue, result: &Value) -> String {
 }
 
 /// The answer line for an error.
-pub fn error_line(id: &RawValue, error: &RpcError) -> String {
+pub fn error_line(id: &RawValue, error: &OperatorError) -> String {
     #[derive(Serialize)]
     struct Answer<'a> {
         id: &'a RawValue,
-        error: &'a RpcError,
+        error: &'a OperatorError,
     }
     to_line(&Answer { id, error })
 }

@@ -201,7 +201,7 @@ fn a_lone_surrogate_and_deep_bad_numbers_say_what_and_where() {
 
 #[test]
 fn answer_lines_end_with_a_newline() {
-    let l = error_line(&null_id(), &RpcError::new(code::BUSY, "busy"));
+    let l = error_line(&null_id(), &OperatorError::new(code::BUSY, "busy"));
     assert_eq!(
         l,
         "{\"id\":null,\"error\":{\"code\":-32000,\"message\":\"busy\"}}\n"

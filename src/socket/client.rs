@@ -7,7 +7,7 @@ use std::time::Duration;
 
 use serde_json::{Value, json};
 
-use super::api::{RpcError, code};
+use super::api::{OperatorError, code};
 
 /// Where the daemon listens.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -44,7 +44,7 @@ pub enum ClientError {
     Protocol(String),
     /// The daemon answered with an error.
     #[error("{}: {}", .0.code, .0.message)]
-    Rpc(RpcError),
+    Rpc(OperatorError),
 }
 
 /// One connection. Requests are answered in order; stream messages (no `id`)
@@ -55,7 +55,7 @@ pub struct Client {
     writer: Box<dyn Write + Send>,
     next_id: u64,
     timeout: Option<Duration>,
-    notices: Vec<RpcError>,
+    notices: Vec<OperatorError>,
 }
 
 impl Client {
@@ -126,7 +126,7 @@ impl Client {
 
     /// What the server said on its own while calls waited (its -32004 notices), oldest
     /// first.
-    pub fn notices(&self) -> &[RpcError] {
+    pub fn notices(&self) -> &[OperatorError] {
         &self.notices
     }
 
@@ -159,15 +159,15 @@ impl Client {
 }
 
 #[derive(serde::Deserialize)]
-struct RpcErrorWire {
+struct OperatorErrorWire {
     code: i64,
     message: String,
 }
 
 /// The `error` of an answer or notice.
-fn wire_error(msg: &Value) -> Result<RpcError, ClientError> {
-    serde_json::from_value::<RpcErrorWire>(msg["error"].clone())
-        .map(|e| RpcError::new(e.code, e.message))
+fn wire_error(msg: &Value) -> Result<OperatorError, ClientError> {
+    serde_json::from_value::<OperatorErrorWire>(msg["error"].clone())
+        .map(|e| OperatorError::new(e.code, e.message))
         .map_err(|_| ClientError::Protocol(msg.to_string()))
 }
 

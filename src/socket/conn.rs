@@ -10,7 +10,7 @@ use std::sync::Arc;
 use tokio::io::{AsyncRead, AsyncWrite, AsyncWriteExt, BufWriter};
 use tokio::sync::{mpsc, watch};
 
-use super::api::{self, RpcError, code};
+use super::api::{self, OperatorError, code};
 use super::clients::Client;
 use super::lines::{Line, LineReader};
 use super::methods;
@@ -75,7 +75,7 @@ pub(crate) async fn serve<S>(
                     "closing: idle for too long (no request and no telemetry stream)"
                 };
                 let line =
-                    api::error_line(&api::null_id(), &RpcError::new(code::TOO_MANY_CLIENTS, why));
+                    api::error_line(&api::null_id(), &OperatorError::new(code::TOO_MANY_CLIENTS, why));
                 let _ = session.send(line).await;
                 break;
             }
@@ -86,7 +86,7 @@ pub(crate) async fn serve<S>(
             Ok(Line::Complete) => handle_line(&shared, &mut session, reader.line()).await,
             Ok(Line::TooLong) => api::error_line(
                 &api::null_id(),
-                &RpcError::new(
+                &OperatorError::new(
                     code::LINE_TOO_LONG,
                     format!(
                         "line longer than {} bytes: discarded up to its newline",
@@ -113,15 +113,13 @@ pub(crate) async fn serve<S>(
         if session.failed_auths >= methods::MAX_FAILED_AUTHS {
             break; // Told so in the answer.
         }
-        session
-            .start_pending(&shared.telemetry, &shared.catalog)
-            .await;
+        session.start_pending(&shared.op).await;
         client.set_subscribed(session.subscribed());
         client.touch();
     }
     session.unsubscribe().await;
     // A driver that goes away no longer drives.
-    shared.driver.release(session.who());
+    shared.op.release_drive(session.who());
     drop(session); // Closes the queue: the writer flushes what is left and ends.
     let _ = writer.await;
 }
@@ -147,7 +145,7 @@ pub(crate) async fn serve_over_limit<S>(
     let (read_half, mut write_half) = tokio::io::split(stream);
     let notice = api::error_line(
         &api::null_id(),
-        &RpcError::new(
+        &OperatorError::new(
             code::TOO_MANY_CLIENTS,
             format!(
                 "too many clients (at most {max}): this connection serves one of {} and closes",
@@ -175,7 +173,7 @@ pub(crate) async fn serve_over_limit<S>(
             }
             Ok(req) => api::error_line(
                 &req.id,
-                &RpcError::new(
+                &OperatorError::new(
                     code::TOO_MANY_CLIENTS,
                     format!(
                         "too many clients (at most {max}): only {} are served over the limit",

@@ -1,20 +1,19 @@
-//! The methods: validate params completely on the async side, then either answer
-//! from the latest snapshot or hand one request to the loop and wait for its ack.
-use std::sync::Arc;
-
+//! The methods: each one's params read completely into the operator API's typed
+//! requests (`crate::operator::Act`) or reads, carried out by the API as the
+//! connection's client, and the answer written as JSON. The Foxglove station's services
+//! use the same mapping ([`call_json`]), so both edges answer alike.
 use serde_json::{Value, json};
 
-use super::api::{PATCH_FIELDS, Params, RpcError, code};
-use super::controllers;
-use super::driver;
-use super::navigate;
+use super::api::{PATCH_FIELDS, Params, OperatorError, code};
+use super::controller_views::{self, info_view, telemetry_view, with_continuity};
 use super::session::Session;
 use super::shared::Shared;
 use super::views;
 use crate::controller_interface::Selection;
 use crate::gait::{BLEND_TIME_RANGE_S, GaitKind, ParamPatch};
+use crate::navigation::navigator::NavigatorConfig;
+use crate::operator::{Act, CALIBRATION_MAX_S, Calibrated, Calibration, Done, Operator};
 use crate::rt::gait_clock::{DEFAULT_STOP_S, STOP_TIME_RANGE_S};
-use crate::rt::messages::LoopRequest;
 
 /// Every method the server knows (listed in the unknown-method error).
 pub const METHODS: [&str; 23] = [
@@ -43,149 +42,27 @@ pub const METHODS: [&str; 23] = [
     "ping",
 ];
 
+/// Methods of a connection itself, not of the operator API.
+const CONNECTION_ONLY: [&str; 3] = ["auth", "telemetry.subscribe", "telemetry.unsubscribe"];
+
 /// Telemetry stream rate limits and default, Hz.
 pub const RATE_RANGE_HZ: (f64, f64) = (1.0, 200.0);
 pub const DEFAULT_RATE_HZ: f64 = 10.0;
 
 pub(crate) async fn dispatch(
-    shared: &Arc<Shared>,
+    shared: &Shared,
     session: &mut Session,
     method: &str,
     mut p: Params,
-) -> Result<Value, RpcError> {
+) -> Result<Value, OperatorError> {
     if !session.authorized() && method != "auth" {
-        return Err(RpcError::new(
+        return Err(OperatorError::new(
             code::UNAUTHORIZED,
             "unauthorized: a TCP client sends `auth` with the token first",
         ));
     }
-    let now = std::time::Instant::now();
-    // Stopping the navigator stops driving: anyone may.
-    let navigation_off = method == "navigate" && p.contains("off");
-    if driver::DRIVING.contains(&method) && !navigation_off {
-        shared.driver.claim(session.who(), now)?;
-    }
-    if navigate::TAKES_OVER.contains(&method) {
-        navigate::operator_takes_over(shared);
-    }
-    if driver::STOPPING.contains(&method) {
-        // Whoever stops the robot frees the drive; the stop itself is never refused.
-        shared.driver.stopped();
-    }
     match method {
         "auth" => auth(shared, session, p).await,
-        "ping" => {
-            p.finish(&[])?;
-            Ok(json!({ "pong": true }))
-        }
-        "status" => {
-            p.finish(&[])?;
-            let mut v = views::status(&shared.telemetry.latest(), &shared.info, &shared.catalog);
-            v["driver"] = views::driver(shared.driver.driver(now).as_ref());
-            v["record"] = shared.record();
-            Ok(v)
-        }
-        "gait.stop" | "gait.resume" => {
-            let (min, max) = STOP_TIME_RANGE_S;
-            let within_s = p
-                .take_f64_in("within_s", min, max)?
-                .unwrap_or(DEFAULT_STOP_S);
-            p.finish(&["within_s"])?;
-            let request = if method == "gait.stop" {
-                LoopRequest::StopGait { within_s }
-            } else {
-                LoopRequest::ResumeGait { within_s }
-            };
-            shared.router.call(request).await?;
-            Ok(
-                json!({ "motion": if method == "gait.stop" { "stopping" } else { "starting" }, "within_s": within_s }),
-            )
-        }
-        "take_over" => {
-            p.finish(&[])?;
-            let from = shared.driver.take_over(session.who(), now);
-            if let Some(from) = &from {
-                tracing::warn!("{} took the drive over from {from}", session.who());
-            }
-            navigate::operator_takes_over(shared);
-            Ok(json!({ "driver": session.who(), "taken_from": from }))
-        }
-        "gait.list" => {
-            p.finish(&[])?;
-            Ok(views::gait_list(&shared.telemetry.latest()))
-        }
-        "gait.set" => {
-            let gait = p.take_gait("gait")?.ok_or_else(|| missing("gait"))?;
-            p.finish(&["gait"])?;
-            shared.router.call(LoopRequest::SetGait { gait }).await?;
-            Ok(json!({ "gait": gait }))
-        }
-        "params.get" => {
-            let gait = p.take_gait("gait")?;
-            p.finish(&["gait"])?;
-            let s = shared.telemetry.latest();
-            Ok(views::params(&s.params, s.blend_time_s, gait))
-        }
-        "params.set" => params_set(shared, p).await,
-        "controller.list" => {
-            let gait = p.take_gait("gait")?;
-            p.finish(&["gait"])?;
-            Ok(controllers::list(shared, gait))
-        }
-        "controller.get" => {
-            let gait = p.take_gait("gait")?;
-            p.finish(&["gait"])?;
-            Ok(controllers::get(shared, gait))
-        }
-        "controller.set" => {
-            let (gait, sel) = controller_set_params(p)?;
-            controllers::set(shared, gait, sel).await
-        }
-        "controller.calibrate" => {
-            let gait = p.take_gait("gait")?;
-            let (min, max) = (0.1, controllers::CALIBRATION_MAX_S);
-            let seconds = p.take_f64_in("seconds", min, max)?;
-            let clear = take_flag(&mut p, "clear")?;
-            p.finish(&["gait", "seconds", "clear"])?;
-            let what = match (clear, seconds) {
-                (true, Some(_)) => {
-                    return Err(RpcError::invalid_params(
-                        "give `seconds` to calibrate or `clear`, not both",
-                    ));
-                }
-                (true, None) => controllers::Calibration::Clear,
-                (false, s) => controllers::Calibration::Run(s),
-            };
-            controllers::calibrate(shared, session, gait, what).await
-        }
-        "controller.heading" => {
-            let gait = p.take_gait("gait")?;
-            let lim = 2.0 * std::f64::consts::PI;
-            let heading = p.take_f64_in("heading_rad", -lim, lim)?;
-            let here = take_flag(&mut p, "here")?;
-            p.finish(&["gait", "heading_rad", "here"])?;
-            let heading = match (heading, here) {
-                (Some(h), false) => Some(h),
-                (None, true) => None,
-                _ => {
-                    return Err(RpcError::invalid_params(
-                        "give `heading_rad` (rad, in the pose estimate's world) or `here: true`",
-                    ));
-                }
-            };
-            controllers::set_heading(shared, gait, heading).await
-        }
-        "navigate" => navigate::navigate(shared, p).await,
-        "hold" => act(shared, p, LoopRequest::Hold).await,
-        "limp" => act(shared, p, LoopRequest::Limp).await,
-        "estop" => act(shared, p, LoopRequest::EStop).await,
-        "arm" => act(shared, p, LoopRequest::Arm).await,
-        "stats" => {
-            p.finish(&[])?;
-            let mut v = views::stats(&shared.telemetry.latest());
-            v["record"] = shared.record();
-            Ok(v)
-        }
         "telemetry.subscribe" => {
             let (min, max) = RATE_RANGE_HZ;
             let rate_hz = p
@@ -201,16 +78,297 @@ pub(crate) async fn dispatch(
             let dropped = session.unsubscribe().await;
             Ok(json!({ "subscribed": false, "dropped": dropped }))
         }
-        _ => Err(RpcError::new(
+        _ => call(&shared.op, session.who(), method, p).await,
+    }
+}
+
+/// `method` with `params` (a JSON object) for the client `who`, as a socket
+/// connection's request is carried out: the Foxglove station's services.
+pub async fn call_json(
+    op: &Operator,
+    who: &str,
+    method: &str,
+    params: &Value,
+) -> Result<Value, OperatorError> {
+    if CONNECTION_ONLY.contains(&method) {
+        return Err(OperatorError::new(
             code::METHOD_NOT_FOUND,
-            format!("unknown method `{method}` (known: {})", METHODS.join(", ")),
-        )),
+            format!("`{method}` belongs to a socket connection"),
+        ));
+    }
+    call(op, who, method, Params::from_value(params)?).await
+}
+
+/// A read, or an act carried out by the API; its answer as JSON.
+async fn call(op: &Operator, who: &str, method: &str, p: Params) -> Result<Value, OperatorError> {
+    if READS.contains(&method) {
+        return read(op, method, p);
+    }
+    let act = parse_act(op, method, p)?;
+    let done = op.act(who, act).await?;
+    Ok(answer_json(op, done))
+}
+
+/// The methods that only read.
+const READS: [&str; 7] = [
+    "ping",
+    "status",
+    "gait.list",
+    "params.get",
+    "controller.list",
+    "controller.get",
+    "stats",
+];
+
+/// A reading method's answer from the latest snapshot.
+fn read(op: &Operator, method: &str, mut p: Params) -> Result<Value, OperatorError> {
+    let v = match method {
+        "ping" => {
+            p.finish(&[])?;
+            json!({ "pong": true })
+        }
+        "status" => {
+            p.finish(&[])?;
+            let mut v = views::status(&op.snapshot(), op.info(), op.catalog());
+            v["driver"] = views::driver(op.driver().as_ref());
+            v["record"] = op.record();
+            v
+        }
+        "gait.list" => {
+            p.finish(&[])?;
+            views::gait_list(&op.snapshot())
+        }
+        "params.get" => {
+            let gait = p.take_gait("gait")?;
+            p.finish(&["gait"])?;
+            let s = op.snapshot();
+            views::params(&s.params, s.blend_time_s, gait)
+        }
+        "controller.list" => {
+            let gait = p.take_gait("gait")?;
+            p.finish(&["gait"])?;
+            controller_views::list(op, gait)
+        }
+        "controller.get" => {
+            let gait = p.take_gait("gait")?;
+            p.finish(&["gait"])?;
+            controller_views::get(op, gait)
+        }
+        "stats" => {
+            p.finish(&[])?;
+            let mut v = views::stats(&op.snapshot());
+            v["record"] = op.record();
+            v
+        }
+        _ => unreachable!("READS lists the reads"),
+    };
+    Ok(v)
+}
+
+/// An acting method's params, read into the API's typed request.
+fn parse_act(op: &Operator, method: &str, mut p: Params) -> Result<Act, OperatorError> {
+    let act = match method {
+        "gait.set" => {
+            let gait = p.take_gait("gait")?.ok_or_else(|| missing("gait"))?;
+            p.finish(&["gait"])?;
+            Act::SetGait { gait }
+        }
+        "gait.stop" | "gait.resume" => {
+            let (min, max) = STOP_TIME_RANGE_S;
+            let within_s = p
+                .take_f64_in("within_s", min, max)?
+                .unwrap_or(DEFAULT_STOP_S);
+            p.finish(&["within_s"])?;
+            if method == "gait.stop" {
+                Act::StopGait { within_s }
+            } else {
+                Act::ResumeGait { within_s }
+            }
+        }
+        "take_over" => {
+            p.finish(&[])?;
+            Act::TakeOver
+        }
+        "params.set" => params_set(op, p)?,
+        "controller.set" => {
+            let (gait, selection) = controller_set_params(p)?;
+            Act::SetController {
+                gait,
+                selection,
+                patch: ParamPatch::default(),
+            }
+        }
+        "controller.calibrate" => {
+            let gait = p.take_gait("gait")?;
+            let (min, max) = (0.1, CALIBRATION_MAX_S);
+            let seconds = p.take_f64_in("seconds", min, max)?;
+            let clear = take_flag(&mut p, "clear")?;
+            p.finish(&["gait", "seconds", "clear"])?;
+            let what = match (clear, seconds) {
+                (true, Some(_)) => {
+                    return Err(OperatorError::invalid_params(
+                        "give `seconds` to calibrate or `clear`, not both",
+                    ));
+                }
+                (true, None) => Calibration::Clear,
+                (false, s) => Calibration::Run(s),
+            };
+            Act::Calibrate { gait, what }
+        }
+        "controller.heading" => {
+            let gait = p.take_gait("gait")?;
+            let lim = 2.0 * std::f64::consts::PI;
+            let heading = p.take_f64_in("heading_rad", -lim, lim)?;
+            let here = take_flag(&mut p, "here")?;
+            p.finish(&["gait", "heading_rad", "here"])?;
+            let heading_rad = match (heading, here) {
+                (Some(h), false) => Some(h),
+                (None, true) => None,
+                _ => {
+                    return Err(OperatorError::invalid_params(
+                        "give `heading_rad` (rad, in the pose estimate's world) or `here: true`",
+                    ));
+                }
+            };
+            Act::SetHeading { gait, heading_rad }
+        }
+        "navigate" => navigate(p)?,
+        "hold" | "limp" | "estop" | "arm" => {
+            p.finish(&[])?;
+            match method {
+                "hold" => Act::Hold,
+                "limp" => Act::Limp,
+                "estop" => Act::EStop,
+                _ => Act::Arm,
+            }
+        }
+        _ => {
+            return Err(OperatorError::new(
+                code::METHOD_NOT_FOUND,
+                format!("unknown method `{method}` (known: {})", METHODS.join(", ")),
+            ));
+        }
+    };
+    Ok(act)
+}
+
+/// An act as the socket's params of its method (`Act::method`): what the station
+/// records of an act it made itself (teleop).
+pub fn act_params(act: &Act) -> Value {
+    match act {
+        Act::SetGait { gait } => json!({ "gait": gait }),
+        Act::StopGait { within_s } | Act::ResumeGait { within_s } => {
+            json!({ "within_s": within_s })
+        }
+        Act::SetParams { gait, patch } => {
+            let mut v = serde_json::to_value(patch).unwrap_or_default();
+            if let Some(o) = v.as_object_mut() {
+                o.retain(|_, x| !x.is_null());
+                o.insert("gait".into(), json!(gait));
+            }
+            v
+        }
+        Act::SetBlendTime { blend_time_s } => json!({ "blend_time_s": blend_time_s }),
+        Act::SetController {
+            gait, selection, ..
+        } => json!({
+            "gait": gait,
+            "controller": selection.controller,
+            "preset": selection.preset,
+            "config": selection.config,
+        }),
+        Act::Calibrate { gait, what } => match what {
+            Calibration::Clear => json!({ "gait": gait, "clear": true }),
+            Calibration::Run(s) => json!({ "gait": gait, "seconds": s }),
+        },
+        Act::SetHeading { gait, heading_rad } => match heading_rad {
+            Some(h) => json!({ "gait": gait, "heading_rad": h }),
+            None => json!({ "gait": gait, "here": true }),
+        },
+        Act::Navigate { travel_rad, config } => {
+            json!({ "heading_rad": travel_rad, "config": config })
+        }
+        Act::NavigateOff => json!({ "off": true }),
+        Act::TakeOver | Act::Hold | Act::Limp | Act::EStop | Act::Arm => json!({}),
+    }
+}
+
+/// What was done, as the socket answers it.
+pub fn answer_json(op: &Operator, done: Done) -> Value {
+    match done {
+        Done::Gait { gait } => json!({ "gait": gait }),
+        Done::Motion { stopping, within_s } => {
+            let motion = if stopping { "stopping" } else { "starting" };
+            json!({ "motion": motion, "within_s": within_s })
+        }
+        Done::Params {
+            gait,
+            params,
+            continuity,
+        } => json!({ "gait": gait, "params": params, "controller": continuity }),
+        Done::BlendTime { blend_time_s } => json!({ "blend_time_s": blend_time_s }),
+        Done::Controller {
+            gait,
+            info,
+            params,
+            continuity,
+        } => {
+            let controller = with_continuity(info_view(&info), continuity);
+            match params {
+                Some(params) => json!({ "gait": gait, "params": params, "controller": controller }),
+                None => json!({ "gait": gait, "controller": controller }),
+            }
+        }
+        Done::Calibration {
+            gait,
+            controller,
+            outcome,
+        } => match outcome {
+            Calibrated::Cleared => {
+                json!({ "gait": gait, "controller": controller, "calibration": "none" })
+            }
+            Calibrated::Started { seconds } => {
+                json!({ "gait": gait, "controller": controller, "seconds": seconds })
+            }
+            Calibrated::Finished {
+                seconds,
+                controller: report,
+            } => {
+                let view = telemetry_view(&report, op.catalog());
+                json!({
+                    "gait": gait,
+                    "controller": controller,
+                    "seconds": seconds,
+                    "signals": view["signals"],
+                    "fields": view["fields"],
+                })
+            }
+        },
+        Done::Heading {
+            gait,
+            controller,
+            heading_rad,
+        } => json!({
+            "gait": gait,
+            "controller": controller,
+            "heading_rad": heading_rad.map_or(json!("here"), |h| json!(h)),
+        }),
+        Done::Navigating { travel_rad, config } => {
+            json!({ "navigating": true, "travel_rad": travel_rad, "config": config })
+        }
+        Done::NavigationOff { was_navigating } => {
+            json!({ "navigating": false, "was_navigating": was_navigating })
+        }
+        Done::TookOver { driver, taken_from } => {
+            json!({ "driver": driver, "taken_from": taken_from })
+        }
+        Done::Ok => json!({ "ok": true }),
     }
 }
 
 /// `controller.set`'s params read and checked: the gait and the selection to build for
 /// it (building it, which checks the configuration, needs no loop: `registry::build`).
-pub fn controller_set_params(mut p: Params) -> Result<(GaitKind, Selection), RpcError> {
+pub fn controller_set_params(mut p: Params) -> Result<(GaitKind, Selection), OperatorError> {
     let gait = p.take_gait("gait")?.ok_or_else(|| missing("gait"))?;
     let controller = p
         .take_str("controller")?
@@ -231,7 +389,7 @@ pub fn controller_set_params(mut p: Params) -> Result<(GaitKind, Selection), Rpc
 pub const AUTH_FAILURE_DELAY: std::time::Duration = std::time::Duration::from_secs(1);
 pub const MAX_FAILED_AUTHS: u32 = 3;
 
-async fn auth(shared: &Shared, session: &mut Session, mut p: Params) -> Result<Value, RpcError> {
+async fn auth(shared: &Shared, session: &mut Session, mut p: Params) -> Result<Value, OperatorError> {
     let token = p.take_str("token")?.ok_or_else(|| missing("token"))?;
     p.finish(&["token"])?;
     let ok = shared.tcp_token.as_deref().is_some_and(|t| {
@@ -246,7 +404,7 @@ async fn auth(shared: &Shared, session: &mut Session, mut p: Params) -> Result<V
             session.failed_auths
         );
         tokio::time::sleep(AUTH_FAILURE_DELAY).await;
-        return Err(RpcError::new(
+        return Err(OperatorError::new(
             code::UNAUTHORIZED,
             if session.failed_auths >= MAX_FAILED_AUTHS {
                 "unauthorized: wrong token; too many wrong tokens, closing"
@@ -259,39 +417,28 @@ async fn auth(shared: &Shared, session: &mut Session, mut p: Params) -> Result<V
     Ok(json!({ "authorized": true }))
 }
 
-fn missing(field: &str) -> RpcError {
-    RpcError::invalid_params(format!("missing `{field}`"))
-}
-
-/// A parameterless request to the loop.
-async fn act(shared: &Shared, p: Params, request: LoopRequest) -> Result<Value, RpcError> {
-    p.finish(&[])?;
-    shared.router.call(request).await?;
-    Ok(json!({ "ok": true }))
+fn missing(field: &str) -> OperatorError {
+    OperatorError::invalid_params(format!("missing `{field}`"))
 }
 
 /// `params.set`: either `{"blend_time_s": x}` or `{"gait": name, <field>: x, ...}`;
 /// for slithering also the old `"compliance": {...}` (now `controller.set`).
-async fn params_set(shared: &Shared, mut p: Params) -> Result<Value, RpcError> {
+fn params_set(op: &Operator, mut p: Params) -> Result<Act, OperatorError> {
     if p.contains("blend_time_s") {
         let (min, max) = BLEND_TIME_RANGE_S;
         let t = p
             .take_f64_in("blend_time_s", min, max)?
             .expect("checked present above");
         if !p.is_empty() {
-            return Err(RpcError::invalid_params(
+            return Err(OperatorError::invalid_params(
                 "`blend_time_s` is set on its own: send gait params in a separate request",
             ));
         }
-        shared
-            .router
-            .call(LoopRequest::SetBlendTime { blend_time_s: t })
-            .await?;
-        return Ok(json!({ "blend_time_s": t }));
+        return Ok(Act::SetBlendTime { blend_time_s: t });
     }
     let gait = p
         .take_gait("gait")?
-        .ok_or_else(|| RpcError::invalid_params("missing `gait` (or `blend_time_s`)"))?;
+        .ok_or_else(|| OperatorError::invalid_params("missing `gait` (or `blend_time_s`)"))?;
     let patch = p.take_patch()?;
     let compliance = p.take_json("compliance")?;
     let mut expected = vec!["gait"];
@@ -299,40 +446,71 @@ async fn params_set(shared: &Shared, mut p: Params) -> Result<Value, RpcError> {
     expected.push("compliance");
     p.finish(&expected)?;
     if compliance.is_some() && gait != GaitKind::Slithering {
-        return Err(RpcError::invalid_params(format!(
+        return Err(OperatorError::invalid_params(format!(
             "`compliance` was slithering's controller; every gait's controller is now set \
              with controller.set (gait {})",
             gait.name()
         )));
     }
     if patch == ParamPatch::default() && compliance.is_none() {
-        return Err(RpcError::invalid_params(format!(
+        return Err(OperatorError::invalid_params(format!(
             "nothing to change: give at least one of {}",
             PATCH_FIELDS.join(", ")
         )));
     }
-    if let Some(c) = compliance {
-        return controllers::set_compliance(shared, gait, patch, c, &shared.layout).await;
+    Ok(match compliance {
+        Some(c) => Act::SetController {
+            gait,
+            selection: controller_views::compliance_selection(op, gait, c)?,
+            patch,
+        },
+        None => Act::SetParams { gait, patch },
+    })
+}
+
+/// `navigate`: `{"heading_rad": h, "config": {..}}` starts (or restarts towards a new
+/// direction), `{"off": true}` stops.
+fn navigate(mut p: Params) -> Result<Act, OperatorError> {
+    let lim = 2.0 * std::f64::consts::PI;
+    let heading = p.take_f64_in("heading_rad", -lim, lim)?;
+    let off = take_flag(&mut p, "off")?;
+    let config = p.take_json("config")?;
+    p.finish(&["heading_rad", "off", "config"])?;
+    match (heading, off) {
+        (None, true) if config.is_none() => Ok(Act::NavigateOff),
+        (Some(h), false) => {
+            let config: NavigatorConfig = match config {
+                None => NavigatorConfig::DEFAULT,
+                // serde would read a struct from an array too (`[]`: every default).
+                Some(v) if !v.is_object() => {
+                    return Err(OperatorError::invalid_params(
+                        "config: an object of the navigator's settings, e.g. {\"slither_max_s\": 60}",
+                    ));
+                }
+                Some(v) => serde_json::from_value(v)
+                    .map_err(|e| OperatorError::invalid_params(format!("config: {e}")))?,
+            };
+            config
+                .check()
+                .map_err(|e| OperatorError::invalid_params(format!("config: {e}")))?;
+            Ok(Act::Navigate {
+                travel_rad: h,
+                config,
+            })
+        }
+        _ => Err(OperatorError::invalid_params(
+            "give `heading_rad` (the direction of travel, rad, in the pose estimate's world; \
+             optionally `config`) or `off: true`",
+        )),
     }
-    // Validated against the table the loop published last; the loop checks again, also
-    // against the gait's controller.
-    let current = *shared.telemetry.latest().params.get(gait);
-    let new = current
-        .patched_for(gait, &patch, shared.layout.module_length_m)
-        .map_err(|e| RpcError::invalid_params(format!("{}: {e}", gait.name())))?;
-    let continuity = shared
-        .router
-        .call(LoopRequest::SetParams { gait, patch })
-        .await?;
-    Ok(json!({ "gait": gait, "params": new, "controller": continuity }))
 }
 
 /// An optional boolean param (absent: false).
-fn take_flag(p: &mut Params, name: &str) -> Result<bool, RpcError> {
+fn take_flag(p: &mut Params, name: &str) -> Result<bool, OperatorError> {
     match p.take_json(name)? {
         None | Some(Value::Bool(false)) => Ok(false),
         Some(Value::Bool(true)) => Ok(true),
-        Some(_) => Err(RpcError::invalid_params(format!(
+        Some(_) => Err(OperatorError::invalid_params(format!(
             "`{name}` must be true or false"
         ))),
     }

@@ -15,25 +15,20 @@
 //!   (its telemetry stream).
 //! - `clients`: the client table (the limit, eviction of the idlest, stops over the
 //!   limit); `conn`: one connection: reading lines, answering in order, the writer.
-//! - `methods`: what each method does; `views`: JSON views of a snapshot.
-//! - `controllers`: the controller methods (`controller.list/get/set`), any gait's
-//!   controller in `status` and telemetry, read from the registry.
-//! - `navigate`: the navigator's task (`navigate`), carried out as an operator's requests.
-//! - `router`: tickets and acks between connections and the loop.
+//! - `methods`: each method's params read into the operator API's typed requests
+//!   (`crate::operator`), and its answer written; `views`: JSON views of a snapshot;
+//!   `controller_views`: JSON views of controllers (`controller.list/get`, any gait's
+//!   controller in `status` and telemetry).
 //! - [`client`]: a small blocking client (used by `snakectl` and the tests).
 
 pub mod api;
 pub mod client;
 mod clients;
 mod conn;
-mod controllers;
-pub mod driver;
+mod controller_views;
 mod lines;
 mod methods;
-mod navigate;
-mod operator;
 pub mod paths;
-mod router;
 mod server;
 mod session;
 mod shared;
@@ -50,7 +45,10 @@ use crate::rt::controller_slots::Installed;
 use crate::rt::messages::{Ack, Envelope};
 use crate::rt::telemetry::TelemetryReader;
 
-pub use methods::{DEFAULT_RATE_HZ, METHODS, RATE_RANGE_HZ, controller_set_params};
+pub use methods::{
+    DEFAULT_RATE_HZ, METHODS, RATE_RANGE_HZ, act_params, answer_json, call_json,
+    controller_set_params,
+};
 pub use server::{RunningServer, ServerError, start};
 
 /// The system service's socket (see [`paths`] for how "auto" resolves).
@@ -78,7 +76,7 @@ pub struct ServerConfig {
     /// when `tcp_port` is set.
     pub tcp_token: Option<String>,
     /// A driver that sends no driving request for this long no longer holds the drive
-    /// (`socket::driver`).
+    /// (`operator::driver`).
     pub driver_timeout: Duration,
     /// The recorder's state, `record` in `status` and `stats` (`None`: no recorder,
     /// `{"state": "off"}`).
@@ -96,7 +94,7 @@ impl Default for ServerConfig {
             socket_mode: 0o660,
             idle_timeout: Some(Duration::from_secs(300)),
             tcp_token: None,
-            driver_timeout: driver::DEFAULT_DRIVER_TIMEOUT,
+            driver_timeout: crate::operator::driver::DEFAULT_DRIVER_TIMEOUT,
             record: None,
         }
     }
@@ -113,7 +111,7 @@ impl RecordView {
     }
 
     /// What `view` reads, `{"state": "off"}` without one.
-    pub(crate) fn read(view: Option<&Self>) -> serde_json::Value {
+    pub fn read(view: Option<&Self>) -> serde_json::Value {
         view.map_or_else(|| serde_json::json!({ "state": "off" }), |v| (v.0)())
     }
 }

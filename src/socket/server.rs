@@ -12,9 +12,9 @@ use std::time::Duration;
 use tokio::io::{AsyncRead, AsyncWrite, AsyncWriteExt};
 use tokio::net::{TcpListener, UnixListener};
 
-use super::api::{self, RpcError, code};
+use super::api::{self, OperatorError, code};
 use super::clients::{Admission, Clients};
-use super::router::AckRouter;
+use crate::operator::{Operator, OperatorConfig};
 use super::shared::Shared;
 use super::{LoopHandle, ServerConfig, conn};
 
@@ -73,8 +73,6 @@ pub struct RunningServer {
     stop: Option<tokio::sync::oneshot::Sender<()>>,
     thread: Option<JoinHandle<()>>,
     shared: Arc<Shared>,
-    /// The runtime the connections run on (operators from elsewhere call on it too).
-    runtime: tokio::runtime::Handle,
 }
 
 impl RunningServer {
@@ -83,12 +81,9 @@ impl RunningServer {
         self.unix_path.as_deref()
     }
 
-    /// The methods for an operator that is not a connection (the Foxglove station).
-    pub fn operator(&self) -> Arc<dyn crate::station::Operator> {
-        Arc::new(super::operator::SocketOperator::new(
-            self.shared.clone(),
-            self.runtime.clone(),
-        ))
+    /// The operator API the connections use (the Foxglove station uses it too).
+    pub fn operator(&self) -> Operator {
+        self.shared.op.clone()
     }
 
     /// The TCP listener's address (useful with `tcp_port: Some(0)`).
@@ -109,7 +104,7 @@ impl RunningServer {
         if let Some(thread) = self.thread.take() {
             let _ = thread.join();
         }
-        self.shared.router.stop();
+        self.shared.op.stop();
         if let (Some(path), Some(id)) = (&self.unix_path, self.unix_id.take()) {
             match std::fs::metadata(path) {
                 Ok(m) if (m.dev(), m.ino()) == id => {
@@ -165,25 +160,25 @@ pub fn start(cfg: ServerConfig, handle: LoopHandle) -> Result<RunningServer, Ser
         .enable_all()
         .build()
         .map_err(ServerError::Runtime)?;
-    let router = AckRouter::start(handle.requests, handle.acks, cfg.ack_timeout)
-        .map_err(ServerError::Runtime)?;
+    let (closing_tx, closing) = tokio::sync::watch::channel(false);
+    // The API's own (it lives on, so it is not among the connections waited for).
+    let (op_closing_tx, op_closing) = tokio::sync::watch::channel(false);
+    let op = {
+        let _enter = rt.enter();
+        let config = OperatorConfig {
+            ack_timeout: cfg.ack_timeout,
+            driver_timeout: cfg.driver_timeout,
+            record: cfg.record.clone(),
+        };
+        Operator::start(handle, config, op_closing).map_err(ServerError::Runtime)?
+    };
     let shared = Arc::new(Shared {
-        router,
-        telemetry: handle.telemetry,
-        info: handle.info,
+        op,
         max_line_bytes: cfg.max_line_bytes.max(1),
         idle_timeout: cfg.idle_timeout,
         tcp_token: cfg.tcp_token.clone(),
-        layout: handle.layout,
-        retired: handle.retired,
-        catalog: handle.catalog,
-        controller_change: tokio::sync::Mutex::new(()),
-        navigation: Default::default(),
-        driver: super::driver::DriverLease::new(cfg.driver_timeout),
-        record: cfg.record.clone(),
     });
     let clients = Clients::new(cfg.max_clients);
-    let (closing_tx, closing) = tokio::sync::watch::channel(false);
     let mut accepts = Vec::new();
     {
         // Listeners must be registered with the runtime they will run on.
@@ -213,7 +208,6 @@ pub fn start(cfg: ServerConfig, handle: LoopHandle) -> Result<RunningServer, Ser
         }
     }
     let (stop_tx, stop_rx) = tokio::sync::oneshot::channel::<()>();
-    let runtime = rt.handle().clone();
     let thread = std::thread::Builder::new()
         .name("snaked-ctl".into())
         .spawn(move || {
@@ -223,6 +217,7 @@ pub fn start(cfg: ServerConfig, handle: LoopHandle) -> Result<RunningServer, Ser
                 // Every connection answers the request in hand (a calibration that
                 // waits is told the daemon shuts down) and closes; each holds a
                 // receiver until it has.
+                op_closing_tx.send_replace(true);
                 closing_tx.send_replace(true);
                 let _ = tokio::time::timeout(CLOSE_GRACE, closing_tx.closed()).await;
             });
@@ -244,7 +239,6 @@ pub fn start(cfg: ServerConfig, handle: LoopHandle) -> Result<RunningServer, Ser
         stop: Some(stop_tx),
         thread: Some(thread),
         shared,
-        runtime,
     })
 }
 
@@ -423,7 +417,7 @@ where
 async fn refuse<S: AsyncWrite + Unpin>(mut stream: S, max: usize) {
     let line = api::error_line(
         &api::null_id(),
-        &RpcError::new(
+        &OperatorError::new(
             code::TOO_MANY_CLIENTS,
             format!("too many clients (at most {max}); closing"),
         ),

@@ -10,7 +10,8 @@ use tokio::time::MissedTickBehavior;
 use super::api;
 use super::views;
 use crate::controller_interface::catalog::Catalog;
-use crate::rt::telemetry::TelemetryReader;
+use crate::operator::Operator;
+use crate::rt::telemetry::Snapshot;
 
 /// Per-connection state the methods can change.
 pub(crate) struct Session {
@@ -97,13 +98,13 @@ impl Session {
         self.dropped.load(Ordering::Relaxed)
     }
 
-    pub(crate) async fn start_pending(&mut self, telemetry: &TelemetryReader, catalog: &Catalog) {
+    pub(crate) async fn start_pending(&mut self, op: &Operator) {
         if let Some(rate_hz) = self.pending_rate_hz.take() {
             self.unsubscribe().await;
             self.dropped.store(0, Ordering::Relaxed);
             self.stream = Some(tokio::spawn(stream_telemetry(
-                telemetry.clone(),
-                catalog.clone(),
+                op.subscribe(),
+                op.catalog().clone(),
                 Duration::from_secs_f64(1.0 / rate_hz),
                 self.out.clone(),
                 self.dropped.clone(),
@@ -112,8 +113,9 @@ impl Session {
     }
 }
 
+/// The newest snapshot of the subscription, at the client's rate.
 async fn stream_telemetry(
-    telemetry: TelemetryReader,
+    snapshots: tokio::sync::watch::Receiver<Arc<Snapshot>>,
     catalog: Catalog,
     period: Duration,
     out: mpsc::Sender<String>,
@@ -123,10 +125,8 @@ async fn stream_telemetry(
     ticks.set_missed_tick_behavior(MissedTickBehavior::Skip);
     loop {
         ticks.tick().await;
-        let line = api::stream_line(
-            "telemetry",
-            &views::telemetry(&telemetry.latest(), &catalog),
-        );
+        let latest = snapshots.borrow().clone();
+        let line = api::stream_line("telemetry", &views::telemetry(&latest, &catalog));
         match out.try_send(line) {
             Ok(()) => {}
             Err(mpsc::error::TrySendError::Full(_)) => {

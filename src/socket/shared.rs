@@ -1,49 +1,12 @@
-//! What every connection shares.
-use crossbeam_channel::Receiver;
-
-use super::DaemonInfo;
-use super::router::AckRouter;
-use crate::controller_interface::catalog::Catalog;
-use crate::gait::BodyLayout;
-use crate::rt::controller_slots::Installed;
-use crate::rt::telemetry::TelemetryReader;
+//! What every connection shares: the operator API and the socket's own settings.
+use crate::operator::Operator;
 
 pub(crate) struct Shared {
-    pub(crate) router: AckRouter,
-    pub(crate) telemetry: TelemetryReader,
-    pub(crate) info: DaemonInfo,
+    /// Everything a request does goes through it.
+    pub(crate) op: Operator,
     pub(crate) max_line_bytes: usize,
     /// Close a connection idle this long (no request, no stream).
     pub(crate) idle_timeout: Option<std::time::Duration>,
     /// The token TCP clients must send (`auth`) before anything else.
     pub(crate) tcp_token: Option<String>,
-    /// The loop's body: controllers are built for it here, off the loop.
-    pub(crate) layout: BodyLayout,
-    /// Controllers the loop replaced or refused; freed here.
-    pub(crate) retired: Receiver<Installed>,
-    /// Names and configurations of every controller built.
-    pub(crate) catalog: Catalog,
-    /// Held by a controller change from reading what is installed to the loop's ack,
-    /// so each change builds on what the previous one left.
-    pub(crate) controller_change: tokio::sync::Mutex<()>,
-    /// Who drives (one operator at a time).
-    pub(crate) driver: super::driver::DriverLease,
-    /// The navigator's task while it runs (`navigate`).
-    pub(crate) navigation: super::navigate::Navigation,
-    /// The recorder's state, if there is a recorder.
-    pub(crate) record: Option<super::RecordView>,
-}
-
-impl Shared {
-    /// The recorder's state: `record` in `status` and `stats`.
-    pub(crate) fn record(&self) -> serde_json::Value {
-        super::RecordView::read(self.record.as_ref())
-    }
-
-    /// Drops the controllers the loop replaced (freeing is off the loop's thread).
-    pub(crate) fn free_retired(&self) {
-        while let Ok(old) = self.retired.try_recv() {
-            drop(old);
-        }
-    }
 }

@@ -4,7 +4,7 @@
 use serde_json::{Value, json};
 
 use super::DaemonInfo;
-use super::controllers::telemetry_view;
+use super::controller_views::telemetry_view;
 use crate::controller_interface::catalog::Catalog;
 use crate::gait::{GaitKind, GaitTable};
 use crate::rt::telemetry::Snapshot;
@@ -33,8 +33,8 @@ pub(crate) fn status(s: &Snapshot, info: &DaemonInfo, catalog: &Catalog) -> Valu
     })
 }
 
-/// Who drives (`socket::driver`): `null` when nobody does.
-pub(crate) fn driver(d: Option<&super::driver::Driver>) -> Value {
+/// Who drives (`operator::driver`): `null` when nobody does.
+pub(crate) fn driver(d: Option<&crate::operator::driver::Driver>) -> Value {
     match d {
         None => Value::Null,
         Some(d) => json!({ "client": d.who, "idle_s": d.idle_s, "expires_in_s": d.expires_in_s }),

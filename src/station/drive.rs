@@ -2,7 +2,7 @@
 //! active gait's speed and steering ([`super::teleop`]); every 50 ms the dead-man looks
 //! at how old the last twist is. It runs as one task on the live view's runtime; the
 //! WebSocket callbacks only parse, check and queue (a full queue drops the twist: the
-//! next one says the same). One operator drives at a time (`socket::driver`): a twist
+//! next one says the same). One operator drives at a time (`operator::driver`): a twist
 //! from a client while another drives is refused with a status, and never feeds the
 //! driver's dead-man; the dead-man stops only while its client still drives.
 
@@ -10,12 +10,13 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use foxglove::websocket::{Client, Status};
-use serde_json::{Value, json};
 use tokio::sync::mpsc;
 
 use super::services::Operating;
-use super::teleop::{Steer, Teleop, TeleopRequest, TeleopState, Twist};
+use super::teleop::{Steer, Teleop, TeleopState, Twist};
 use crate::gait::GaitKind;
+use crate::gait::params::Field;
+use crate::operator::Act;
 
 /// Twists queued at most (a few of the panel's messages).
 const QUEUE: usize = 16;
@@ -27,9 +28,6 @@ struct Sent {
     client: Client,
     twist: Twist,
 }
-
-/// The name the worker's own reads go by.
-const STATION: &str = "station";
 
 fn teleop_status(client: &Client, message: String) {
     client.send_status(Status::error(message).with_id("snaked.teleop"));
@@ -85,70 +83,56 @@ impl Drive {
     }
 }
 
-/// The active gait, from `status`, and how a turn steers it: by the nominal heading
-/// where its engaged controller declares it steers by one now (its `capabilities`:
-/// anti-compliant sidewinding, a heading hold that holds one), else by the gait's knob.
-async fn active_gait(op: &Operating) -> Option<(GaitKind, Steer)> {
-    let s = op.station.call(STATION, "status", json!({})).await.ok()?;
-    let gait: GaitKind = serde_json::from_value(s.get("gait")?.clone()).ok()?;
-    let by_heading = s["controller"]["capabilities"]["steers_by_heading"] == true;
-    let steer = match (by_heading, s["body"]["heading_rad"].as_f64()) {
+/// The active gait, from the loop's snapshot, and how a turn steers it: by the nominal
+/// heading where its engaged controller declares it steers by one now (its
+/// `capabilities`: anti-compliant sidewinding, a heading hold that holds one), else by
+/// the gait's knob.
+fn active_gait(op: &Operating) -> Option<(GaitKind, Steer)> {
+    let s = op.station.snapshot()?;
+    let steer = match (s.controller.capabilities.steers_by_heading, s.body.valid) {
         (false, _) => Steer::Knob,
-        (true, Some(h)) if s["body"]["valid"] == true => Steer::Heading(h),
+        (true, true) if s.body.heading_rad.is_finite() => Steer::Heading(s.body.heading_rad),
         (true, _) => Steer::NoEstimate,
     };
-    Some((gait, steer))
+    Some((s.gait, steer))
 }
 
-/// `r` without the parameters that already have their values (`None`: nothing left).
-async fn changed_only(op: &Operating, mut r: TeleopRequest) -> Option<TeleopRequest> {
-    if r.method != "params.set" {
-        return Some(r);
-    }
-    let gait = r.params["gait"].clone();
-    let Ok(live) = op
-        .station
-        .call(STATION, "params.get", json!({ "gait": gait }))
-        .await
-    else {
-        return Some(r);
+/// `act` without the parameters that already have their values (`None`: nothing left).
+fn changed_only(op: &Operating, act: Act) -> Option<Act> {
+    let Act::SetParams { gait, mut patch } = act else {
+        return Some(act);
     };
-    let fields = r.params.as_object_mut()?;
-    fields.retain(|k, v| {
-        k == "gait"
-            || !matches!((live["params"][k].as_f64(), v.as_f64()), (Some(a), Some(b)) if (a - b).abs() < 1e-9)
-    });
-    (fields.len() > 1).then_some(r)
+    let Some(s) = op.station.snapshot() else {
+        return Some(Act::SetParams { gait, patch });
+    };
+    let live = s.params.get(gait);
+    let mut left = false;
+    for f in Field::ALL {
+        match f.in_patch(&patch) {
+            Some(v) if (f.get(live) - v).abs() < 1e-9 => f.clear_in_patch(&mut patch),
+            Some(_) => left = true,
+            None => {}
+        }
+    }
+    left.then_some(Act::SetParams { gait, patch })
 }
 
 /// A teleop session starts: the operator drives, so a navigation in progress stops
 /// (as it does before any driving request on the socket).
 async fn stop_navigation(op: &Operating, client: &Client) {
-    let navigating = op
-        .station
-        .call(STATION, "status", json!({}))
-        .await
-        .is_ok_and(|s| s["navigator"]["active"] == true);
-    if navigating {
-        let r = TeleopRequest {
-            method: "navigate",
-            params: json!({ "off": true }),
-        };
+    if op.station.snapshot().is_some_and(|s| s.navigator.active) {
         let who = Operating::client_name(u32::from(client.id()));
-        send(op, &who, &r, Some(client)).await;
+        send(op, &who, Act::NavigateOff, Some(client)).await;
     }
 }
 
-/// Sends `r` as `who`; a refusal is logged, recorded and told to `client` (if any).
-async fn send(op: &Operating, who: &str, r: &TeleopRequest, client: Option<&Client>) -> bool {
-    let answer = op.station.call(who, r.method, r.params.clone()).await;
-    let logged: Result<Value, String> = answer.clone().map_err(|e| e.to_string());
-    op.actions.log(who, r.method, &r.params, &logged);
-    if let Err(e) = &answer {
-        tracing::warn!("station: {who}'s teleop {} refused: {e}", r.method);
-        if let Some(c) = client {
-            teleop_status(c, format!("teleop {} refused: {e}", r.method));
-        }
+/// Carries `act` out as `who`; a refusal is logged, recorded and told to `client` (if
+/// any).
+async fn send(op: &Operating, who: &str, act: Act, client: Option<&Client>) -> bool {
+    let method = act.method();
+    let answer = op.act_logged(who, act).await;
+    if let (Err(e), Some(c)) = (&answer, client) {
+        teleop_status(c, format!("teleop {method} refused: {e}"));
     }
     answer.is_ok()
 }
@@ -169,34 +153,34 @@ async fn work(op: Arc<Operating>, mut rx: mpsc::Receiver<Sent>) {
                     stop_navigation(&op, &client).await;
                 }
                 let mut steer = Steer::Knob;
-                if let Some((g, s)) = active_gait(&op).await {
+                if let Some((g, s)) = active_gait(&op) {
                     (gait, steer) = (g, s);
                 }
                 let now = t0.elapsed().as_secs_f64();
-                for r in teleop.on_twist(now, gait, twist, steer, &config) {
-                    // A parameter change hands the joints back to the selector until
-                    // its blend is done: send only what differs from what is live.
-                    if let Some(r) = changed_only(&op, r).await {
-                        send(&op, &who, &r, Some(&client)).await;
+                for act in teleop.on_twist(now, gait, twist, steer, &config) {
+                    // Send only what differs from what is live.
+                    if let Some(act) = changed_only(&op, act) {
+                        send(&op, &who, act, Some(&client)).await;
                     }
                 }
                 driver = Some(client);
             }
             _ = tick.tick() => {
                 let now = t0.elapsed().as_secs_f64();
-                let Some(r) = teleop.tick(now, &config) else { continue };
+                let Some(act) = teleop.tick(now, &config) else { continue };
                 let Some(client) = &driver else { continue };
                 let name = Operating::client_name(u32::from(client.id()));
+                let stopping = matches!(act, Act::StopGait { .. });
                 // The dead-man is its driver's: another operator who took the drive
                 // over is not stopped by it.
-                if r.method == "gait.stop" && op.station.claim_drive(&name).is_err() {
+                if stopping && op.station.claim_drive(&name).is_err() {
                     teleop = Teleop::default();
                     continue;
                 }
                 let who = format!("dead-man ({name})");
-                if !send(&op, &who, &r, Some(client)).await && r.method == "gait.stop" {
+                if !send(&op, &who, act, Some(client)).await && stopping {
                     let hold = teleop.stop_refused();
-                    send(&op, &who, &hold, Some(client)).await;
+                    send(&op, &who, hold, Some(client)).await;
                 }
             }
         }

@@ -2,13 +2,17 @@
 //! live view's WebSocket server (`live::server`) carries it when `[foxglove] operate`
 //! is on: services for the socket's methods that change state, a teleop channel in the
 //! shape Foxglove's Teleop panel publishes, with a dead-man, and who may do either.
-//! Everything an operator asks goes through the control socket's own methods
-//! ([`Operator`], implemented by `socket::RunningServer::operator`), so it meets the
-//! same checks, the same loop queue and the same errors as `snakectl`.
+//! It is a thin adapter over the operator API (`crate::operator`): teleop and the
+//! Parameters panel hand it typed acts and read the loop's snapshot; the services take
+//! the socket's methods with their JSON params through the socket's own mapping. So an
+//! operator here meets the same checks, the same loop queue and the same errors as
+//! `snakectl`.
 //!
 //! - [`access`]: which Foxglove clients may operate (the token).
 //! - [`teleop`]: a twist to the gait's speed and steering, and the dead-man (pure).
 //! - [`services`]: the services and what they answer.
+//! - [`parameters`]: the Parameters panel.
+//! - [`drive`]: the teleop channel's worker.
 //! - [`actions`]: operator actions as events on the `/operator` channel (file and live).
 
 pub mod access;
@@ -18,8 +22,6 @@ pub mod parameters;
 pub mod services;
 pub mod teleop;
 
-use std::future::Future;
-use std::pin::Pin;
 use std::sync::{Arc, OnceLock};
 
 use serde_json::Value;
@@ -27,39 +29,16 @@ use serde_json::Value;
 pub use access::Access;
 pub use teleop::{Steer, Teleop, TeleopConfig, Twist};
 
-/// An error an operator's call answers with: the control socket's code and message.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct CallError {
-    pub code: i64,
-    pub message: String,
-}
+use crate::operator::{Act, Done, Operator, OperatorError, code};
+use crate::rt::telemetry::Snapshot;
 
-impl std::fmt::Display for CallError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "error {}: {}", self.code, self.message)
-    }
-}
-
-/// What a call answers, once it has been carried out.
-pub type CallFuture = Pin<Box<dyn Future<Output = Result<Value, CallError>> + Send>>;
-
-/// Carries out a control-socket method (`method`, its `params` object) as an
-/// authorised client's request, the client named `who` (the drive lease and the logs
-/// name it so: one operator drives at a time, `socket::driver`).
-pub trait Operator: Send + Sync {
-    fn call(&self, who: &str, method: &str, params: Value) -> CallFuture;
-    /// `who` is about to drive: it holds the drive or takes a free one; refused while
-    /// another operator drives.
-    fn claim_drive(&self, who: &str) -> Result<(), CallError>;
-}
-
-/// What the station needs, given to the live view: its settings and the operator,
-/// which the daemon binds once the control socket runs (calls before that are
-/// refused as "not ready").
+/// What the station needs, given to the live view: its settings and the operator API,
+/// which the daemon binds once the control socket runs (calls before that are refused
+/// as not ready).
 #[derive(Clone)]
 pub struct Station {
     pub config: StationConfig,
-    operator: Arc<OnceLock<Arc<dyn Operator>>>,
+    operator: Arc<OnceLock<Operator>>,
 }
 
 impl std::fmt::Debug for Station {
@@ -86,19 +65,11 @@ pub struct StationConfig {
     pub teleop: TeleopConfig,
 }
 
-/// The code of a call refused for want of privilege (the socket's -32005).
-pub const UNAUTHORIZED: i64 = -32005;
-/// The code of a call made before the control socket runs (the socket's "refused").
-pub const NOT_READY: i64 = -32002;
-/// The socket's codes for a request that is not JSON, and for bad params.
-pub const PARSE_ERROR: i64 = -32700;
-pub const INVALID_PARAMS: i64 = -32602;
-
-fn not_ready() -> CallError {
-    CallError {
-        code: NOT_READY,
-        message: "not ready: the control socket is not running yet".into(),
-    }
+fn not_ready() -> OperatorError {
+    OperatorError::new(
+        code::NOT_READY,
+        "not ready: the control socket is not running yet",
+    )
 }
 
 impl Station {
@@ -109,24 +80,34 @@ impl Station {
         }
     }
 
-    /// Binds the operator (the control socket); later binds are ignored.
-    pub fn bind(&self, operator: Arc<dyn Operator>) {
+    /// Binds the operator API; later binds are ignored.
+    pub fn bind(&self, operator: Operator) {
         let _ = self.operator.set(operator);
     }
 
-    /// Carries `method` out through the bound operator, as `who`.
-    pub fn call(&self, who: &str, method: &str, params: Value) -> CallFuture {
-        match self.operator.get() {
-            Some(op) => op.call(who, method, params),
-            None => Box::pin(async { Err(not_ready()) }),
-        }
+    /// The operator API, once bound.
+    pub fn operator(&self) -> Result<&Operator, OperatorError> {
+        self.operator.get().ok_or_else(not_ready)
     }
 
-    /// Whether `who` may drive now (see [`Operator::claim_drive`]).
-    pub fn claim_drive(&self, who: &str) -> Result<(), CallError> {
-        match self.operator.get() {
-            Some(op) => op.claim_drive(who),
-            None => Err(not_ready()),
-        }
+    /// Carries `act` out as the client `who`.
+    pub async fn act(&self, who: &str, act: Act) -> Result<Done, OperatorError> {
+        self.operator()?.act(who, act).await
+    }
+
+    /// A control-socket method with its JSON params, as `who`: the services' edge
+    /// (the socket's own mapping, so both answer alike).
+    pub async fn call_json(&self, who: &str, method: &str, params: &Value) -> Result<Value, OperatorError> {
+        crate::socket::call_json(self.operator()?, who, method, params).await
+    }
+
+    /// Whether `who` may drive now (`operator::driver`).
+    pub fn claim_drive(&self, who: &str) -> Result<(), OperatorError> {
+        self.operator()?.claim_drive(who)
+    }
+
+    /// The loop's latest snapshot, once bound.
+    pub fn snapshot(&self) -> Option<Snapshot> {
+        self.operator.get().map(Operator::snapshot)
     }
 }

@@ -1,8 +1,9 @@
 //! The station's parameters (Foxglove's Parameters panel): the active gait, its
 //! parameters and its controller's configuration, read live, set through the control
-//! socket's methods (`gait.set`, `params.set`, `controller.set`) with their checks and
-//! errors (a refusal is sent to the panel as an error status; the panel then shows the
-//! values as they are).
+//! operator API's typed acts (`Act::SetGait`, `Act::SetParams`, `Act::SetController`)
+//! with their checks and errors (a refusal is sent to the panel as an error status; the
+//! panel then shows the values as they are). Changes made elsewhere reach subscribed
+//! panels from the loop's snapshots as they come (`Operator::subscribe`).
 //!
 //! Names: `gait` (string), `params.<field>` (the active gait's, numbers),
 //! `controller.name`, `controller.preset` (strings) and `controller.config.<path>` (the
@@ -20,8 +21,11 @@ use foxglove::websocket::{
 };
 use serde_json::{Map, Value, json};
 
-use super::CallError;
 use super::services::Operating;
+use crate::controller_interface::Selection;
+use crate::gait::params::Field;
+use crate::gait::{GaitKind, ParamPatch};
+use crate::operator::{Act, OperatorError};
 
 /// The parameter handler.
 pub struct Parameters {
@@ -30,26 +34,29 @@ pub struct Parameters {
 
 /// What the parameters are read from.
 struct Live {
-    gait: String,
+    gait: GaitKind,
     params: Map<String, Value>,
+    /// The gait's controller: `controller`, `preset`, `config` (null without one).
     controller: Value,
 }
 
-async fn live(op: &Operating) -> Result<Live, CallError> {
-    let status = op.station.call("station", "status", json!({})).await?;
-    let gait = status["gait"].as_str().unwrap_or_default().to_owned();
-    let p = op
-        .station
-        .call("station", "params.get", json!({ "gait": gait }))
-        .await?;
-    let c = op
-        .station
-        .call("station", "controller.get", json!({ "gait": gait }))
-        .await?;
+/// The active gait, its parameters and its controller, from the loop's snapshot.
+fn live(op: &Operating) -> Result<Live, OperatorError> {
+    let api = op.station.operator()?;
+    let s = api.snapshot();
+    let gait = s.gait;
+    let params = match serde_json::to_value(s.params.get(gait)) {
+        Ok(Value::Object(m)) => m,
+        _ => Map::new(),
+    };
+    let controller = match api.installed(gait) {
+        Some(i) => json!({ "controller": i.controller, "preset": i.preset, "config": i.config }),
+        None => Value::Null,
+    };
     Ok(Live {
-        params: p["params"].as_object().cloned().unwrap_or_default(),
-        controller: c["controller"].clone(),
         gait,
+        params,
+        controller,
     })
 }
 
@@ -84,7 +91,7 @@ fn flatten(prefix: &str, v: &Value, out: &mut Vec<Parameter>) {
 }
 
 fn all(l: &Live) -> Vec<Parameter> {
-    let mut out = vec![Parameter::string("gait", l.gait.clone())];
+    let mut out = vec![Parameter::string("gait", l.gait.name())];
     for (k, v) in &l.params {
         out.extend(param(format!("params.{k}"), v));
     }
@@ -109,27 +116,48 @@ fn json_of(v: &ParameterValue) -> Value {
     }
 }
 
-/// The socket request setting parameter `name` to `value`, given what is live.
-fn request_for(l: &Live, name: &str, value: Value) -> Result<(&'static str, Value), String> {
+/// The act setting parameter `name` to `value`, given what is live.
+fn act_for(l: &Live, name: &str, value: Value) -> Result<Act, String> {
     if name == "gait" {
-        return Ok(("gait.set", json!({ "gait": value })));
+        let gait = value
+            .as_str()
+            .and_then(GaitKind::from_name)
+            .ok_or_else(|| format!("gait: not a gait: {value}"))?;
+        return Ok(Act::SetGait { gait });
     }
     if let Some(field) = name.strip_prefix("params.") {
-        let mut p = json!({ "gait": l.gait });
-        p[field] = value;
-        return Ok(("params.set", p));
+        let field = Field::ALL
+            .into_iter()
+            .find(|f| f.name() == field)
+            .ok_or_else(|| format!("no parameter {name:?}"))?;
+        let x = value
+            .as_f64()
+            .ok_or_else(|| format!("{name} must be a number, not {value}"))?;
+        let mut patch = ParamPatch::default();
+        field.set_in_patch(&mut patch, x);
+        return Ok(Act::SetParams {
+            gait: l.gait,
+            patch,
+        });
     }
     let c = &l.controller;
     if !c.is_object() {
-        return Err(format!("{name}: the {} gait has no controller", l.gait));
+        return Err(format!("{name}: the {} gait has no controller", l.gait.name()));
     }
-    let mut sel = json!({ "gait": l.gait, "controller": c["controller"], "preset": c["preset"] });
+    let text = |v: &Value| v.as_str().map(str::to_owned);
+    let mut sel = Selection {
+        controller: text(&c["controller"]).unwrap_or_default(),
+        preset: text(&c["preset"]),
+        config: None,
+    };
     match name {
         "controller.name" => {
-            sel["controller"] = value;
-            sel.as_object_mut().map(|m| m.remove("preset"));
+            sel.controller = text(&value).ok_or_else(|| format!("{name} must be a string"))?;
+            sel.preset = None;
         }
-        "controller.preset" => sel["preset"] = value,
+        "controller.preset" => {
+            sel.preset = Some(text(&value).ok_or_else(|| format!("{name} must be a string"))?);
+        }
         _ => {
             let path = name
                 .strip_prefix("controller.config.")
@@ -142,32 +170,46 @@ fn request_for(l: &Live, name: &str, value: Value) -> Result<(&'static str, Valu
                 })?;
             }
             *at = value;
-            sel["config"] = config;
+            sel.config = Some(config);
         }
     }
-    Ok(("controller.set", sel))
+    Ok(Act::SetController {
+        gait: l.gait,
+        selection: sel,
+        patch: ParamPatch::default(),
+    })
 }
 
-/// How often subscribed parameters are compared with what is live.
-const UPDATE_EVERY: Duration = Duration::from_secs(1);
+/// Parameter updates go out at most this often.
+const UPDATE_EVERY: Duration = Duration::from_millis(100);
 
 /// While a client subscribes to parameter updates (`subscribed` names > 0), publishes
-/// those whose live value changed (by the panel, `snakectl` or the navigator) once a
-/// second; the server sends each client the ones it subscribed to. Runs until aborted.
+/// those whose live value changed (by the panel, `snakectl` or the navigator) as the
+/// loop's snapshots show them (at most every [`UPDATE_EVERY`]); the server sends each
+/// client the ones it subscribed to. Runs until aborted.
 pub async fn publish_changes(
     op: Arc<Operating>,
     server: Weak<WebSocketServerHandle>,
     subscribed: Arc<AtomicUsize>,
 ) {
     let mut last: BTreeMap<String, Parameter> = BTreeMap::new();
-    let mut tick = tokio::time::interval(UPDATE_EVERY);
+    // The operator API is bound once the control socket runs.
+    let mut snapshots = loop {
+        if let Ok(api) = op.station.operator() {
+            break api.subscribe();
+        }
+        tokio::time::sleep(UPDATE_EVERY).await;
+    };
     loop {
-        tick.tick().await;
+        if snapshots.changed().await.is_err() {
+            return; // The API stopped.
+        }
+        tokio::time::sleep(UPDATE_EVERY).await;
         if subscribed.load(Ordering::Relaxed) == 0 {
             last.clear();
             continue;
         }
-        let Ok(l) = live(&op).await else { continue };
+        let Ok(l) = live(&op) else { continue };
         let now = all(&l);
         let changed: Vec<Parameter> = now
             .iter()
@@ -195,7 +237,7 @@ impl ParameterHandler for Parameters {
     ) {
         let op = self.operating.clone();
         tokio::spawn(async move {
-            let params = match live(&op).await {
+            let params = match live(&op) {
                 Ok(l) => all(&l),
                 Err(e) => {
                     r.client().send_error(format!("parameters: {e}"));
@@ -225,23 +267,15 @@ impl ParameterHandler for Parameters {
             } else {
                 for p in &parameters {
                     let Some(v) = &p.value else { continue };
-                    let l = match live(&op).await {
+                    let l = match live(&op) {
                         Ok(l) => l,
                         Err(e) => {
                             client.send_error(format!("parameters: {e}"));
                             break;
                         }
                     };
-                    let answer = match request_for(&l, &p.name, json_of(v)) {
-                        Ok((method, params)) => {
-                            let a = op.station.call(&who, method, params.clone()).await;
-                            let logged = a.clone().map_err(|e| e.to_string());
-                            op.actions.log(&who, method, &params, &logged);
-                            if let Err(e) = &a {
-                                tracing::warn!("station: {who}'s {method} refused: {e}");
-                            }
-                            a.map(drop).map_err(|e| e.to_string())
-                        }
+                    let answer = match act_for(&l, &p.name, json_of(v)) {
+                        Ok(act) => op.act_logged(&who, act).await.map_err(|e| e.to_string()),
                         Err(e) => Err(e),
                     };
                     if let Err(e) = answer {
@@ -250,7 +284,7 @@ impl ParameterHandler for Parameters {
                 }
             }
             // What is live now, for the names asked about.
-            let now = live(&op).await.map(|l| all(&l)).unwrap_or_default();
+            let now = live(&op).map(|l| all(&l)).unwrap_or_default();
             let asked = |q: &Parameter| parameters.iter().any(|p| p.name == q.name);
             r.respond(now.into_iter().filter(asked).collect());
         });
@@ -263,7 +297,7 @@ mod tests {
 
     fn live() -> Live {
         Live {
-            gait: "slithering".into(),
+            gait: GaitKind::Slithering,
             params: json!({"temporal_freq_rad_s": 1.0})
                 .as_object()
                 .cloned()
@@ -273,8 +307,13 @@ mod tests {
         }
     }
 
+    /// An act as the socket's method and params.
+    fn request_for(l: &Live, name: &str, value: Value) -> Result<(&'static str, Value), String> {
+        act_for(l, name, value).map(|a| (a.method(), crate::socket::act_params(&a)))
+    }
+
     #[test]
-    fn parameters_are_named_and_set_through_the_socket_methods() {
+    fn parameters_are_named_and_set_through_the_operator_s_acts() {
         let l = live();
         let names: Vec<String> = all(&l).into_iter().map(|p| p.name).collect();
         assert_eq!(
@@ -306,8 +345,12 @@ mod tests {
         assert_eq!(p["config"]["amplitude"]["enabled"], true, "the rest kept");
         assert_eq!(p["preset"], "a_ws_omega");
         let (_, p) = request_for(&l, "controller.name", json!("open_loop")).unwrap();
-        assert_eq!(p, json!({"gait": "slithering", "controller": "open_loop"}));
+        assert_eq!(
+            p,
+            json!({"gait": "slithering", "controller": "open_loop", "preset": null, "config": null})
+        );
         assert!(request_for(&l, "controller.config.nope", json!(1)).is_err());
         assert!(request_for(&l, "whatever", json!(1)).is_err());
+        assert!(request_for(&l, "params.temporal_freq_rad_s", json!("fast")).is_err());
     }
 }

@@ -12,7 +12,8 @@ use serde_json::{Value, json};
 
 use super::access::Access;
 use super::actions::Actions;
-use super::{CallError, Station, UNAUTHORIZED};
+use super::Station;
+use crate::operator::{Act, Done, OperatorError, code};
 
 /// The services, in the order they are advertised.
 pub const SERVICES: [&str; 15] = [
@@ -50,17 +51,17 @@ impl Operating {
     }
 
     /// Carries out `method` for `client` (privilege checked), logs it, answers.
-    pub async fn call(&self, client: u32, method: &str, params: Value) -> Result<Value, CallError> {
+    pub async fn call(&self, client: u32, method: &str, params: Value) -> Result<Value, OperatorError> {
         let name = Self::client_name(client);
         let answer = if method == "auth" {
             self.auth(client, &params).await
         } else if !OPEN.contains(&method) && !self.access.may_operate(client) {
-            Err(CallError {
-                code: UNAUTHORIZED,
+            Err(OperatorError {
+                code: code::UNAUTHORIZED,
                 message: "unauthorized: call the `auth` service with the token first".into(),
             })
         } else {
-            self.station.call(&name, method, params.clone()).await
+            self.station.call_json(&name, method, &params).await
         };
         if method != "status" {
             let shown = if method == "auth" { json!({}) } else { params };
@@ -73,9 +74,26 @@ impl Operating {
         answer
     }
 
-    async fn auth(&self, client: u32, params: &Value) -> Result<Value, CallError> {
-        let bad = |message: &str| CallError {
-            code: crate::station::INVALID_PARAMS,
+    /// Carries a typed `act` out as `who` (teleop, the Parameters panel) and records it
+    /// on `/operator` as the socket's method with its params and answer.
+    pub async fn act_logged(&self, who: &str, act: Act) -> Result<Done, OperatorError> {
+        let (method, params) = (act.method(), crate::socket::act_params(&act));
+        let answer = self.station.act(who, act).await;
+        let logged = match (&answer, self.station.operator()) {
+            (Ok(done), Ok(api)) => Ok(crate::socket::answer_json(api, done.clone())),
+            (Err(e), _) => Err(e.to_string()),
+            (Ok(_), Err(e)) => Err(e.to_string()),
+        };
+        self.actions.log(who, method, &params, &logged);
+        if let Err(e) = &answer {
+            tracing::warn!("station: {who}'s {method} refused: {e}");
+        }
+        answer
+    }
+
+    async fn auth(&self, client: u32, params: &Value) -> Result<Value, OperatorError> {
+        let bad = |message: &str| OperatorError {
+            code: code::INVALID_PARAMS,
             message: message.into(),
         };
         let obj = params
@@ -95,8 +113,8 @@ impl Operating {
             Err(why) => {
                 // Guessing costs a client a second a try, and a few tries in all.
                 tokio::time::sleep(crate::station::access::FAILURE_DELAY).await;
-                Err(CallError {
-                    code: UNAUTHORIZED,
+                Err(OperatorError {
+                    code: code::UNAUTHORIZED,
                     message: format!("unauthorized: {why}"),
                 })
             }
@@ -105,21 +123,21 @@ impl Operating {
 }
 
 /// A request's payload as a params object (empty: `{}`).
-fn params_of(payload: &[u8]) -> Result<Value, CallError> {
-    let text = std::str::from_utf8(payload).map_err(|_| CallError {
-        code: crate::station::INVALID_PARAMS,
+fn params_of(payload: &[u8]) -> Result<Value, OperatorError> {
+    let text = std::str::from_utf8(payload).map_err(|_| OperatorError {
+        code: code::INVALID_PARAMS,
         message: "the request is not UTF-8 JSON".into(),
     })?;
     if text.trim().is_empty() {
         return Ok(json!({}));
     }
-    let v: Value = serde_json::from_str(text).map_err(|e| CallError {
-        code: crate::station::PARSE_ERROR,
+    let v: Value = serde_json::from_str(text).map_err(|e| OperatorError {
+        code: code::PARSE_ERROR,
         message: format!("the request is not JSON: {e}"),
     })?;
     if !v.is_object() {
-        return Err(CallError {
-            code: crate::station::INVALID_PARAMS,
+        return Err(OperatorError {
+            code: code::INVALID_PARAMS,
             message: "the request is a params object".into(),
         });
     }
@@ -148,7 +166,7 @@ pub fn services(operating: &Arc<Operating>) -> Vec<Service> {
                     let client = u32::from(req.client_id());
                     let params = params_of(req.payload())?;
                     let v = op.call(client, method, params).await?;
-                    Ok::<Vec<u8>, CallError>(v.to_string().into_bytes())
+                    Ok::<Vec<u8>, OperatorError>(v.to_string().into_bytes())
                 }
             })
         })
@@ -168,15 +186,15 @@ mod tests {
         );
         assert_eq!(
             params_of(b"[1]").unwrap_err().code,
-            crate::station::INVALID_PARAMS
+            code::INVALID_PARAMS
         );
         assert_eq!(
             params_of(b"{").unwrap_err().code,
-            crate::station::PARSE_ERROR
+            code::PARSE_ERROR
         );
         assert_eq!(
             params_of(&[0xff]).unwrap_err().code,
-            crate::station::INVALID_PARAMS
+            code::INVALID_PARAMS
         );
     }
 }

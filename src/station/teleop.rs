@@ -1,18 +1,20 @@
 //! Teleop (pure, time as an argument): a twist in the shape Foxglove's Teleop panel
 //! publishes (`geometry_msgs/Twist`: `linear.x` forward, `angular.z` turn left) becomes
 //! the active gait's speed (its temporal frequency) and steering (slithering's lateral
-//! offset, conical sidewinding's taper), as `params.set` requests — or, where the gait's
-//! controller steers by a nominal heading (anti-compliant sidewinding), the nominal
-//! heading led `heading_lead_rad` per unit of turn ahead of the body's, as
-//! `controller.heading`; and a **dead-man**: when twists stop coming for `timeout_s`
+//! offset, conical sidewinding's taper), as the operator API's typed acts
+//! (`Act::SetParams`) — or, where the gait's controller declares it steers by a nominal
+//! heading (anti-compliant sidewinding, a heading hold), the nominal heading led
+//! `heading_lead_rad` per unit of turn ahead of the body's (`Act::SetHeading`); and a
+//! **dead-man**: when twists stop coming for `timeout_s`
 //! the gait makes a controlled stop (`gait.stop`: the whole body at rest within
 //! `stop_s`, whatever the blend time), and after `hold_after_s` more the robot holds
 //! (`arm` resumes). The next twist after a stop resumes the gait (`gait.resume`).
 
 use serde::Deserialize;
-use serde_json::{Value, json};
 
-use crate::gait::GaitKind;
+use crate::gait::params::Field;
+use crate::gait::{GaitKind, ParamPatch};
+use crate::operator::Act;
 
 /// The teleop settings (`[foxglove]` `teleop_*`).
 #[derive(Debug, Clone, PartialEq)]
@@ -175,13 +177,6 @@ pub enum Steer {
     NoEstimate,
 }
 
-/// A request teleop wants made.
-#[derive(Debug, Clone, PartialEq)]
-pub struct TeleopRequest {
-    pub method: &'static str,
-    pub params: Value,
-}
-
 /// What teleop is doing.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum TeleopState {
@@ -213,13 +208,13 @@ impl Default for Teleop {
 }
 
 /// The gait's steering parameter and how much of it a unit turn asks for.
-fn steering(gait: GaitKind, c: &TeleopConfig) -> Option<(&'static str, f64, f64)> {
+fn steering(gait: GaitKind, c: &TeleopConfig) -> Option<(Field, f64, f64)> {
     match gait {
         // A positive offset or taper turns the body clockwise going forwards (measured:
         // controllers/steering, controllers/sidewinding/heading): left is negative.
-        GaitKind::Slithering => Some(("offset_lat_rad", -c.offset_rad, c.max_offset_rad)),
+        GaitKind::Slithering => Some((Field::OffsetLat, -c.offset_rad, c.max_offset_rad)),
         // Conical sidewinding is the turning one; the plain gait has no knob.
-        GaitKind::ConicalSidewinding => Some(("taper", -c.taper, c.max_taper)),
+        GaitKind::ConicalSidewinding => Some((Field::Taper, -c.taper, c.max_taper)),
         _ => None,
     }
 }
@@ -239,7 +234,7 @@ impl Teleop {
         twist: Twist,
         steer: Steer,
         c: &TeleopConfig,
-    ) -> Vec<TeleopRequest> {
+    ) -> Vec<Act> {
         let steer_heading = match steer {
             Steer::Heading(h) => Some(h),
             _ => None,
@@ -248,21 +243,23 @@ impl Teleop {
         let mut out = Vec::new();
         if self.state != TeleopState::Driving {
             // A session starts (or restarts after the dead-man): the gait moves again.
-            out.push(TeleopRequest {
-                method: "gait.resume",
-                params: json!({ "within_s": c.stop_s }),
+            out.push(Act::ResumeGait {
+                within_s: c.stop_s,
             });
         }
         self.state = TeleopState::Driving;
         let speed = (twist.forward * c.speed_rad_s).clamp(-c.max_speed_rad_s, c.max_speed_rad_s);
-        let mut params = json!({ "gait": gait, "temporal_freq_rad_s": speed });
+        let mut patch = ParamPatch {
+            temporal_freq_rad_s: Some(speed),
+            ..ParamPatch::default()
+        };
         let mut knob_value = 0.0;
         let knob = steering(gait, c).filter(|_| steer == Steer::Knob);
         if let Some((name, per_unit, max)) = knob {
             // Backing along an arc turns the other way: keep "left" left.
             let dir = if speed < 0.0 { -1.0 } else { 1.0 };
             knob_value = (dir * twist.turn * per_unit).clamp(-max, max);
-            params[name] = json!(knob_value);
+            name.set_in_patch(&mut patch, knob_value);
         }
         let lead = (twist.turn * c.heading_lead_rad)
             .clamp(-c.max_heading_lead_rad, c.max_heading_lead_rad);
@@ -281,19 +278,16 @@ impl Teleop {
         };
         if fresh {
             self.sent = Some((gait, now, now_s));
-            out.push(TeleopRequest {
-                method: "params.set",
-                params,
-            });
+            out.push(Act::SetParams { gait, patch });
         }
         // A turn follows the body (each twist); a straight twist holds the heading once.
         if let Some(h) = steer_heading
             && (lead != 0.0 || fresh)
         {
             let nominal = crate::num::wrap_pi(h + lead);
-            out.push(TeleopRequest {
-                method: "controller.heading",
-                params: json!({ "gait": gait, "heading_rad": nominal }),
+            out.push(Act::SetHeading {
+                gait: Some(gait),
+                heading_rad: Some(nominal),
             });
         }
         out
@@ -301,35 +295,27 @@ impl Teleop {
 
     /// The dead-man at `now_s`: a controlled stop (the body at rest within `stop_s`)
     /// once the twists are `timeout_s` old, hold `hold_after_s` later.
-    pub fn tick(&mut self, now_s: f64, c: &TeleopConfig) -> Option<TeleopRequest> {
+    pub fn tick(&mut self, now_s: f64, c: &TeleopConfig) -> Option<Act> {
         let age = now_s - self.last_twist_s;
         match self.state {
             TeleopState::Driving if age >= c.timeout_s => {
                 self.state = TeleopState::Stopped;
-                Some(TeleopRequest {
-                    method: "gait.stop",
-                    params: json!({ "within_s": c.stop_s }),
+                Some(Act::StopGait {
+                    within_s: c.stop_s,
                 })
             }
             TeleopState::Stopped if age >= c.timeout_s + c.hold_after_s => {
                 self.state = TeleopState::Idle;
-                Some(hold())
+                Some(Act::Hold)
             }
             _ => None,
         }
     }
 
     /// The stop was refused: hold at once.
-    pub fn stop_refused(&mut self) -> TeleopRequest {
+    pub fn stop_refused(&mut self) -> Act {
         self.state = TeleopState::Idle;
-        hold()
-    }
-}
-
-fn hold() -> TeleopRequest {
-    TeleopRequest {
-        method: "hold",
-        params: json!({}),
+        Act::Hold
     }
 }
 

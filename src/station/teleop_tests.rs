@@ -13,11 +13,11 @@ fn a_twist_sets_speed_and_steering_within_limits() {
         .on_twist(0.0, GaitKind::Slithering, twist(0.8, 1.0), Steer::Knob, &c)
         .pop()
         .unwrap();
-    assert_eq!(r.method, "params.set");
-    assert_eq!(r.params["gait"], "slithering");
-    assert!((r.params["temporal_freq_rad_s"].as_f64().unwrap() - 0.8).abs() < 1e-12);
+    assert_eq!(r.method(), "params.set");
+    assert_eq!(params(&r)["gait"], "slithering");
+    assert!((params(&r)["temporal_freq_rad_s"].as_f64().unwrap() - 0.8).abs() < 1e-12);
     assert!(
-        (r.params["offset_lat_rad"].as_f64().unwrap() + 0.2).abs() < 1e-12,
+        (params(&r)["offset_lat_rad"].as_f64().unwrap() + 0.2).abs() < 1e-12,
         "left is negative"
     );
     let r = t
@@ -25,11 +25,11 @@ fn a_twist_sets_speed_and_steering_within_limits() {
         .pop()
         .unwrap();
     assert_eq!(
-        r.params["temporal_freq_rad_s"], 2.0,
+        params(&r)["temporal_freq_rad_s"], 2.0,
         "clamped to max_speed_rad_s"
     );
     assert_eq!(
-        r.params["offset_lat_rad"], 0.25,
+        params(&r)["offset_lat_rad"], 0.25,
         "clamped to max_offset_rad"
     );
     // Backing: the turn keeps its sense.
@@ -37,7 +37,7 @@ fn a_twist_sets_speed_and_steering_within_limits() {
         .on_twist(0.2, GaitKind::Slithering, twist(-1.0, 1.0), Steer::Knob, &c)
         .pop()
         .unwrap();
-    assert!(r.params["offset_lat_rad"].as_f64().unwrap() > 0.0);
+    assert!(params(&r)["offset_lat_rad"].as_f64().unwrap() > 0.0);
     let r = t
         .on_twist(
             0.3,
@@ -48,7 +48,7 @@ fn a_twist_sets_speed_and_steering_within_limits() {
         )
         .pop()
         .unwrap();
-    assert!((r.params["taper"].as_f64().unwrap() + 0.4).abs() < 1e-12);
+    assert!((params(&r)["taper"].as_f64().unwrap() + 0.4).abs() < 1e-12);
     let r = t.on_twist(
         0.35,
         GaitKind::Sidewinding,
@@ -57,7 +57,7 @@ fn a_twist_sets_speed_and_steering_within_limits() {
         &c,
     );
     assert_eq!(
-        r[0].params.as_object().unwrap().len(),
+        params(&r[0]).as_object().unwrap().len(),
         2,
         "plain sidewinding: speed only"
     );
@@ -66,10 +66,10 @@ fn a_twist_sets_speed_and_steering_within_limits() {
         .pop()
         .unwrap();
     assert_eq!(
-        r.params.as_object().unwrap().len(),
+        params(&r).as_object().unwrap().len(),
         2,
         "rolling: no steering: {}",
-        r.params
+        params(&r)
     );
 }
 
@@ -79,7 +79,7 @@ fn a_repeated_twist_is_resent_only_now_and_then() {
     let mut t = Teleop::default();
     let first = t.on_twist(0.0, GaitKind::Slithering, twist(1.0, 0.0), Steer::Knob, &c);
     assert_eq!(
-        first.iter().map(|r| r.method).collect::<Vec<_>>(),
+        first.iter().map(|r| r.method()).collect::<Vec<_>>(),
         ["gait.resume", "params.set"],
         "a session starts by letting the gait move"
     );
@@ -118,7 +118,7 @@ fn the_dead_man_stops_then_holds_and_a_twist_drives_again() {
     assert_eq!(t.tick(0.4, &c), None);
     let r = t.tick(0.5, &c).unwrap();
     assert_eq!(
-        (r.method, r.params["within_s"].as_f64()),
+        (r.method(), params(&r)["within_s"].as_f64()),
         ("gait.stop", Some(c.stop_s)),
         "a controlled stop, not a speed change blended over the blend time"
     );
@@ -126,20 +126,20 @@ fn the_dead_man_stops_then_holds_and_a_twist_drives_again() {
     // A twist within the stop resumes at once; the speed it asks for is live.
     let r = t.on_twist(0.6, GaitKind::Slithering, twist(1.0, 0.0), Steer::Knob, &c);
     assert_eq!(
-        r.iter().map(|r| r.method).collect::<Vec<_>>(),
+        r.iter().map(|r| r.method()).collect::<Vec<_>>(),
         ["gait.resume"]
     );
-    assert_eq!(t.tick(1.1, &c).unwrap().method, "gait.stop");
+    assert_eq!(t.tick(1.1, &c).unwrap().method(), "gait.stop");
     assert_eq!(t.tick(2.0, &c), None);
     assert_eq!(t.tick(3.0, &c), None);
     let r = t.tick(3.1, &c).unwrap();
-    assert_eq!(r.method, "hold");
+    assert_eq!(r.method(), "hold");
     assert_eq!(t.state(), TeleopState::Idle);
     assert_eq!(t.tick(9.0, &c), None, "holds once");
-    assert_eq!(t.stop_refused().method, "hold");
+    assert_eq!(t.stop_refused().method(), "hold");
     let r = t.on_twist(10.0, GaitKind::Slithering, twist(0.5, 0.0), Steer::Knob, &c);
     assert_eq!(
-        r.iter().map(|r| r.method).collect::<Vec<_>>(),
+        r.iter().map(|r| r.method()).collect::<Vec<_>>(),
         ["gait.resume", "params.set"]
     );
 }
@@ -156,13 +156,13 @@ fn where_the_controller_steers_by_a_heading_the_turn_leads_it() {
         &c,
     );
     assert_eq!(r.len(), 3, "{r:?}");
-    assert_eq!(r[0].method, "gait.resume");
+    assert_eq!(r[0].method(), "gait.resume");
     assert!(
-        r[1].params.get("taper").is_none(),
+        params(&r[1]).get("taper").is_none(),
         "no taper: the controller steers"
     );
-    assert_eq!(r[2].method, "controller.heading");
-    let h = r[2].params["heading_rad"].as_f64().unwrap();
+    assert_eq!(r[2].method(), "controller.heading");
+    let h = params(&r[2])["heading_rad"].as_f64().unwrap();
     assert!(
         (h - crate::num::wrap_pi(3.0 + c.heading_lead_rad)).abs() < 1e-12,
         "{h}"
@@ -176,7 +176,7 @@ fn where_the_controller_steers_by_a_heading_the_turn_leads_it() {
         &c,
     );
     assert_eq!(
-        r.iter().map(|r| r.method).collect::<Vec<_>>(),
+        r.iter().map(|r| r.method()).collect::<Vec<_>>(),
         ["controller.heading"]
     );
     // Straight again: the heading is held where the body is, once.
@@ -188,7 +188,7 @@ fn where_the_controller_steers_by_a_heading_the_turn_leads_it() {
         &c,
     );
     assert_eq!(r.len(), 2);
-    assert!((r[1].params["heading_rad"].as_f64().unwrap() - 3.1).abs() < 1e-12);
+    assert!((params(&r[1])["heading_rad"].as_f64().unwrap() - 3.1).abs() < 1e-12);
     assert!(
         t.on_twist(
             0.3,
@@ -253,4 +253,9 @@ fn bad_settings_are_refused() {
     ] {
         assert!(bad.check().is_err(), "{bad:?}");
     }
+}
+
+/// An act's params as the socket's method takes them.
+fn params(a: &crate::operator::Act) -> serde_json::Value {
+    crate::socket::act_params(a)
 }

@@ -14,30 +14,18 @@
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
-use serde_json::{Value, json};
-
-use super::api::{Params, RpcError, code};
+use super::act::Done;
 use super::controllers;
+use super::error::{OperatorError, code};
 use super::shared::Shared;
 use crate::controller_interface::Selection;
-use crate::gait::GaitKind;
+use crate::gait::{GaitKind, ParamPatch};
 use crate::navigation::navigator::{Decision, NavView, Navigator, NavigatorConfig};
 use crate::navigation::state::{NavigatorState, StopReason};
 use crate::rt::controller_slots::Engagement;
 use crate::rt::messages::LoopRequest;
 use crate::rt::telemetry::Snapshot;
 use crate::safety::failsafe::Mode;
-
-/// The methods after which the operator drives: navigation stops first.
-pub const TAKES_OVER: [&str; 7] = [
-    "gait.set",
-    "controller.set",
-    "controller.heading",
-    "controller.calibrate",
-    "hold",
-    "limp",
-    "estop",
-];
 
 /// How often the runner looks at the loop.
 const STEP: Duration = Duration::from_millis(50);
@@ -84,29 +72,8 @@ pub(crate) fn operator_takes_over(shared: &Arc<Shared>) {
     }
 }
 
-/// `navigate`: `{"heading_rad": h, "config": {..}}` starts (or restarts towards a new
-/// direction), `{"off": true}` stops.
-pub(crate) async fn navigate(shared: &Arc<Shared>, mut p: Params) -> Result<Value, RpcError> {
-    let lim = 2.0 * std::f64::consts::PI;
-    let heading = p.take_f64_in("heading_rad", -lim, lim)?;
-    let off = match p.take_json("off")? {
-        None | Some(Value::Bool(false)) => false,
-        Some(Value::Bool(true)) => true,
-        Some(_) => return Err(RpcError::invalid_params("`off` must be true or false")),
-    };
-    let config = p.take_json("config")?;
-    p.finish(&["heading_rad", "off", "config"])?;
-    match (heading, off) {
-        (None, true) if config.is_none() => stop(shared).await,
-        (Some(h), false) => start(shared, h, config).await,
-        _ => Err(RpcError::invalid_params(
-            "give `heading_rad` (the direction of travel, rad, in the pose estimate's world; \
-             optionally `config`) or `off: true`",
-        )),
-    }
-}
-
-async fn stop(shared: &Arc<Shared>) -> Result<Value, RpcError> {
+/// Stops navigating; whether it was.
+pub(crate) async fn stop(shared: &Arc<Shared>) -> Result<Done, OperatorError> {
     let was = shared.navigation.abort();
     let mut state = shared.telemetry.latest().navigator;
     if was || state.active {
@@ -114,31 +81,23 @@ async fn stop(shared: &Arc<Shared>) -> Result<Value, RpcError> {
         state.stopped = Some(StopReason::Off);
         report(shared, state).await?;
     }
-    Ok(json!({ "navigating": false, "was_navigating": was }))
+    Ok(Done::NavigationOff {
+        was_navigating: was,
+    })
 }
 
-async fn start(
+/// Starts navigating towards `travel_rad` (or restarts towards a new direction).
+pub(crate) async fn start(
     shared: &Arc<Shared>,
     travel_rad: f64,
-    config: Option<Value>,
-) -> Result<Value, RpcError> {
-    let config: NavigatorConfig = match config {
-        None => NavigatorConfig::DEFAULT,
-        // serde would read a struct from an array too (`[]`: every default).
-        Some(v) if !v.is_object() => {
-            return Err(RpcError::invalid_params(
-                "config: an object of the navigator's settings, e.g. {\"slither_max_s\": 60}",
-            ));
-        }
-        Some(v) => serde_json::from_value(v)
-            .map_err(|e| RpcError::invalid_params(format!("config: {e}")))?,
-    };
+    config: NavigatorConfig,
+) -> Result<Done, OperatorError> {
     config
         .check()
-        .map_err(|e| RpcError::invalid_params(format!("config: {e}")))?;
+        .map_err(|e| OperatorError::invalid_params(format!("config: {e}")))?;
     let s = shared.telemetry.latest();
     if s.mode != Mode::Running {
-        return Err(RpcError::new(
+        return Err(OperatorError::new(
             code::REFUSED,
             format!(
                 "refused: the loop is not running a gait (mode {}): arm it or set a gait first",
@@ -150,7 +109,7 @@ async fn start(
         ));
     }
     if !s.body.valid {
-        return Err(RpcError::new(
+        return Err(OperatorError::new(
             code::REFUSED,
             "refused: the pose estimate is not valid (docs/estimation.md), and the navigator \
              steers by it: wait until `status.body.valid` is true",
@@ -162,11 +121,14 @@ async fn start(
     report(shared, NavigatorState::of(&nav, true, None)).await?;
     let task = tokio::spawn(run(shared.clone(), nav));
     shared.navigation.set(task.abort_handle());
-    Ok(json!({ "navigating": true, "travel_rad": travel, "config": config }))
+    Ok(Done::Navigating {
+        travel_rad: travel,
+        config,
+    })
 }
 
 /// Tells the loop what the navigator does.
-async fn report(shared: &Shared, state: NavigatorState) -> Result<(), RpcError> {
+async fn report(shared: &Shared, state: NavigatorState) -> Result<(), OperatorError> {
     shared
         .router
         .call(LoopRequest::Navigation { state })
@@ -242,12 +204,13 @@ fn drives(s: &Snapshot, gait: GaitKind) -> bool {
 }
 
 /// The decision's controller (when another is installed for its gait) and gait.
-async fn carry_out(shared: &Shared, s: &Snapshot, d: &Decision) -> Result<(), RpcError> {
+async fn carry_out(shared: &Shared, s: &Snapshot, d: &Decision) -> Result<(), OperatorError> {
     let gait = d.choice.gait();
     let name = d.choice.controller();
     let installed = shared.catalog.get(s.controller.installed[gait.index()]);
     if installed.is_none_or(|i| i.preset != name && i.controller != name) {
-        controllers::set(shared, gait, Selection::named(name)).await?;
+        let sel = Selection::named(name);
+        controllers::set(shared, gait, &sel, ParamPatch::default()).await?;
     }
     if s.gait != gait {
         shared.router.call(LoopRequest::SetGait { gait }).await?;

@@ -3,31 +3,17 @@
 //! dead-man), goes away, or sends no driving request for the lease's timeout; another
 //! client's driving requests are refused meanwhile (`DRIVEN_BY_OTHER`, naming the
 //! driver) until it takes over explicitly (`take_over`). Socket connections, Foxglove
-//! clients (through `socket::operator`) and any later input meet the same lease.
+//! clients and any later input meet the same lease: it is the operator API's
+//! ([`crate::operator::Act::drives`], [`crate::operator::Act::stops`]).
 //! Stops are never refused: whoever sees the robot may stop it.
 
 use std::sync::{Mutex, MutexGuard, PoisonError};
 use std::time::{Duration, Instant};
 
-use super::api::{RpcError, code};
+use super::error::{OperatorError, code};
 
 /// How long a driver keeps the drive without driving, unless configured.
 pub const DEFAULT_DRIVER_TIMEOUT: Duration = Duration::from_secs(5);
-
-/// Methods that drive: they need the drive (and claim it when it is free).
-pub const DRIVING: [&str; 8] = [
-    "gait.set",
-    "gait.resume",
-    "params.set",
-    "controller.set",
-    "controller.heading",
-    "controller.calibrate",
-    "navigate",
-    "arm",
-];
-
-/// Methods that stop the robot: anyone may, and the drive is free afterwards.
-pub const STOPPING: [&str; 4] = ["hold", "limp", "estop", "gait.stop"];
 
 #[derive(Debug, Clone)]
 struct Holder {
@@ -67,12 +53,12 @@ impl DriverLease {
 
     /// `who` drives at `now`: it holds the drive, or takes a free or lapsed one;
     /// refused while another client holds it.
-    pub fn claim(&self, who: &str, now: Instant) -> Result<(), RpcError> {
+    pub fn claim(&self, who: &str, now: Instant) -> Result<(), OperatorError> {
         let mut h = self.lock();
         match h.as_mut() {
             Some(held) if held.who != who && now.duration_since(held.last) < self.timeout => {
                 let left = self.timeout - now.duration_since(held.last);
-                Err(RpcError::new(
+                Err(OperatorError::new(
                     code::DRIVEN_BY_OTHER,
                     format!(
                         "refused: {} is driving (its drive lapses {:.1} s after its last \

@@ -19,7 +19,7 @@ use std::time::Duration;
 use crossbeam_channel::{Receiver, RecvTimeoutError, Sender, TrySendError};
 use tokio::sync::oneshot;
 
-use super::api::{RpcError, code};
+use super::error::{OperatorError, code};
 use crate::rt::controller_slots::Installed;
 use crate::rt::messages::{Ack, Continuity, Envelope, LoopRequest, LoopResult, Refusal, Rejection};
 
@@ -113,7 +113,7 @@ impl AckRouter {
 
     /// Send `request` to the loop and wait for its ack (at most `ack_timeout`); what
     /// became of the gait's controller, for a change of its parameters or controller.
-    pub(crate) async fn call(&self, request: LoopRequest) -> Result<Option<Continuity>, RpcError> {
+    pub(crate) async fn call(&self, request: LoopRequest) -> Result<Option<Continuity>, OperatorError> {
         self.call_with(request, None).await
     }
 
@@ -123,7 +123,7 @@ impl AckRouter {
         &self,
         request: LoopRequest,
         controller: Option<Installed>,
-    ) -> Result<Option<Continuity>, RpcError> {
+    ) -> Result<Option<Continuity>, OperatorError> {
         let ticket = self.next_ticket.fetch_add(1, Ordering::Relaxed);
         let (tx, rx) = oneshot::channel();
         lock(&self.pending).insert(ticket, tx);
@@ -151,12 +151,12 @@ impl AckRouter {
         }
         match tokio::time::timeout(self.ack_timeout, rx).await {
             Ok(Ok(Ok(continuity))) => Ok(continuity),
-            Ok(Ok(Err(rejection))) => Err(RpcError::new(
+            Ok(Ok(Err(rejection))) => Err(OperatorError::new(
                 code::REFUSED,
                 format!("refused by the loop: {rejection}"),
             )),
             Ok(Err(_)) => Err(not_running()),
-            Err(_) => Err(RpcError::new(
+            Err(_) => Err(OperatorError::new(
                 code::LOOP_TIMEOUT,
                 format!(
                     "the loop did not answer within {} ms",
@@ -182,15 +182,15 @@ impl Drop for AckRouter {
     }
 }
 
-fn busy() -> RpcError {
-    RpcError::new(
+fn busy() -> OperatorError {
+    OperatorError::new(
         code::BUSY,
         "busy: the loop's request queue is full; try again",
     )
 }
 
-fn not_running() -> RpcError {
-    RpcError::new(
+fn not_running() -> OperatorError {
+    OperatorError::new(
         code::REFUSED,
         format!(
             "refused: the loop is not running ({})",
