@@ -130,7 +130,7 @@ async fn stop_navigation(op: &Operating, client: &Client) {
 /// any).
 async fn send(op: &Operating, who: &str, act: Act, client: Option<&Client>) -> bool {
     let method = act.method();
-    let answer = op.act_logged(who, act).await;
+    let answer = op.act_logged(who, "teleop ", act).await;
     if let (Err(e), Some(c)) = (&answer, client) {
         teleop_status(c, format!("teleop {method} refused: {e}"));
     }

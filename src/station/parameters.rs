@@ -275,7 +275,7 @@ impl ParameterHandler for Parameters {
                         }
                     };
                     let answer = match act_for(&l, &p.name, json_of(v)) {
-                        Ok(act) => op.act_logged(&who, act).await.map_err(|e| e.to_string()),
+                        Ok(act) => op.act_logged(&who, "", act).await.map_err(|e| e.to_string()),
                         Err(e) => Err(e),
                     };
                     if let Err(e) = answer {

@@ -75,8 +75,14 @@ impl Operating {
     }
 
     /// Carries a typed `act` out as `who` (teleop, the Parameters panel) and records it
-    /// on `/operator` as the socket's method with its params and answer.
-    pub async fn act_logged(&self, who: &str, act: Act) -> Result<Done, OperatorError> {
+    /// on `/operator` as the socket's method with its params and answer; a refusal is
+    /// logged, `what` naming where it came from ("teleop ", or "").
+    pub async fn act_logged(
+        &self,
+        who: &str,
+        what: &str,
+        act: Act,
+    ) -> Result<Done, OperatorError> {
         let (method, params) = (act.method(), crate::socket::act_params(&act));
         let answer = self.station.act(who, act).await;
         let logged = match (&answer, self.station.operator()) {
@@ -86,7 +92,7 @@ impl Operating {
         };
         self.actions.log(who, method, &params, &logged);
         if let Err(e) = &answer {
-            tracing::warn!("station: {who}'s {method} refused: {e}");
+            tracing::warn!("station: {who}'s {what}{method} refused: {e}");
         }
         answer
     }
