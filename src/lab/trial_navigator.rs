@@ -1,16 +1,19 @@
-//! Runs the navigator (`navigation::navigator`) in a lab trial as the daemon's control
-//! side does: every sample it reads the loop, and carries a decision out as an
-//! operator's requests through the loop's queue (`controller.set` with the controller
-//! built off the loop, `gait.set`, then `controller.heading` once the controller drives).
+//! Runs the navigator in a lab trial as the daemon does: the same runner
+//! (`operator::navigator_runner`), its typed acts carried out on the trial's loop queue
+//! (the controller built off the loop, `SetController`, `SetGait`, the heading once the
+//! controller drives), and the navigator's state reported at each decision.
 
 use crossbeam_channel::Sender;
 
 use super::LabError;
-use super::aim::PendingHeading;
-use super::compared::LabController;
+use crate::controller_interface::ControllerCommand;
+use crate::controller_interface::registry;
+use crate::controllers::REGISTRY;
 use crate::gait::{BodyLayout, GaitTable};
 use crate::navigation::navigator::{Choice, NavView, Navigator, NavigatorConfig};
 use crate::navigation::state::NavigatorState;
+use crate::operator::Act;
+use crate::operator::navigator_runner::{NavigatorRunner, RunnerView};
 use crate::rt::control_loop::ControlLoop;
 use crate::rt::controller_slots::Installed;
 use crate::rt::messages::{Envelope, LoopRequest};
@@ -23,16 +26,13 @@ pub const CHOICE_SIGNAL: &str = "navigator_choice";
 /// Tickets of the navigator's requests (apart from the trial's own).
 const TICKETS: u64 = 3 << 32;
 
-/// The navigator and what it has asked the loop for.
+/// The runner and what it needs to carry its acts out.
 pub struct TrialNavigator {
-    nav: Navigator,
+    runner: NavigatorRunner,
     layout: BodyLayout,
     table: GaitTable,
-    /// The choice whose controller is installed (at the start: the trial's controller).
-    installed: Choice,
-    /// A heading to send once its gait's controller drives.
-    pending_heading: PendingHeading,
     ticket: u64,
+    acts: Vec<Act>,
 }
 
 impl TrialNavigator {
@@ -45,18 +45,21 @@ impl TrialNavigator {
         table: GaitTable,
         first: Choice,
     ) -> Self {
+        let nav = Navigator::new(config, travel_rad);
+        let runner = NavigatorRunner::new(nav, |gait, name| {
+            gait == first.gait() && name == first.controller()
+        });
         Self {
-            nav: Navigator::new(config, travel_rad),
+            runner,
             layout,
             table,
-            installed: first,
-            pending_heading: PendingHeading::default(),
             ticket: TICKETS,
+            acts: Vec::new(),
         }
     }
 
     pub fn switches(&self) -> u32 {
-        self.nav.switches()
+        self.runner.navigator().switches()
     }
 
     fn send(&mut self, tx: &Sender<Envelope>, request: LoopRequest, c: Option<Installed>) {
@@ -77,36 +80,61 @@ impl TrialNavigator {
         lp: &ControlLoop,
         tx: &Sender<Envelope>,
     ) -> Result<(), LabError> {
-        if self
-            .pending_heading
-            .send_when_engaged(lp, tx, self.ticket + 1)
-        {
-            self.ticket += 1;
-        }
-        let view = NavView {
-            running: lp.mode() == Mode::Running,
-            estimate_valid: lp.body().valid,
-            heading_rad: lp.body().heading_rad,
-            progress: lp.progress(),
+        let view = RunnerView {
+            t_s,
+            nav: NavView {
+                running: lp.mode() == Mode::Running,
+                estimate_valid: lp.body().valid,
+                heading_rad: lp.body().heading_rad,
+                progress: lp.progress(),
+            },
+            gait: lp.gait(),
+            driving: lp.controllers().engaged(),
         };
-        let Some(d) = self.nav.step(t_s, &view) else {
-            return Ok(());
-        };
-        let gait = d.choice.gait();
-        if d.choice.controller() != self.installed.controller() {
-            let c = LabController::named(gait, d.choice.controller())?;
-            let built = c.build(&self.layout, self.table.get(gait))?;
-            let installed = Installed {
-                id: built.info.id,
-                controller: built.controller,
-            };
-            self.send(tx, LoopRequest::SetController { gait }, Some(installed));
-            self.send(tx, LoopRequest::SetGait { gait }, None);
-            self.installed = d.choice;
+        let mut acts = std::mem::take(&mut self.acts);
+        acts.clear();
+        let decided = self.runner.step(&view, &mut acts);
+        for act in acts.drain(..) {
+            self.carry_out(act, tx)?;
         }
-        self.pending_heading = PendingHeading::new(gait, Some(d.heading_rad));
-        let state = NavigatorState::of(&self.nav, true, None);
-        self.send(tx, LoopRequest::Navigation { state }, None);
+        self.acts = acts;
+        if decided {
+            let state: NavigatorState = self.runner.state(true);
+            self.send(tx, LoopRequest::Navigation { state }, None);
+        }
+        Ok(())
+    }
+
+    /// One of the runner's acts, on the trial's queue.
+    fn carry_out(&mut self, act: Act, tx: &Sender<Envelope>) -> Result<(), LabError> {
+        match act {
+            Act::SetController {
+                gait, selection, ..
+            } => {
+                let ctx = registry::BuildContext {
+                    gait,
+                    layout: &self.layout,
+                    params: self.table.get(gait),
+                };
+                let built = registry::build(REGISTRY, &selection, &ctx).map_err(|e| {
+                    LabError::BadValue(format!("controller {}: {e}", selection.controller))
+                })?;
+                let installed = Installed {
+                    id: built.info.id,
+                    controller: built.controller,
+                };
+                self.send(tx, LoopRequest::SetController { gait }, Some(installed));
+            }
+            Act::SetGait { gait } => self.send(tx, LoopRequest::SetGait { gait }, None),
+            Act::SetHeading {
+                gait: Some(gait),
+                heading_rad,
+            } => {
+                let command = ControllerCommand::SetHeading { heading_rad };
+                self.send(tx, LoopRequest::ControllerCommand { gait, command }, None);
+            }
+            other => unreachable!("the runner makes no {}", other.method()),
+        }
         Ok(())
     }
 }

@@ -22,7 +22,9 @@ pub mod act;
 pub(crate) mod controllers;
 pub mod driver;
 pub mod error;
+pub mod handle;
 pub(crate) mod navigate;
+pub mod navigator_runner;
 pub(crate) mod router;
 pub(crate) mod shared;
 
@@ -37,7 +39,7 @@ use crate::controller_interface::catalog::{Catalog, ControllerInfo};
 use crate::gait::{BodyLayout, GaitKind};
 use crate::rt::messages::LoopRequest;
 use crate::rt::telemetry::Snapshot;
-use crate::socket::{DaemonInfo, LoopHandle, RecordView};
+use handle::{DaemonInfo, LoopHandle, RecordView};
 use router::AckRouter;
 use shared::Shared;
 

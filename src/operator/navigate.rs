@@ -14,13 +14,13 @@
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
-use super::act::Done;
+use super::act::{Act, Done};
+use super::navigator_runner::{NavigatorRunner, RunnerView};
 use super::controllers;
 use super::error::{OperatorError, code};
 use super::shared::Shared;
-use crate::controller_interface::Selection;
-use crate::gait::{GaitKind, ParamPatch};
-use crate::navigation::navigator::{Decision, NavView, Navigator, NavigatorConfig};
+use crate::gait::GaitKind;
+use crate::navigation::navigator::{NavView, Navigator, NavigatorConfig};
 use crate::navigation::state::{NavigatorState, StopReason};
 use crate::rt::controller_slots::Engagement;
 use crate::rt::messages::LoopRequest;
@@ -136,18 +136,28 @@ async fn report(shared: &Shared, state: NavigatorState) -> Result<(), OperatorEr
         .map(|_| ())
 }
 
-async fn run(shared: Arc<Shared>, mut nav: Navigator) {
-    let why = drive(&shared, &mut nav).await;
+async fn run(shared: Arc<Shared>, nav: Navigator) {
+    let catalog = shared.catalog.clone();
+    let installed = shared.telemetry.latest().controller.installed;
+    let mut runner = NavigatorRunner::new(nav, |gait, name| {
+        catalog
+            .get(installed[gait.index()])
+            .is_some_and(|i| i.preset == name || i.controller == name)
+    });
+    let why = drive(&shared, &mut runner).await;
     tracing::info!(reason = ?why, "navigation stopped: {}", why.explain());
-    let _ = report(&shared, NavigatorState::of(&nav, false, Some(why))).await;
+    let state = NavigatorState::of(runner.navigator(), false, Some(why));
+    let _ = report(&shared, state).await;
 }
 
-/// Steps the navigator until something stops it; returns why.
-async fn drive(shared: &Shared, nav: &mut Navigator) -> StopReason {
+/// Steps the runner until something stops it; returns why. Its acts are carried out
+/// as the operator API carries out anyone's (the drive lease aside: the navigator
+/// drives for whoever started it, and stops when another operator acts).
+async fn drive(shared: &Shared, runner: &mut NavigatorRunner) -> StopReason {
     let mut tick = tokio::time::interval(STEP);
     tick.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
     let mut invalid_since: Option<f64> = None;
-    let mut pending: Option<(GaitKind, f64)> = None;
+    let mut acts = Vec::new();
     loop {
         tick.tick().await;
         let s = shared.telemetry.latest();
@@ -162,58 +172,52 @@ async fn drive(shared: &Shared, nav: &mut Navigator) -> StopReason {
             continue;
         }
         invalid_since = None;
-        if let Some((gait, h)) = pending
-            && drives(&s, gait)
-        {
-            pending = None;
-            if controllers::set_heading(shared, Some(gait), Some(h))
-                .await
-                .is_err()
-            {
+        let view = RunnerView {
+            t_s: s.t_s,
+            nav: NavView {
+                running: true,
+                estimate_valid: true,
+                heading_rad: s.body.heading_rad,
+                progress: s.progress,
+            },
+            gait: s.gait,
+            driving: driving(&s),
+        };
+        acts.clear();
+        let decided = runner.step(&view, &mut acts);
+        for act in acts.drain(..) {
+            if carry_out(shared, act).await.is_err() {
                 return StopReason::Refused;
             }
         }
-        let view = NavView {
-            running: true,
-            estimate_valid: true,
-            heading_rad: s.body.heading_rad,
-            progress: s.progress,
-        };
-        let Some(d) = nav.step(s.t_s, &view) else {
-            continue;
-        };
-        if carry_out(shared, &s, &d).await.is_err() {
-            return StopReason::Refused;
-        }
-        pending = Some((d.choice.gait(), d.heading_rad));
-        if report(shared, NavigatorState::of(nav, true, None))
-            .await
-            .is_err()
-        {
+        if decided && report(shared, runner.state(true)).await.is_err() {
             return StopReason::Refused;
         }
     }
 }
 
-/// Whether `gait`'s controller drives the joints now.
-fn drives(s: &Snapshot, gait: GaitKind) -> bool {
+/// The gait whose controller drives the joints now.
+fn driving(s: &Snapshot) -> Option<GaitKind> {
     let c = &s.controller;
-    s.gait == gait
-        && c.active_id == c.installed[gait.index()]
-        && c.engagement == Engagement::Engaged
+    (c.active_id == c.installed[s.gait.index()] && c.engagement == Engagement::Engaged)
+        .then_some(s.gait)
 }
 
-/// The decision's controller (when another is installed for its gait) and gait.
-async fn carry_out(shared: &Shared, s: &Snapshot, d: &Decision) -> Result<(), OperatorError> {
-    let gait = d.choice.gait();
-    let name = d.choice.controller();
-    let installed = shared.catalog.get(s.controller.installed[gait.index()]);
-    if installed.is_none_or(|i| i.preset != name && i.controller != name) {
-        let sel = Selection::named(name);
-        controllers::set(shared, gait, &sel, ParamPatch::default()).await?;
+/// One of the runner's acts, carried out without the operator's drive lease.
+async fn carry_out(shared: &Shared, act: Act) -> Result<Done, OperatorError> {
+    match act {
+        Act::SetController {
+            gait,
+            selection,
+            patch,
+        } => controllers::set(shared, gait, &selection, patch).await,
+        Act::SetHeading { gait, heading_rad } => {
+            controllers::set_heading(shared, gait, heading_rad).await
+        }
+        Act::SetGait { gait } => {
+            shared.router.call(LoopRequest::SetGait { gait }).await?;
+            Ok(Done::Gait { gait })
+        }
+        other => unreachable!("the runner makes no {}", other.method()),
     }
-    if s.gait != gait {
-        shared.router.call(LoopRequest::SetGait { gait }).await?;
-    }
-    Ok(())
 }

@@ -6,7 +6,7 @@ use crate::controller_interface::catalog::Catalog;
 use crate::gait::BodyLayout;
 use crate::rt::controller_slots::Installed;
 use crate::rt::telemetry::TelemetryReader;
-use crate::socket::{DaemonInfo, RecordView};
+use super::handle::{DaemonInfo, RecordView};
 
 pub(crate) struct Shared {
     pub(crate) router: AckRouter,

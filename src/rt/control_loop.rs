@@ -208,6 +208,11 @@ impl ControlLoop {
     }
 
     /// The controller slots (which one drives, its last report).
+    /// The gait the selector runs or blends into.
+    pub fn gait(&self) -> crate::gait::GaitKind {
+        self.p.selector.active()
+    }
+
     pub fn controllers(&self) -> &ControllerSlots {
         &self.slots
     }
