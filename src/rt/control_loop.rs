@@ -32,7 +32,7 @@ use crate::safety::failsafe::{Event, Failsafe, Mode, Output};
 pub const MAX_REQUESTS_PER_CYCLE: usize = 8;
 
 /// The ack channel for a request channel of `requests`: a full queue and one cycle's
-/// answers. The server keeps no more requests in flight than this (`socket::router`),
+/// answers. The server keeps no more requests in flight than this (`operator::router`),
 /// so the loop's `try_send` of an answer never finds it full; while the server takes
 /// the answers within a cycle, only a full queue makes it answer "busy".
 pub const fn ack_capacity(requests: usize) -> usize {
