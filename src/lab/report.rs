@@ -8,8 +8,9 @@ use std::path::{Path, PathBuf};
 
 use super::LabError;
 use super::experiment::Experiment;
+pub use super::experiment::SummaryContext;
+use super::experiment::{TrialResult, controller_names};
 use super::odometry_check::{OdometryCheck, odometry_markdown};
-use super::runner::{TrialResult, controller_names};
 use super::strain::{Strain, StrainSummary};
 use super::stuck_check::{StuckCheck, stuck_markdown};
 
@@ -57,23 +58,6 @@ pub(crate) fn csv_field(s: &str) -> String {
     } else {
         s.to_owned()
     }
-}
-
-/// What the summary says about how the results were made.
-#[derive(Debug, Clone, Default, serde::Serialize, serde::Deserialize)]
-pub struct SummaryContext {
-    /// The exact command line.
-    pub command: String,
-    pub layouts: Vec<String>,
-    pub starts: usize,
-    /// Trials per start (differing in their sensor-noise seed).
-    pub repeats: usize,
-    pub limit_s: f64,
-    /// PNG files written beside the summary (names).
-    pub plots: Vec<String>,
-    /// Controllers calibrated on open ground before the trials: label and what was
-    /// measured (JSON).
-    pub calibrations: Vec<(String, String)>,
 }
 
 /// The calibrations section of a summary (empty when there were none).

@@ -12,13 +12,13 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use super::LabError;
 use super::compared::LabController;
 use super::experiment::Experiment;
+pub use super::experiment::{TrialResult, controller_names};
 use super::file_stem;
 use super::layout::{Layout, noise_seed};
 use super::odometry_check::OdometryCheck;
 use super::shard::Shard;
-use super::strain::Strain;
 use super::stuck_check::StuckCheck;
-use super::trial::{TrialConfig, TrialRecord, TrialRecording, run_trial};
+use super::trial::{TrialConfig, TrialRecording, run_trial};
 use crate::emu::world::WorldSpec;
 use crate::emu::world::scenario::MODULE_LENGTH_M;
 use crate::gait::{BodyLayout, Plane};
@@ -50,39 +50,6 @@ pub struct PlannedWorld<G> {
     pub goal: G,
     /// Sensor-noise seed, shared by every controller on this world.
     pub noise_seed: u64,
-}
-
-/// One finished trial of experiment `E`.
-#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
-#[serde(bound = "")]
-pub struct TrialResult<E: Experiment> {
-    pub controller: String,
-    pub layout: String,
-    pub start: usize,
-    pub repeat: usize,
-    pub metrics: E::Metrics,
-    /// What the trial asked of the actuators (every experiment reports it).
-    pub strain: Strain,
-    /// How the loop's stuck detector did against the truth (every experiment).
-    #[serde(default)]
-    pub stuck: StuckCheck,
-    /// How the estimator's contact odometry did against the truth (every experiment).
-    #[serde(default)]
-    pub odometry: OdometryCheck,
-    /// The world and the full record, kept for the trial the report plots (each
-    /// controller's first layout and start).
-    pub plotted: Option<(Arc<WorldSpec>, E::Goal, TrialRecord)>,
-}
-
-/// The controllers of `results`, in the order they first appear.
-pub fn controller_names<E: Experiment>(results: &[TrialResult<E>]) -> Vec<&str> {
-    let mut names: Vec<&str> = Vec::new();
-    for r in results {
-        if !names.contains(&r.controller.as_str()) {
-            names.push(&r.controller);
-        }
-    }
-    names
 }
 
 /// How to run.

@@ -25,7 +25,7 @@ use crate::emu::world::scenario::{FrictionSpec, WorldScenario};
 use crate::gait::GaitKind;
 use crate::lab::LabError;
 use crate::lab::aim::Aim;
-use crate::lab::experiment::{Defaults, Experiment, Goal};
+use crate::lab::experiment::{About, Defaults, Experiment, Goal};
 use crate::lab::layout::Layout;
 use crate::lab::pegboard::board::{Board, board_region};
 use crate::lab::report::SummaryContext;
@@ -146,32 +146,22 @@ impl Experiment for Crossing {
     type Metrics = CrossingMetrics;
     type Args = CrossingArgs;
 
-    fn name(&self) -> &'static str {
-        "crossing"
-    }
-    fn summary(&self) -> &'static str {
-        "getting across boards of obstacles from inside and the edge, any gait (issue 28)"
-    }
-    fn title(&self) -> &'static str {
-        "Crossing boards of obstacles (issue 28)"
-    }
-    fn gait(&self) -> GaitKind {
-        GaitKind::Slithering
-    }
-    fn controllers(&self) -> &'static [&'static str] {
-        CONTROLLERS
-    }
-    fn any_gait(&self) -> bool {
-        true
-    }
-    fn variant_base(&self) -> &'static str {
-        crate::lab::compared::VARIANT_BASE
-    }
-    fn defaults(&self) -> Defaults {
-        Defaults {
-            starts: StartKind::ALL.len(),
-            repeats: 1,
-            seconds: 180.0,
+    fn about(&self) -> About {
+        About {
+            name: "crossing",
+            summary: "getting across boards of obstacles from inside and the edge, any gait (issue 28)",
+            title: "Crossing boards of obstacles (issue 28)",
+            gait: GaitKind::Slithering,
+            controllers: CONTROLLERS,
+            any_gait: true,
+            variant_base: crate::lab::compared::VARIANT_BASE,
+            defaults: {
+                Defaults {
+                    starts: StartKind::ALL.len(),
+                    repeats: 1,
+                    seconds: 180.0,
+                }
+            },
         }
     }
 

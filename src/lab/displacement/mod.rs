@@ -17,7 +17,7 @@ use crate::emu::world::WorldSpec;
 use crate::emu::world::scenario::MODULE_LENGTH_M;
 use crate::gait::{GaitKind, GaitParams};
 use crate::lab::LabError;
-use crate::lab::experiment::{Defaults, Experiment};
+use crate::lab::experiment::{About, Defaults, Experiment};
 use crate::lab::file_stem;
 use crate::lab::layout::Layout;
 use crate::lab::protocol::{self, Protocol};
@@ -121,51 +121,39 @@ impl Experiment for Displacement {
     type Metrics = DisplacementMetrics;
     type Args = DisplacementArgs;
 
-    fn name(&self) -> &'static str {
-        match self.terrain {
-            Terrain::PegArray => "peg-array",
-            Terrain::RockPile => "rock-pile",
-        }
-    }
-    fn summary(&self) -> &'static str {
-        match self.terrain {
-            Terrain::PegArray => {
-                "directional compliance on a planar peg array (SPEC §8): body lengths per minute"
-            }
-            Terrain::RockPile => {
-                "directional compliance in 3-D over a rock pile (SPEC §8): body lengths per minute"
-            }
-        }
-    }
-    fn title(&self) -> &'static str {
-        match self.terrain {
-            Terrain::PegArray => "Directional compliance on the peg array (SPEC §8, planar)",
-            Terrain::RockPile => "Directional compliance on the rock pile (SPEC §8, 3-D)",
-        }
-    }
-    fn gait(&self) -> GaitKind {
-        GaitKind::Slithering
-    }
-    fn controllers(&self) -> &'static [&'static str] {
-        match self.terrain {
-            Terrain::PegArray => PEG_ARRAY_CONTROLLERS,
-            Terrain::RockPile => ROCK_PILE_CONTROLLERS,
-        }
-    }
-    fn variant_base(&self) -> &'static str {
-        match self.terrain {
-            Terrain::PegArray => "dc_switching",
-            Terrain::RockPile => "dc3d_switching",
-        }
-    }
-    fn defaults(&self) -> Defaults {
-        // The built-in protocols' (a unit test checks they agree).
-        Defaults {
+    fn about(&self) -> About {
+        // The built-in protocols' defaults (a unit test checks they agree).
+        let defaults = Defaults {
             starts: 5,
             repeats: 4,
             seconds: 120.0,
+        };
+        match self.terrain {
+            Terrain::PegArray => About {
+                name: "peg-array",
+                summary: "directional compliance on a planar peg array (SPEC §8): body lengths \
+                          per minute",
+                title: "Directional compliance on the peg array (SPEC §8, planar)",
+                gait: GaitKind::Slithering,
+                controllers: PEG_ARRAY_CONTROLLERS,
+                any_gait: false,
+                variant_base: "dc_switching",
+                defaults,
+            },
+            Terrain::RockPile => About {
+                name: "rock-pile",
+                summary: "directional compliance in 3-D over a rock pile (SPEC §8): body \
+                          lengths per minute",
+                title: "Directional compliance on the rock pile (SPEC §8, 3-D)",
+                gait: GaitKind::Slithering,
+                controllers: ROCK_PILE_CONTROLLERS,
+                any_gait: false,
+                variant_base: "dc3d_switching",
+                defaults,
+            },
         }
     }
+
     fn protocol(&self) -> Option<&Protocol> {
         self.protocol.as_ref()
     }

@@ -16,7 +16,7 @@ use crate::emu::world::physics::no_slip_bound::no_slip;
 use crate::emu::world::scenario::{MODULE_LENGTH_M, WorldScenario};
 use crate::gait::{BodyLayout, GaitKind, Plane};
 use crate::lab::LabError;
-use crate::lab::experiment::{Defaults, Experiment, Goal};
+use crate::lab::experiment::{About, Defaults, Experiment, Goal};
 use crate::lab::layout::Layout;
 use crate::lab::metrics::mean_sd_median;
 use crate::lab::report::SummaryContext;
@@ -85,29 +85,22 @@ impl Experiment for FlatGround {
     type Metrics = FlatMetrics;
     type Args = FlatGroundArgs;
 
-    fn name(&self) -> &'static str {
-        "flat-ground"
-    }
-    fn summary(&self) -> &'static str {
-        "a gait on flat ground against its no-slip bound: metres per cycle"
-    }
-    fn title(&self) -> &'static str {
-        "A gait on flat ground against the no-slip bound"
-    }
-    fn gait(&self) -> GaitKind {
-        self.gait
-    }
-    fn controllers(&self) -> &'static [&'static str] {
-        &["open_loop"]
-    }
-    fn variant_base(&self) -> &'static str {
-        "open_loop"
-    }
-    fn defaults(&self) -> Defaults {
-        Defaults {
-            starts: 3,
-            repeats: 1,
-            seconds: 40.0,
+    fn about(&self) -> About {
+        About {
+            name: "flat-ground",
+            summary: "a gait on flat ground against its no-slip bound: metres per cycle",
+            title: "A gait on flat ground against the no-slip bound",
+            gait: self.gait,
+            controllers: &["open_loop"],
+            any_gait: false,
+            variant_base: "open_loop",
+            defaults: {
+                Defaults {
+                    starts: 3,
+                    repeats: 1,
+                    seconds: 40.0,
+                }
+            },
         }
     }
 

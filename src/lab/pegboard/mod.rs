@@ -20,7 +20,7 @@ use crate::emu::world::scenario::WorldScenario;
 use crate::gait::GaitKind;
 use crate::lab::LabError;
 use crate::lab::aim::Aim;
-use crate::lab::experiment::{Defaults, Experiment, Goal};
+use crate::lab::experiment::{About, Defaults, Experiment, Goal};
 use crate::lab::layout::Layout;
 use crate::lab::metrics::MetricsConfig;
 use crate::lab::report::SummaryContext;
@@ -84,29 +84,22 @@ impl Experiment for Pegboard {
     type Metrics = TrialMetrics;
     type Args = PegboardArgs;
 
-    fn name(&self) -> &'static str {
-        "pegboard"
-    }
-    fn summary(&self) -> &'static str {
-        "slithering through seeded peg boards (SPEC §5): cycles per metre, success, time stuck"
-    }
-    fn gait(&self) -> GaitKind {
-        GaitKind::Slithering
-    }
-    fn title(&self) -> &'static str {
-        "Peg-board experiment (SPEC §5)"
-    }
-    fn controllers(&self) -> &'static [&'static str] {
-        CONTROLLERS
-    }
-    fn variant_base(&self) -> &'static str {
-        crate::lab::compared::VARIANT_BASE
-    }
-    fn defaults(&self) -> Defaults {
-        Defaults {
-            starts: 3,
-            repeats: 1,
-            seconds: 120.0,
+    fn about(&self) -> About {
+        About {
+            name: "pegboard",
+            summary: "slithering through seeded peg boards (SPEC §5): cycles per metre, success, time stuck",
+            title: "Peg-board experiment (SPEC §5)",
+            gait: GaitKind::Slithering,
+            controllers: CONTROLLERS,
+            any_gait: false,
+            variant_base: crate::lab::compared::VARIANT_BASE,
+            defaults: {
+                Defaults {
+                    starts: 3,
+                    repeats: 1,
+                    seconds: 120.0,
+                }
+            },
         }
     }
 

@@ -19,7 +19,7 @@ use crate::emu::world::scenario::WorldScenario;
 use crate::emu::world::{PoleSection, WorldSpec};
 use crate::gait::{GaitKind, GaitParams};
 use crate::lab::LabError;
-use crate::lab::experiment::{Defaults, Experiment, Goal};
+use crate::lab::experiment::{About, Defaults, Experiment, Goal};
 use crate::lab::file_stem;
 use crate::lab::layout::Layout;
 use crate::lab::report::SummaryContext;
@@ -147,29 +147,22 @@ impl Experiment for PoleClimb {
     type Metrics = PoleMetrics;
     type Args = PoleArgs;
 
-    fn name(&self) -> &'static str {
-        "pole"
-    }
-    fn summary(&self) -> &'static str {
-        "rolling helix with radius compliance up poles whose diameter changes (SPEC §6)"
-    }
-    fn title(&self) -> &'static str {
-        "Pole climbing: rolling helix with radius compliance (SPEC §6, thesis §4.2)"
-    }
-    fn gait(&self) -> GaitKind {
-        GaitKind::RollingHelix
-    }
-    fn controllers(&self) -> &'static [&'static str] {
-        CONTROLLERS
-    }
-    fn variant_base(&self) -> &'static str {
-        "windowed_adaptive"
-    }
-    fn defaults(&self) -> Defaults {
-        Defaults {
-            starts: 3,
-            repeats: 1,
-            seconds: 150.0,
+    fn about(&self) -> About {
+        About {
+            name: "pole",
+            summary: "rolling helix with radius compliance up poles whose diameter changes (SPEC §6)",
+            title: "Pole climbing: rolling helix with radius compliance (SPEC §6, thesis §4.2)",
+            gait: GaitKind::RollingHelix,
+            controllers: CONTROLLERS,
+            any_gait: false,
+            variant_base: "windowed_adaptive",
+            defaults: {
+                Defaults {
+                    starts: 3,
+                    repeats: 1,
+                    seconds: 150.0,
+                }
+            },
         }
     }
 

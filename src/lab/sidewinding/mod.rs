@@ -17,7 +17,7 @@ use crate::emu::world::WorldSpec;
 use crate::emu::world::scenario::WorldScenario;
 use crate::gait::GaitKind;
 use crate::lab::LabError;
-use crate::lab::experiment::{Defaults, Experiment};
+use crate::lab::experiment::{About, Defaults, Experiment};
 use crate::lab::file_stem;
 use crate::lab::layout::Layout;
 use crate::lab::report::SummaryContext;
@@ -57,29 +57,22 @@ impl Experiment for SidewindingPegs {
     type Metrics = SidewindingMetrics;
     type Args = SidewindingArgs;
 
-    fn name(&self) -> &'static str {
-        "sidewinding"
-    }
-    fn summary(&self) -> &'static str {
-        "anti-compliant sidewinding through an irregular peg array (SPEC §7)"
-    }
-    fn title(&self) -> &'static str {
-        "Sidewinding through an irregular peg array (SPEC §7, thesis §4.3.7)"
-    }
-    fn gait(&self) -> GaitKind {
-        GaitKind::Sidewinding
-    }
-    fn controllers(&self) -> &'static [&'static str] {
-        CONTROLLERS
-    }
-    fn variant_base(&self) -> &'static str {
-        "ac_sfc"
-    }
-    fn defaults(&self) -> Defaults {
-        Defaults {
-            starts: 7,
-            repeats: 3,
-            seconds: 300.0,
+    fn about(&self) -> About {
+        About {
+            name: "sidewinding",
+            summary: "anti-compliant sidewinding through an irregular peg array (SPEC §7)",
+            title: "Sidewinding through an irregular peg array (SPEC §7, thesis §4.3.7)",
+            gait: GaitKind::Sidewinding,
+            controllers: CONTROLLERS,
+            any_gait: false,
+            variant_base: "ac_sfc",
+            defaults: {
+                Defaults {
+                    starts: 7,
+                    repeats: 3,
+                    seconds: 300.0,
+                }
+            },
         }
     }
 
