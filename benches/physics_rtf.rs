@@ -10,10 +10,10 @@ use rand::{RngExt, SeedableRng};
 use rand_pcg::Pcg64;
 use snaked::emu::Plant;
 use snaked::emu::plant::NoiseConfig;
-use snaked::emu::servo::MODULE_LENGTH_M;
 use snaked::emu::world::physics::{PhysicsConfig, PhysicsPlant};
 use snaked::emu::world::{Peg, Rock, StartPose, WorldSpec};
 use snaked::gait::{BodyLayout, GaitKind, GaitSelector, GaitTable, Plane};
+use snaked::module::MODULE_LENGTH_M;
 use snaked::protocol::Command;
 
 const N: usize = 18;

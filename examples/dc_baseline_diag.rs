@@ -15,7 +15,7 @@
 //! the body's centre leaves the obstacles' bounding box).
 use std::io::Write;
 
-use snaked::emu::world::scenario::{MODULE_LENGTH_M, WorldScenario};
+use snaked::emu::world::scenario::WorldScenario;
 use snaked::gait::GaitKind;
 use snaked::lab::calibration::calibrate;
 use snaked::lab::compared::LabController;
@@ -23,6 +23,7 @@ use snaked::lab::displacement::FieldEdge;
 use snaked::lab::layout::Layout;
 use snaked::lab::layout::noise_seed;
 use snaked::lab::trial::{TrialConfig, TrialRecord, nominal_gaits, run_trial};
+use snaked::module::MODULE_LENGTH_M;
 
 const SECTIONS: [&str; 3] = ["head", "mid", "tail"];
 

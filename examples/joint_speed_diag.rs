@@ -29,13 +29,13 @@ use std::time::Instant;
 
 use snaked::emu::Plant;
 use snaked::emu::plant::plane_of;
-use snaked::emu::servo::MODULE_LENGTH_M;
-use snaked::emu::world::physics::build::MODULE_DIAMETER_M;
 use snaked::emu::world::physics::kinematics::{axis_of, twist_angle, upright_helix};
 use snaked::emu::world::physics::{PhysicsConfig, PhysicsPlant};
 use snaked::emu::world::scenario::WorldScenario;
 use snaked::emu::world::{Pole, PoleSection, StartPose, WorldSpec};
 use snaked::gait::{BodyLayout, GaitKind, GaitParams, GaitSelector, GaitTable, Plane, Serpenoid};
+use snaked::module::MODULE_DIAMETER_M;
+use snaked::module::MODULE_LENGTH_M;
 use snaked::protocol::Command;
 
 const MOTOR_RAD_S: f64 = 3.46;

@@ -7,11 +7,11 @@
 //! Environment: SECS (60), AMP, WS, WT (the gait's lateral amplitude, spatial and
 //! temporal frequency; default the daemon's), MU, PEG_MU (friction).
 use snaked::emu::Plant;
-use snaked::emu::servo::MODULE_LENGTH_M;
 use snaked::emu::world::physics::{PhysicsConfig, PhysicsPlant};
 use snaked::emu::world::scenario::WorldScenario;
 use snaked::gait::{BodyLayout, GaitKind, GaitSelector, GaitTable, Plane};
 use snaked::lab::trial::centre;
+use snaked::module::MODULE_LENGTH_M;
 use snaked::protocol::Command;
 
 fn env(name: &str, d: f64) -> f64 {

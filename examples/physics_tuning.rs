@@ -11,11 +11,11 @@
 //! side by side.
 //!     cargo run --release --example physics_tuning
 use snaked::emu::Plant;
-use snaked::emu::servo::MODULE_LENGTH_M;
 use snaked::emu::world::physics::{PhysicsConfig, PhysicsPlant};
 use snaked::emu::world::scenario::WorldScenario;
 use snaked::emu::world::{Peg, WorldSpec};
 use snaked::gait::{BodyLayout, GaitKind, GaitSelector, GaitTable, Plane};
+use snaked::module::MODULE_LENGTH_M;
 use snaked::protocol::Command;
 
 const N: usize = 18;

@@ -27,12 +27,11 @@ use std::f64::consts::PI;
 
 use nalgebra::{UnitQuaternion, Vector3};
 use snaked::emu::Plant;
-use snaked::emu::servo::MODULE_LENGTH_M;
-use snaked::emu::world::physics::build::MODULE_DIAMETER_M;
 use snaked::emu::world::physics::kinematics::head_pose;
 use snaked::emu::world::physics::{PhysicsConfig, PhysicsPlant};
 use snaked::emu::world::{Pole, PoleSection, StartPose, WorldSpec};
 use snaked::gait::{BodyLayout, GaitKind, GaitParams, Plane, Serpenoid};
+use snaked::module::{MODULE_LENGTH_M, MODULE_RADIUS_M};
 use snaked::protocol::Command;
 
 fn env(name: &str, d: f64) -> f64 {
@@ -43,7 +42,6 @@ fn env(name: &str, d: f64) -> f64 {
 }
 
 const N: usize = 18;
-const MODULE_RADIUS_M: f64 = 0.5 * MODULE_DIAMETER_M;
 
 fn helix(layout: &BodyLayout, radius_m: f64, pitch_m: f64) -> Serpenoid {
     let p = GaitParams {

@@ -17,10 +17,10 @@
 use std::f64::consts::{PI, TAU};
 
 use snaked::emu::Plant;
-use snaked::emu::servo::MODULE_LENGTH_M;
 use snaked::emu::world::physics::{PhysicsConfig, PhysicsPlant};
 use snaked::emu::world::scenario::WorldScenario;
 use snaked::gait::{BodyLayout, GaitKind, GaitSelector, GaitTable, Plane};
+use snaked::module::MODULE_LENGTH_M;
 use snaked::protocol::Command;
 
 fn env(name: &str, d: f64) -> f64 {

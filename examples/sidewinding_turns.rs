@@ -8,11 +8,11 @@
 use std::f64::consts::{PI, TAU};
 
 use snaked::emu::Plant;
-use snaked::emu::servo::MODULE_LENGTH_M;
 use snaked::emu::world::WorldSpec;
 use snaked::emu::world::physics::{PhysicsConfig, PhysicsPlant};
 use snaked::gait::{BodyLayout, GaitKind, GaitSelector, GaitTable, Plane};
 use snaked::lab::trial::centre;
+use snaked::module::MODULE_LENGTH_M;
 use snaked::protocol::Command;
 
 const N: usize = 18;

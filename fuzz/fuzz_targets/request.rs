@@ -10,7 +10,8 @@ use serde_json::Value;
 use serde_json::value::RawValue;
 use snaked::controller_interface::{BuildContext, ConfigError, registry};
 use snaked::controllers::REGISTRY;
-use snaked::gait::{BodyLayout, GaitTable, Plane, SEA_MODULE_LENGTH_M};
+use snaked::gait::{BodyLayout, GaitTable, Plane};
+use snaked::module::MODULE_LENGTH_M;
 use snaked::socket::api::{RequestId, RpcError, code, error_line, parse_request, result_line};
 use snaked::socket::controller_set_params;
 
@@ -122,7 +123,7 @@ fn has_duplicate_key(raw: &RawValue, depth: usize) -> bool {
 /// `controller.set` as the socket serves it, short of installing the controller.
 fn controller_set(params: snaked::socket::api::Params) -> Result<(), RpcError> {
     let (gait, sel) = controller_set_params(params)?;
-    let layout = BodyLayout::alternating(18, Plane::Lateral, SEA_MODULE_LENGTH_M);
+    let layout = BodyLayout::alternating(18, Plane::Lateral, MODULE_LENGTH_M);
     let table = GaitTable::default();
     let ctx = BuildContext {
         gait,

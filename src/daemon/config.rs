@@ -80,7 +80,7 @@ impl Default for BodyConfig {
     fn default() -> Self {
         Self {
             first_joint_plane: Plane::Lateral,
-            module_length_m: crate::gait::SEA_MODULE_LENGTH_M,
+            module_length_m: crate::module::MODULE_LENGTH_M,
         }
     }
 }
@@ -187,7 +187,7 @@ impl Default for GaitSection {
             initial: GaitKind::Sidewinding,
             start: StartMode::Hold,
             blend_time_s: 2.0,
-            max_joint_speed_rad_s: crate::gait::SEA_MAX_JOINT_SPEED_RAD_S,
+            max_joint_speed_rad_s: crate::module::MODULE_MAX_SPEED_RAD_S,
             params: Default::default(),
             controllers: Default::default(),
             slithering_controller: None,

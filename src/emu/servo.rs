@@ -27,6 +27,9 @@
 //! [`ServoParams::max_substep_s`] (0.1 ms), so a 1 ms plant step is stable for springs
 //! and obstacle contacts far stiffer than the defaults.
 
+use crate::module::{
+    MODULE_LENGTH_M, MODULE_MASS_KG, MODULE_MAX_SPEED_RAD_S, MODULE_MAX_TORQUE_NM,
+};
 use crate::protocol::{Command, ControlStrategy};
 
 /// How a position command becomes the velocity loop's reference.
@@ -99,11 +102,6 @@ pub struct ServoParams {
     pub max_substep_s: f64,
 }
 
-/// Module mass (SPEC §1), kg.
-pub const MODULE_MASS_KG: f64 = 0.205;
-/// Module length (SPEC §1), m.
-pub use crate::gait::SEA_MODULE_LENGTH_M as MODULE_LENGTH_M;
-
 impl Default for ServoParams {
     fn default() -> Self {
         Self {
@@ -111,8 +109,8 @@ impl Default for ServoParams {
             spring_damping_nm_s_per_rad: 0.01,
             output_inertia_kg_m2: MODULE_MASS_KG * MODULE_LENGTH_M * MODULE_LENGTH_M / 3.0,
             output_damping_nm_s_per_rad: 0.02,
-            max_motor_speed_rad_s: crate::gait::SEA_MAX_JOINT_SPEED_RAD_S,
-            max_torque_nm: 7.0,
+            max_motor_speed_rad_s: MODULE_MAX_SPEED_RAD_S,
+            max_torque_nm: MODULE_MAX_TORQUE_NM,
             position_gain_per_s: 150.0,
             velocity_gain_nm_s_per_rad: 0.2,
             velocity_integral_nm_per_rad: 10.0,

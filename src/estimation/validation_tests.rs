@@ -10,12 +10,13 @@ use super::VirtualChassisEstimator;
 use super::chassis::{Chassis, chassis};
 use crate::controller_interface::{BodyEstimate, Estimator, Imu, Observation};
 use crate::emu::Plant;
-use crate::emu::servo::{MODULE_LENGTH_M, PositionLoop};
+use crate::emu::servo::PositionLoop;
 use crate::emu::world::WorldSpec;
 use crate::emu::world::physics::{ImuBias, PhysicsConfig, PhysicsPlant};
 use crate::emu::world::scenario::WorldScenario;
 use crate::gait::{BodyLayout, GaitKind, GaitParams, Plane, Serpenoid};
 use crate::module::Command;
+use crate::module::MODULE_LENGTH_M;
 
 const N: usize = 18;
 

@@ -40,14 +40,14 @@ pub fn link_poses(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::gait::SEA_MODULE_LENGTH_M;
+    use crate::module::MODULE_LENGTH_M;
 
     #[test]
     fn a_straight_body_lies_along_minus_x_and_a_bend_turns_the_tail() {
-        let layout = BodyLayout::alternating(2, Plane::Lateral, SEA_MODULE_LENGTH_M);
+        let layout = BodyLayout::alternating(2, Plane::Lateral, MODULE_LENGTH_M);
         let mut poses = [Isometry3::identity(); 3];
         link_poses(Isometry3::identity(), &layout, &[0.0, 0.0], &mut poses);
-        let l = SEA_MODULE_LENGTH_M;
+        let l = MODULE_LENGTH_M;
         assert!((poses[2].translation.vector - Vector3::new(-2.0 * l, 0.0, 0.0)).norm() < 1e-12);
         // Lateral +90°: the tail side swings to −y (right); dorsal +90°: it pitches down.
         link_poses(

@@ -12,9 +12,6 @@ pub mod serpenoid;
 pub mod slew;
 
 pub use layout::{BodyLayout, Plane};
-pub use params::{
-    Field, GaitKind, GaitParams, GaitTable, JOINT_LIMIT_RAD, ParamError, ParamPatch,
-    SEA_MAX_JOINT_SPEED_RAD_S, SEA_MODULE_LENGTH_M,
-};
+pub use params::{Field, GaitKind, GaitParams, GaitTable, JOINT_LIMIT_RAD, ParamError, ParamPatch};
 pub use selector::{BLEND_TIME_RANGE_S, DEFAULT_BLEND_TIME_S, GaitSelector, smoothstep};
 pub use serpenoid::{Serpenoid, Wave, helix_wave};

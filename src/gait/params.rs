@@ -8,12 +8,9 @@ use std::f64::consts::{FRAC_PI_2, FRAC_PI_4, FRAC_PI_8, PI};
 use serde::{Deserialize, Serialize};
 
 use super::serpenoid::Serpenoid;
+use crate::module::{MODULE_LENGTH_M, MODULE_MAX_SPEED_RAD_S};
 use crate::num::Num;
 
-/// Maximum output speed of an SEA Snake module (33 rpm), rad/s (SPEC §1).
-pub const SEA_MAX_JOINT_SPEED_RAD_S: f64 = 3.46;
-/// Length of one SEA Snake module, m (SPEC §1).
-pub const SEA_MODULE_LENGTH_M: f64 = 0.064;
 /// Largest joint excursion a gait may command, rad (±90°: beyond it neighbouring
 /// modules collide).
 pub const JOINT_LIMIT_RAD: f64 = FRAC_PI_2;
@@ -346,16 +343,16 @@ impl GaitKind {
 
 impl GaitParams {
     /// Checks the set for `kind` on the SEA Snake (module length
-    /// [`SEA_MODULE_LENGTH_M`], which the rolling helix's amplitude depends on).
+    /// [`MODULE_LENGTH_M`], which the rolling helix's amplitude depends on).
     /// See [`GaitParams::validate_for`].
     pub fn validate(&self, kind: GaitKind) -> Result<(), ParamError> {
-        self.validate_for(kind, SEA_MODULE_LENGTH_M)
+        self.validate_for(kind, MODULE_LENGTH_M)
     }
 
     /// Checks the set for `kind` on modules of `module_length_m`: every field finite,
     /// every field the gait uses within [`Field::range`], |offset| + amplitude within
     /// [`JOINT_LIMIT_RAD`] in each plane, and the peak joint speed (amplitude · taper ·
-    /// |ωT|) within [`SEA_MAX_JOINT_SPEED_RAD_S`]. Allocates nothing.
+    /// |ωT|) within [`MODULE_MAX_SPEED_RAD_S`]. Allocates nothing.
     pub fn validate_for(&self, kind: GaitKind, module_length_m: f64) -> Result<(), ParamError> {
         for field in Field::ALL {
             let value = field.get(self);
@@ -391,11 +388,11 @@ impl GaitParams {
             }
         }
         let peak_rad_s = wave.peak_joint_speed_rad_s();
-        if peak_rad_s.is_nan() || peak_rad_s > SEA_MAX_JOINT_SPEED_RAD_S {
+        if peak_rad_s.is_nan() || peak_rad_s > MODULE_MAX_SPEED_RAD_S {
             return Err(ParamError::TooFast {
                 gait: kind.name(),
                 peak_rad_s,
-                max_rad_s: SEA_MAX_JOINT_SPEED_RAD_S,
+                max_rad_s: MODULE_MAX_SPEED_RAD_S,
             });
         }
         Ok(())
@@ -405,7 +402,7 @@ impl GaitParams {
     /// changes a field `kind` does not use is refused ([`ParamError::Unused`]) rather
     /// than silently ignored. Allocates nothing.
     pub fn patched(&self, kind: GaitKind, patch: &ParamPatch) -> Result<GaitParams, ParamError> {
-        self.patched_for(kind, patch, SEA_MODULE_LENGTH_M)
+        self.patched_for(kind, patch, MODULE_LENGTH_M)
     }
 
     /// [`GaitParams::patched`] for modules of `module_length_m`.

@@ -10,7 +10,7 @@ fn every_default_gait_is_valid() {
             .validate(kind)
             .unwrap_or_else(|e| panic!("{kind:?}: {e}"));
     }
-    assert_eq!(table.validate_for(SEA_MODULE_LENGTH_M), Ok(()));
+    assert_eq!(table.validate_for(MODULE_LENGTH_M), Ok(()));
     // Thesis values where it gives them, but sidewinding's waves in quadrature (the
     // reversal's wells then run forward and backward alike; the thesis's 3π/4 stalls
     // inside one).

@@ -1,13 +1,13 @@
 //! Blending, resync, parameter changes and the slew limiter.
 use super::*;
 use crate::gait::layout::Plane;
-use crate::gait::params::{SEA_MAX_JOINT_SPEED_RAD_S, SEA_MODULE_LENGTH_M};
+use crate::module::{MODULE_LENGTH_M, MODULE_MAX_SPEED_RAD_S};
 
 const DT: f64 = 1e-3;
-const VMAX: f64 = SEA_MAX_JOINT_SPEED_RAD_S;
+const VMAX: f64 = MODULE_MAX_SPEED_RAD_S;
 
 fn sea() -> BodyLayout {
-    BodyLayout::alternating(18, Plane::Lateral, SEA_MODULE_LENGTH_M)
+    BodyLayout::alternating(18, Plane::Lateral, MODULE_LENGTH_M)
 }
 
 fn selector(initial: GaitKind) -> GaitSelector {

@@ -4,10 +4,11 @@ use std::f64::consts::{FRAC_PI_2, PI};
 use nalgebra::{Matrix3, Rotation3, Vector3};
 
 use super::*;
-use crate::gait::params::{GaitTable, SEA_MODULE_LENGTH_M};
+use crate::gait::params::GaitTable;
+use crate::module::MODULE_LENGTH_M;
 
 fn sea() -> BodyLayout {
-    BodyLayout::alternating(18, Plane::Lateral, SEA_MODULE_LENGTH_M)
+    BodyLayout::alternating(18, Plane::Lateral, MODULE_LENGTH_M)
 }
 
 fn eval(kind: GaitKind, p: &GaitParams, layout: &BodyLayout, psi: f64) -> Vec<f64> {

@@ -41,13 +41,16 @@ pub fn strain_markdown<E: Experiment>(results: &[TrialResult<E>]) -> String {
             StrainSummary::of(mine.map(|r| &r.strain)).table_row(name)
         );
     }
-    s.push_str(
+    let _ = write!(
+        s,
         "\nGuard-limited = cycles in which the set-point guard slowed a set-point to the \
          joints' speed (the controller asked for more). Peak joint speed = the fastest \
          joint speed a module reported in the trial; above motor speed = share of joint-time \
-         reported faster than the motor's 3.46 rad/s (on the spring or thrown by a contact). \
-         At torque limit = share of joint-time at 95 % of 7 N·m or more. Definitions: \
+         reported faster than the motor's {} rad/s (on the spring or thrown by a contact). \
+         At torque limit = share of joint-time at 95 % of {} N·m or more. Definitions: \
          docs/lab.md, \"Strain\".\n",
+        crate::module::MODULE_MAX_SPEED_RAD_S,
+        crate::module::MODULE_MAX_TORQUE_NM,
     );
     s
 }

@@ -20,8 +20,8 @@ use super::shard::Shard;
 use super::stuck_check::StuckCheck;
 use super::trial::{TrialConfig, TrialRecording, run_trial};
 use crate::emu::world::WorldSpec;
-use crate::emu::world::scenario::MODULE_LENGTH_M;
 use crate::gait::{BodyLayout, Plane};
+use crate::module::MODULE_LENGTH_M;
 
 /// What to run: the compared controllers on every layout, start and repeat.
 #[derive(Debug, Clone)]

@@ -40,8 +40,8 @@ pub struct StrainLimits {
 impl StrainLimits {
     /// The SEA Snake's module (SPEC §1): 3.46 rad/s, 7 N·m.
     pub const SEA: StrainLimits = StrainLimits {
-        motor_speed_rad_s: crate::gait::SEA_MAX_JOINT_SPEED_RAD_S,
-        max_torque_nm: 7.0,
+        motor_speed_rad_s: crate::module::MODULE_MAX_SPEED_RAD_S,
+        max_torque_nm: crate::module::MODULE_MAX_TORQUE_NM,
     };
 }
 

@@ -22,11 +22,10 @@ use crate::emu::servo::PositionLoop;
 use crate::emu::sim_bus::{SimBus, SimBusConfig};
 use crate::emu::world::WorldSpec;
 use crate::emu::world::physics::{PhysicsConfig, PhysicsPlant};
-use crate::emu::world::scenario::MODULE_LENGTH_M;
 use crate::gait::{
     BodyLayout, DEFAULT_BLEND_TIME_S, GaitKind, GaitParams, GaitSelector, GaitTable, Plane,
-    SEA_MAX_JOINT_SPEED_RAD_S,
 };
+use crate::module::{MODULE_LENGTH_M, MODULE_MAX_SPEED_RAD_S};
 use crate::record::{LoopRecorder, LoopRecording};
 use crate::record::{McapOptions, RecordOptions, Recorder, RecordingInfo};
 use crate::rt::control_loop::{ControlLoop, Flow, LoopParts};
@@ -320,7 +319,7 @@ pub(crate) fn trial_loop(
             table,
             config.lead_in().map_or(gait, |(g, _)| g),
             config.blend_time_s,
-            SEA_MAX_JOINT_SPEED_RAD_S,
+            MODULE_MAX_SPEED_RAD_S,
         ),
         failsafe: Failsafe::new(FailsafeConfig::default()),
         requests: loop_ends.requests,

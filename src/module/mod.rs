@@ -1,6 +1,22 @@
 //! What one module takes and reports, whatever carries it: protocol v2 over UDP
 //! (`protocol`, `bus::udp`), the in-process emulator (`emu::sim_bus`), the loop and
-//! the recorder alike.
+//! the recorder alike; and the module's body, the figures everything that models,
+//! draws or drives the SEA Snake uses (the emulator, the recorder's scene and URDF, the
+//! gaits, the lab).
+
+/// Length of one SEA Snake module, joint to joint, m (SPEC §1: 6.4 cm, the thesis's
+/// Table 2.1).
+pub const MODULE_LENGTH_M: f64 = 0.064;
+/// Diameter of one module, m (SPEC §1: 5.1 cm, the thesis's Table 2.1).
+pub const MODULE_DIAMETER_M: f64 = 0.051;
+/// Radius of one module, m: half [`MODULE_DIAMETER_M`] (2.55 cm).
+pub const MODULE_RADIUS_M: f64 = 0.5 * MODULE_DIAMETER_M;
+/// Mass of one module, kg (SPEC §1: 205 g, the thesis's Table 2.1).
+pub const MODULE_MASS_KG: f64 = 0.205;
+/// A module's maximum output speed, rad/s (SPEC §1: 33 rpm, the thesis's Table 2.1).
+pub const MODULE_MAX_SPEED_RAD_S: f64 = 3.46;
+/// A module's maximum output torque, N·m (SPEC §1: 7 N·m, the thesis's Table 2.1).
+pub const MODULE_MAX_TORQUE_NM: f64 = 7.0;
 
 /// Set-points for one module. NaN means "not commanded". All three NaN = limp.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -13,8 +13,8 @@ use super::cycle::CycleRecord;
 use super::kinematics::link_poses_in_body;
 use crate::emu::LinkPose;
 use crate::emu::world::WorldSpec;
-use crate::emu::world::physics::build::MODULE_DIAMETER_M;
 use crate::gait::BodyLayout;
+use crate::module::MODULE_DIAMETER_M;
 
 pub const WORLD_FRAME: &str = "world";
 pub const BODY_FRAME: &str = "body";

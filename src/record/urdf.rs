@@ -9,14 +9,14 @@
 
 use std::fmt::Write;
 
-use crate::emu::world::scenario::MODULE_RADIUS_M;
 use crate::gait::{BodyLayout, JOINT_LIMIT_RAD, Plane};
+use crate::module::{MODULE_MAX_SPEED_RAD_S, MODULE_MAX_TORQUE_NM, MODULE_RADIUS_M};
 
 /// The asset's URI (Foxglove's 3-D panel: a URDF layer with this URL).
 pub const URDF_URI: &str = "package://snaked/urdf/snake.urdf";
-/// The modules' peak torque and the motor's speed (docs/emulator.md), for the limits.
-const EFFORT_NM: f64 = 7.0;
-const VELOCITY_RAD_S: f64 = 3.46;
+/// The modules' peak torque and the motor's speed (SPEC §1), for the limits.
+const EFFORT_NM: f64 = MODULE_MAX_TORQUE_NM;
+const VELOCITY_RAD_S: f64 = MODULE_MAX_SPEED_RAD_S;
 
 /// The URDF of `layout`; joint `k` is named `names[k]` (or `joint_k`).
 pub fn urdf(layout: &BodyLayout, names: &[String]) -> String {

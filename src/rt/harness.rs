@@ -10,6 +10,7 @@ use crate::controller_interface::catalog::Catalog;
 use crate::controller_interface::registry::{self, BuildContext, Selection};
 use crate::controllers::REGISTRY;
 use crate::gait::{BodyLayout, GaitKind, GaitSelector, GaitTable, Plane};
+use crate::module::MODULE_LENGTH_M;
 use crate::rt::control_loop::{ControlLoop, LoopParts};
 use crate::rt::controller_slots::Installed;
 use crate::rt::messages::{Ack, Envelope};
@@ -18,8 +19,6 @@ use crate::rt::telemetry::{self, Snapshot, TelemetryReader};
 use crate::safety::failsafe::{Failsafe, FailsafeConfig};
 
 pub const PERIOD_NS: u64 = 1_000_000;
-/// Module length of the harness's body, m.
-pub use crate::gait::SEA_MODULE_LENGTH_M as MODULE_LENGTH_M;
 
 pub struct Harness {
     pub control: ControlLoop,
@@ -119,7 +118,7 @@ pub fn echo_harness_sized(
             table,
             gait,
             2.0,
-            crate::gait::SEA_MAX_JOINT_SPEED_RAD_S,
+            crate::module::MODULE_MAX_SPEED_RAD_S,
         ),
         failsafe: Failsafe::new(failsafe),
         requests: loop_ends.requests,

@@ -1,8 +1,8 @@
 use std::f64::consts::{FRAC_PI_4, PI};
 
 use super::*;
-use crate::emu::servo::MODULE_LENGTH_M;
 use crate::gait::{GaitKind, GaitParams, Serpenoid};
+use crate::module::MODULE_LENGTH_M;
 use crate::shape::function::numeric_jacobian;
 use crate::shape::window::steepness_for_width;
 

@@ -81,8 +81,8 @@ mod tests {
     /// joint must then oppose the commanded bend.
     #[test]
     fn the_environment_torque_opposes_a_blocked_joint() {
-        let l = crate::emu::servo::MODULE_LENGTH_M;
-        let gap = 0.5 * crate::emu::world::physics::build::MODULE_DIAMETER_M + 0.026;
+        let l = crate::module::MODULE_LENGTH_M;
+        let gap = 0.5 * crate::module::MODULE_DIAMETER_M + 0.026;
         let peg = |x: f64, y: f64| Peg {
             x_m: x,
             y_m: y,

@@ -4,8 +4,8 @@ use std::f64::consts::PI;
 use super::*;
 use crate::controller_interface::testing::ObservationBuf;
 use crate::controllers::open_loop::OpenLoop;
-use crate::emu::servo::MODULE_LENGTH_M;
 use crate::gait::{GaitKind, Plane};
+use crate::module::MODULE_LENGTH_M;
 
 const N: usize = 18;
 

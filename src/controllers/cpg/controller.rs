@@ -232,8 +232,8 @@ mod tests {
     use crate::controller_interface::TickClock;
     use crate::controller_interface::testing::{ObservationBuf, engage_at};
     use crate::controllers::open_loop::OpenLoop;
-    use crate::emu::servo::MODULE_LENGTH_M;
     use crate::gait::GaitKind;
+    use crate::module::MODULE_LENGTH_M;
 
     #[test]
     fn without_torque_it_is_the_open_loop_gait_and_a_local_push_stays_local() {

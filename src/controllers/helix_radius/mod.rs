@@ -16,9 +16,8 @@ use crate::controller_interface::report::{ControllerReport, FieldSpec, ReportSpe
 use crate::controller_interface::{
     BuildContext, Controller, ControllerKind, Handover, NominalMismatch, Observation, Tick,
 };
-use crate::gait::{
-    BodyLayout, GaitKind, GaitParams, JOINT_LIMIT_RAD, Plane, SEA_MAX_JOINT_SPEED_RAD_S, Serpenoid,
-};
+use crate::gait::{BodyLayout, GaitKind, GaitParams, JOINT_LIMIT_RAD, Plane, Serpenoid};
+use crate::module::MODULE_MAX_SPEED_RAD_S;
 use crate::shape::ShapeFunction;
 use crate::shape::admittance::ParamState;
 use crate::shape::helix_shape::HelixShape;
@@ -270,10 +269,10 @@ impl Controller for HelixRadius {
         let speed = rho * a0 * wt.abs();
         let over = |a0: f64| {
             let by_reach = rho * a0 / (JOINT_LIMIT_RAD - offset).max(1e-9);
-            let by_speed = rho * a0 * wt.abs() / SEA_MAX_JOINT_SPEED_RAD_S;
+            let by_speed = rho * a0 * wt.abs() / MODULE_MAX_SPEED_RAD_S;
             by_reach.max(by_speed)
         };
-        if reach > JOINT_LIMIT_RAD || speed > SEA_MAX_JOINT_SPEED_RAD_S {
+        if reach > JOINT_LIMIT_RAD || speed > MODULE_MAX_SPEED_RAD_S {
             // The smallest nominal radius (the pitch scaled with it) the bound leaves
             // room for: A is nearly ∝ 1/radius, so a few fixed-point steps find it.
             let mut p = *params;

@@ -9,15 +9,14 @@
 use serde::{Deserialize, Serialize};
 
 use crate::controller_interface::config::{ConfigError, check_range};
-use crate::controller_interface::report::{ControllerReport, ReportSpec, SignalSpec};
 use crate::controller_interface::nominal::Nominal;
+use crate::controller_interface::report::{ControllerReport, ReportSpec, SignalSpec};
 use crate::controller_interface::{
-    BuildContext, CannotFollow, Controller, ControllerKind, Handover, NominalMismatch,
-    Observation, Tick, same_kind,
+    BuildContext, CannotFollow, Controller, ControllerKind, Handover, NominalMismatch, Observation,
+    Tick, same_kind,
 };
-use crate::gait::{
-    BodyLayout, GaitKind, GaitParams, JOINT_LIMIT_RAD, Plane, SEA_MAX_JOINT_SPEED_RAD_S, Serpenoid,
-};
+use crate::gait::{BodyLayout, GaitKind, GaitParams, JOINT_LIMIT_RAD, Plane, Serpenoid};
+use crate::module::MODULE_MAX_SPEED_RAD_S;
 use crate::shape::admittance::{AdmittanceGains, AdmittanceSign, ParamState};
 use crate::shape::torque::TorqueFilter;
 
@@ -223,9 +222,9 @@ impl Controller for SerpenoidAdmittance {
                 Plane::Lateral => "amplitude_lat_rad",
                 Plane::Dorsal => "amplitude_dor_rad",
             };
-            if reach > JOINT_LIMIT_RAD || speed > SEA_MAX_JOINT_SPEED_RAD_S {
+            if reach > JOINT_LIMIT_RAD || speed > MODULE_MAX_SPEED_RAD_S {
                 let by_reach = (JOINT_LIMIT_RAD - w.offset_rad.abs()) / k;
-                let by_speed = SEA_MAX_JOINT_SPEED_RAD_S / (k * wave.temporal_freq_rad_s.abs());
+                let by_speed = MODULE_MAX_SPEED_RAD_S / (k * wave.temporal_freq_rad_s.abs());
                 return Err(NominalMismatch {
                     field,
                     value: w.amplitude_rad,

@@ -252,7 +252,8 @@ mod tests {
     /// no faster than the motor turns.
     #[test]
     fn the_presets_fit_the_joints_speed_at_the_default_gait() {
-        use crate::gait::{GaitKind, GaitParams, SEA_MAX_JOINT_SPEED_RAD_S};
+        use crate::gait::{GaitKind, GaitParams};
+        use crate::module::MODULE_MAX_SPEED_RAD_S;
         let c = SidewindingConfig::full();
         let wt = GaitParams::default_for(GaitKind::Sidewinding).temporal_freq_rad_s;
         let grow = 1.0 + c.heading.turn_taper;
@@ -262,7 +263,7 @@ mod tests {
         let spatial = c.spatial_freq.gains.max_rate * a_max;
         let total = wave + amplitude + spatial;
         assert!(
-            total <= SEA_MAX_JOINT_SPEED_RAD_S,
+            total <= MODULE_MAX_SPEED_RAD_S,
             "{wave:.2} + {amplitude:.2} + {spatial:.2} = {total:.2} rad/s"
         );
     }

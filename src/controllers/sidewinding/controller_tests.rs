@@ -5,8 +5,8 @@ use super::*;
 use crate::controller_interface::testing::engage_at;
 use crate::controller_interface::{BodyEstimate, Imu};
 use crate::controllers::open_loop::OpenLoop;
-use crate::emu::servo::MODULE_LENGTH_M;
 use crate::gait::{GaitKind, Plane};
+use crate::module::MODULE_LENGTH_M;
 
 const N: usize = 18;
 

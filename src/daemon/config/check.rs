@@ -358,7 +358,7 @@ impl Config {
             "gait.max_joint_speed_rad_s",
             self.gait.max_joint_speed_rad_s,
             0.1,
-            crate::gait::SEA_MAX_JOINT_SPEED_RAD_S,
+            crate::module::MODULE_MAX_SPEED_RAD_S,
         )?;
         range(
             "control.max_line_bytes",

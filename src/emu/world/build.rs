@@ -1,8 +1,9 @@
 //! Runs a validated world scenario's generators in a fixed order into a `WorldSpec`.
 
 use super::generators::{self as g, Kind};
-use super::scenario::{MODULE_RADIUS_M, PegRow, ScenarioError, WorldScenario};
+use super::scenario::{PegRow, ScenarioError, WorldScenario};
 use super::spec::{Friction, Peg, Pole, PoleSection, StartPose, WorldSpec};
+use crate::module::MODULE_RADIUS_M;
 
 /// Tries for a random start before giving up.
 const START_TRIES: usize = 1_000;

@@ -4,8 +4,9 @@
 use rand::{Rng, RngExt, SeedableRng};
 use rand_pcg::Pcg64;
 
-use super::scenario::{MODULE_LENGTH_M, MODULE_RADIUS_M, PegFence, Region};
+use super::scenario::{PegFence, Region};
 use super::spec::{Peg, Rock, WorldSpec};
+use crate::module::{MODULE_LENGTH_M, MODULE_RADIUS_M};
 
 /// Generator kinds, mixed into the derived seeds so kinds never share a stream.
 #[derive(Debug, Clone, Copy)]

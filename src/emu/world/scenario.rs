@@ -12,10 +12,6 @@ use serde::{Deserialize, Serialize};
 
 use super::spec::{Anisotropic, Wall, WorldSpec};
 
-/// Radius of one SEA Snake module (diameter 5.1 cm), m.
-pub const MODULE_RADIUS_M: f64 = 0.0255;
-/// Length of one module, m.
-pub use crate::gait::SEA_MODULE_LENGTH_M as MODULE_LENGTH_M;
 /// Default height of generated pegs, m (well above the body's 5.1 cm).
 pub const DEFAULT_PEG_HEIGHT_M: f64 = 0.15;
 

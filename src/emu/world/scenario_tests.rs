@@ -1,5 +1,6 @@
 use super::*;
 use crate::emu::world::generators::{body_hits, point_segment_m, serpenoid_geometry};
+use crate::module::MODULE_RADIUS_M;
 
 const BOARD: &str = r#"
 seed = 7

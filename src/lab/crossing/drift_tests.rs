@@ -11,11 +11,11 @@ use std::f64::consts::TAU;
 
 use super::starts::StartKind;
 use crate::emu::Plant;
-use crate::emu::servo::MODULE_LENGTH_M;
 use crate::emu::world::physics::{PhysicsConfig, PhysicsPlant};
 use crate::emu::world::scenario::WorldScenario;
 use crate::gait::{BodyLayout, GaitKind, GaitParams, Plane, Serpenoid};
 use crate::module::Command;
+use crate::module::MODULE_LENGTH_M;
 
 const N: usize = 18;
 const SECONDS: f64 = 40.0;

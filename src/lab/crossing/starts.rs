@@ -6,7 +6,8 @@
 
 use std::f64::consts::FRAC_PI_2;
 
-use crate::emu::world::scenario::{MODULE_LENGTH_M, RandomStart, Region, StartGen};
+use crate::emu::world::scenario::{RandomStart, Region, StartGen};
+use crate::module::MODULE_LENGTH_M;
 
 /// Half the spread of the start's yaw, rad.
 pub const YAW_SPREAD_RAD: f64 = 0.3;

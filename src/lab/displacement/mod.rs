@@ -14,7 +14,6 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use crate::emu::world::WorldSpec;
-use crate::emu::world::scenario::MODULE_LENGTH_M;
 use crate::gait::{GaitKind, GaitParams};
 use crate::lab::LabError;
 use crate::lab::experiment::{About, Defaults, Experiment};
@@ -24,6 +23,7 @@ use crate::lab::protocol::{self, Protocol};
 use crate::lab::report::SummaryContext;
 use crate::lab::runner::TrialResult;
 use crate::lab::trial::{TrialConfig, TrialRecord};
+use crate::module::MODULE_LENGTH_M;
 pub use field::FieldEdge;
 use metrics::{DisplacementMetrics, displacement_metrics};
 

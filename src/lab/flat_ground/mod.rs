@@ -11,9 +11,8 @@ use std::path::{Path, PathBuf};
 
 use crate::emu::Plant;
 use crate::emu::world::WorldSpec;
-use crate::emu::world::physics::build::MODULE_DIAMETER_M;
 use crate::emu::world::physics::no_slip_bound::no_slip;
-use crate::emu::world::scenario::{MODULE_LENGTH_M, WorldScenario};
+use crate::emu::world::scenario::WorldScenario;
 use crate::gait::{BodyLayout, GaitKind, Plane};
 use crate::lab::LabError;
 use crate::lab::experiment::{About, Defaults, Experiment, Goal};
@@ -22,6 +21,7 @@ use crate::lab::metrics::mean_sd_median;
 use crate::lab::report::SummaryContext;
 use crate::lab::runner::{TrialResult, controller_names};
 use crate::lab::trial::{TrialConfig, TrialRecord};
+use crate::module::{MODULE_DIAMETER_M, MODULE_LENGTH_M};
 
 /// Open flat ground, the start anywhere near the origin, any heading.
 const FLAT_TOML: &str = "seed = 1\n[start.random]\n\

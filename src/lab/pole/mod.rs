@@ -14,7 +14,6 @@ pub mod report;
 use std::path::{Path, PathBuf};
 
 use crate::emu::Plant;
-use crate::emu::world::physics::build::MODULE_DIAMETER_M;
 use crate::emu::world::scenario::WorldScenario;
 use crate::emu::world::{PoleSection, WorldSpec};
 use crate::gait::{GaitKind, GaitParams};
@@ -25,6 +24,7 @@ use crate::lab::layout::Layout;
 use crate::lab::report::SummaryContext;
 use crate::lab::runner::TrialResult;
 use crate::lab::trial::{TrialConfig, TrialRecord};
+use crate::module::MODULE_DIAMETER_M;
 use metrics::{PoleMetrics, pole_metrics};
 use poles::PoleDesign;
 

@@ -11,11 +11,11 @@ use plotters::prelude::*;
 
 use super::poles::diameter_at;
 use super::{PoleClimb, PoleGoal};
-use crate::emu::world::physics::build::MODULE_DIAMETER_M;
 use crate::lab::LabError;
 use crate::lab::plots::{FONT, plot_err, register_fonts};
 use crate::lab::runner::{TrialResult, controller_names};
 use crate::lab::trial::TrialRecord;
+use crate::module::MODULE_DIAMETER_M;
 
 /// Every controller's first trial: height over time.
 pub fn climb_plot(path: &Path, results: &[TrialResult<PoleClimb>]) -> Result<(), LabError> {

@@ -7,8 +7,8 @@ use std::f64::consts::TAU;
 use rand::{RngExt, SeedableRng};
 use rand_pcg::Pcg64;
 
-use crate::emu::world::physics::build::MODULE_DIAMETER_M;
 use crate::emu::world::{Pole, PoleSection, StartPose, WorldSpec};
+use crate::module::MODULE_DIAMETER_M;
 
 /// Modules on the body the starts are laid out for.
 const MODULES: usize = 18;
@@ -163,7 +163,7 @@ impl PoleDesign {
         let gap: f64 = rng.random_range(0.005..0.02);
         let along: f64 = rng.random_range(-0.05..0.05);
         let modules = MODULES as f64;
-        let length = modules * crate::emu::servo::MODULE_LENGTH_M;
+        let length = modules * crate::module::MODULE_LENGTH_M;
         // Head → tail along t; towards the head is −t, its left (sin, −cos).
         let t = [yaw.cos(), yaw.sin()];
         let left = [yaw.sin(), -yaw.cos()];
@@ -272,7 +272,7 @@ mod tests {
         for seed in 0..20 {
             let w = p.world(seed, 0.6);
             let (h, yaw) = (w.start.head_m, w.start.yaw_rad);
-            let length = MODULES as f64 * crate::emu::servo::MODULE_LENGTH_M;
+            let length = MODULES as f64 * crate::module::MODULE_LENGTH_M;
             let mid = [
                 h[0] + yaw.cos() * 0.5 * length,
                 h[1] + yaw.sin() * 0.5 * length,

@@ -4,8 +4,9 @@
 
 use crate::emu::Plant;
 use crate::emu::world::WorldSpec;
-use crate::emu::world::scenario::{MODULE_LENGTH_M, MODULE_RADIUS_M, PegFence};
+use crate::emu::world::scenario::PegFence;
 use crate::lab::experiment::Goal;
+use crate::module::{MODULE_LENGTH_M, MODULE_RADIUS_M};
 
 /// Beyond either end of the array by this much, the body has gone round it, m.
 pub const OFF_END_M: f64 = 0.3;

@@ -1,8 +1,8 @@
 //! The gait selector and the failsafe allocate nothing per cycle, also when they
 //! refuse a request: proved with a counting global allocator (this test binary only).
 
-use snaked::gait::params::SEA_MAX_JOINT_SPEED_RAD_S;
 use snaked::gait::{BodyLayout, GaitKind, GaitSelector, GaitTable, ParamPatch, Plane};
+use snaked::module::MODULE_MAX_SPEED_RAD_S;
 use snaked::safety::failsafe::{Event, Failsafe, FailsafeConfig, Health, Output};
 
 use crate::support::counting_alloc;
@@ -23,7 +23,7 @@ fn selector_and_failsafe_cycles_do_not_allocate() {
         GaitTable::default(),
         GaitKind::Slithering,
         2.0,
-        SEA_MAX_JOINT_SPEED_RAD_S,
+        MODULE_MAX_SPEED_RAD_S,
     );
     let mut fs = Failsafe::new(FailsafeConfig::default());
     let (mut pos, mut vel) = (vec![0.0; 18], vec![0.0; 18]);

@@ -7,11 +7,9 @@ use rapier3d::prelude::*;
 use super::kinematics::{axis_of, chain_poses, head_pose, to_rapier};
 use super::{PhysicsConfig, PhysicsError};
 use crate::emu::plant::plane_of;
-use crate::emu::servo::{MODULE_LENGTH_M, MODULE_MASS_KG};
 use crate::emu::world::WorldSpec;
+use crate::module::{MODULE_DIAMETER_M, MODULE_LENGTH_M, MODULE_MASS_KG};
 
-/// Module diameter (SPEC §1), m.
-pub const MODULE_DIAMETER_M: f64 = 0.051;
 /// Joint limit, rad.
 pub const JOINT_LIMIT_RAD: f64 = std::f64::consts::FRAC_PI_2;
 

@@ -233,8 +233,8 @@ fn dissipation(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::emu::servo::MODULE_LENGTH_M;
     use crate::gait::{GaitKind, GaitParams};
+    use crate::module::MODULE_LENGTH_M;
 
     fn slithering(amplitude_rad: f64) -> (Serpenoid, BodyLayout) {
         let layout = BodyLayout::alternating(18, Plane::Lateral, MODULE_LENGTH_M);

@@ -70,7 +70,7 @@ fn slithering_drift_matches_the_coulomb_model() {
         };
         let physics = physics_drift_per_cycle(config, params, 2);
         let gait = Serpenoid::for_layout(GaitKind::Slithering, &params, &l);
-        let r = 0.5 * build::MODULE_DIAMETER_M;
+        let r = 0.5 * crate::module::MODULE_DIAMETER_M;
         let model = super::coulomb_model::displacement_per_cycle(&gait, &l, r, 1000)[0];
         println!(
             "ωS {waves_pi}π, explicit sliding friction {explicit}: physics {physics:+.4} m/cycle, model {model:+.4}"
@@ -183,7 +183,7 @@ fn slithering_drift_sweep() {
                             let lat = rapier3d::math::Vector::Z.cross(axis).normalize();
                             let v = f64::from(b.linvel().dot(lat));
                             let side = *b.rotation() * rapier3d::math::Vector::Y;
-                            rolling[0] += (roll * 0.5 * build::MODULE_DIAMETER_M).powi(2);
+                            rolling[0] += (roll * 0.5 * crate::module::MODULE_DIAMETER_M).powi(2);
                             rolling[1] += v * v;
                             rolling[3] += f64::from(side.z).powi(2);
                             rolling[4] += 1.0;
@@ -212,7 +212,7 @@ fn slithering_drift_sweep() {
             let model = super::coulomb_model::displacement_per_cycle(
                 &gait,
                 &l,
-                0.5 * build::MODULE_DIAMETER_M,
+                0.5 * crate::module::MODULE_DIAMETER_M,
                 1000,
             );
             for k in 0..measured.len() {
@@ -221,7 +221,7 @@ fn slithering_drift_sweep() {
                 gait.evaluate(&l, psi + params.temporal_freq_rad_s * settle, &mut a);
                 commanded.push(a);
             }
-            let r = 0.5 * build::MODULE_DIAMETER_M;
+            let r = 0.5 * crate::module::MODULE_DIAMETER_M;
             let of_measured = super::coulomb_model::displacement_of_shapes(&measured, &l, r, 2);
             let of_commanded = super::coulomb_model::displacement_of_shapes(&commanded, &l, r, 2);
             let lag: f64 = (0..N)
@@ -359,7 +359,7 @@ fn ground_pairs(
 /// the lever rule on where its contacts sit along the link, N:
 /// `[head_0, tail_0, head_1, tail_1, ...]`.
 fn ground_load_ends(p: &PhysicsPlant) -> Vec<f64> {
-    let a = (0.5 * crate::emu::servo::MODULE_LENGTH_M - 0.5 * build::MODULE_DIAMETER_M) as f32;
+    let a = (0.5 * crate::module::MODULE_LENGTH_M - 0.5 * crate::module::MODULE_DIAMETER_M) as f32;
     let mut out = Vec::with_capacity(2 * p.chain.colliders.len());
     for &ch in &p.chain.colliders {
         let (mut head, mut tail) = (0.0_f64, 0.0_f64);

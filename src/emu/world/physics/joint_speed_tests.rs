@@ -94,7 +94,7 @@ fn joints_exceed_the_motor_s_speed_only_at_contact_events() {
     let params = GaitParams::default_for(GaitKind::ConicalSidewinding);
     let cycle_s = 2.0 * PI / params.temporal_freq_rad_s;
     let settle_s = 1.0;
-    let motor = crate::gait::SEA_MAX_JOINT_SPEED_RAD_S;
+    let motor = crate::module::MODULE_MAX_SPEED_RAD_S;
     let (mut rates, mut forces) = (Vec::new(), Vec::new());
     run_gait(
         &WorldSpec::default(),
@@ -112,7 +112,7 @@ fn joints_exceed_the_motor_s_speed_only_at_contact_events() {
             }
         },
     );
-    let weight = crate::emu::servo::MODULE_MASS_KG * crate::emu::plant::GRAVITY_M_S2;
+    let weight = crate::module::MODULE_MASS_KG * crate::emu::plant::GRAVITY_M_S2;
     let (mut episodes, mut peak) = (Vec::new(), 0.0f64);
     for i in 0..N {
         let mut k = 0;

@@ -11,9 +11,9 @@ use crate::controller_interface::Controller;
 use crate::controller_interface::testing::{ObservationBuf, engage_at};
 use crate::controllers::helix_radius::HelixRadiusConfig;
 use crate::emu::Plant;
-use crate::emu::servo::MODULE_LENGTH_M;
 use crate::emu::world::{Pole, PoleSection, StartPose};
 use crate::gait::{BodyLayout, GaitKind, GaitParams, Serpenoid};
+use crate::module::MODULE_LENGTH_M;
 
 const N: usize = 18;
 
@@ -54,7 +54,7 @@ fn coiled_stepped(
 ) -> (PhysicsPlant, f64) {
     let angles = helix_angles(start_radius_m);
     let (place, r) = upright_helix(Plane::Lateral, &angles, MODULE_LENGTH_M, 0.6);
-    let pole_r = r - 0.5 * build::MODULE_DIAMETER_M - clearance_m;
+    let pole_r = r - 0.5 * crate::module::MODULE_DIAMETER_M - clearance_m;
     let spec = WorldSpec {
         poles: vec![Pole {
             x_m: 0.0,

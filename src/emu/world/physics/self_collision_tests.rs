@@ -49,7 +49,7 @@ fn fold(self_collision: bool) -> (PhysicsPlant, f64) {
 
 #[test]
 fn a_body_folded_onto_itself_does_not_pass_through_itself() {
-    let d = build::MODULE_DIAMETER_M;
+    let d = crate::module::MODULE_DIAMETER_M;
     let (plant, closest) = fold(true);
     let (ghost, ghost_closest) = fold(false);
     println!(
@@ -205,7 +205,7 @@ fn ordinary_gaits_make_no_self_contacts() {
         println!(
             "{kind:?} 3 s: {} self-contact onsets, closest centres {:.2} diameters",
             plant.self_contacts(),
-            closest / build::MODULE_DIAMETER_M
+            closest / crate::module::MODULE_DIAMETER_M
         );
         assert_eq!(plant.self_contacts(), 0, "{kind:?}");
     }

@@ -100,7 +100,7 @@ fn slip(
 /// The bottom of `link`'s round section along `n` (pointing into the link): where it
 /// touches a surface, seen from its centre.
 fn touch_point(link: &Collider, n: Vector) -> Vector {
-    link.translation() - n * (0.5 * super::build::MODULE_DIAMETER_M as f32)
+    link.translation() - n * (0.5 * crate::module::MODULE_DIAMETER_M as f32)
 }
 
 /// The largest impulse (N·s) that a force along `dir` at `point` on `body` can give

@@ -159,9 +159,9 @@ fn invalid_configs_are_refused() {
 /// positive torque).
 #[test]
 fn joint_pressed_by_pegs_reports_torque_of_the_right_sign() {
-    use crate::emu::servo::MODULE_LENGTH_M;
+    use crate::module::MODULE_LENGTH_M;
     let l = MODULE_LENGTH_M;
-    let gap = 0.5 * build::MODULE_DIAMETER_M + 0.025 + 0.001;
+    let gap = 0.5 * crate::module::MODULE_DIAMETER_M + 0.025 + 0.001;
     for sign in [1.0, -1.0] {
         // Head at the origin, body along −x; joint 4 (lateral) at x = −5 l. A positive
         // lateral angle swings the tail side right (−y): the body's ends move to −y

@@ -6,8 +6,8 @@ use std::f64::consts::PI;
 use super::tests::{hold, quiet};
 use super::*;
 use crate::emu::Plant;
-use crate::emu::servo::MODULE_LENGTH_M;
 use crate::gait::{BodyLayout, GaitKind, GaitParams, Serpenoid};
+use crate::module::MODULE_LENGTH_M;
 
 pub(super) const N: usize = 18;
 
@@ -255,7 +255,7 @@ fn rolling_rolls_sideways() {
             roll += p.link_angvel_rad_s(mid).dot(&axis) * 1e-3;
         }
     });
-    let ideal = PI * build::MODULE_DIAMETER_M;
+    let ideal = PI * crate::module::MODULE_DIAMETER_M;
     let (across, along, roll) = (across / cycles, along / cycles, roll / cycles);
     println!(
         "rolling: the middle module turns {:.2} rev about its axis and moves {across:.3} m \
@@ -319,7 +319,7 @@ fn matched_pegs(params: &GaitParams) -> (Vec<crate::emu::world::Peg>, [f64; 2]) 
     // Wavelength along the line: between crests on the same side.
     let lambda = (crests[0][0] - crests[2][0]).abs();
     let peg_d = 0.05;
-    let gap = 0.5 * build::MODULE_DIAMETER_M + 0.5 * peg_d + 0.003;
+    let gap = 0.5 * crate::module::MODULE_DIAMETER_M + 0.5 * peg_d + 0.003;
     // Measured: 3/8 of a wavelength behind each apex (near the inflection, where the
     // tailward flank faces backwards) pushes best; at 1/8 or on the apex it barely helps.
     let shift = 0.375;
@@ -398,7 +398,7 @@ fn slithering_needs_pegs() {
     let model = super::coulomb_model::displacement_per_cycle(
         &gait,
         &l,
-        0.5 * build::MODULE_DIAMETER_M,
+        0.5 * crate::module::MODULE_DIAMETER_M,
         1000,
     );
     println!(
@@ -461,7 +461,7 @@ fn speed_clamped(modules: usize) -> PhysicsConfig {
 /// cycle, past the bound (printed here).
 #[test]
 fn three_d_gaits_stay_within_the_no_slip_bound() {
-    let radius = 0.5 * build::MODULE_DIAMETER_M;
+    let radius = 0.5 * crate::module::MODULE_DIAMETER_M;
     for kind in [GaitKind::Sidewinding, GaitKind::Rolling] {
         let params = GaitParams::default_for(kind);
         let cycle_s = 2.0 * PI / params.temporal_freq_rad_s;
