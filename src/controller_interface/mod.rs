@@ -13,8 +13,9 @@ pub mod report;
 
 pub use config::ConfigError;
 pub use interface::{
-    BodyEstimate, CalibrationState, CannotFollow, Capabilities, CommandRefused, Controller, ControllerCommand, Estimator, Handover, Imu,
-    NominalMismatch, Observation, Tick, TickClock, same_kind,
+    BodyEstimate, CalibrationState, CannotFollow, Capabilities, CommandRefused, Controller,
+    ControllerCommand, Estimator, Handover, Imu, NominalMismatch, Observation, Tick, TickClock,
+    same_kind,
 };
 pub use registry::{BuildContext, Built, ControllerKind, Family, Selection};
 pub mod testing;

@@ -267,7 +267,10 @@ mod tests {
             t += dt;
             let phase = n.phase_at(t);
             let speed = (phase - last_phase) / dt;
-            assert!((speed - last_speed).abs() < 0.05, "ωT jumps at {t}: {last_speed} -> {speed}");
+            assert!(
+                (speed - last_speed).abs() < 0.05,
+                "ωT jumps at {t}: {last_speed} -> {speed}"
+            );
             n.advance(t);
             let amp = n.params.amplitude_lat_rad;
             assert!(
@@ -296,8 +299,11 @@ mod tests {
         let steps = 10_000;
         let h = d / steps as f64;
         let integral: f64 = (0..steps)
-            .map(|k| 0.5 * h * (n.params_at(k as f64 * h).temporal_freq_rad_s
-                + n.params_at((k + 1) as f64 * h).temporal_freq_rad_s))
+            .map(|k| {
+                0.5 * h
+                    * (n.params_at(k as f64 * h).temporal_freq_rad_s
+                        + n.params_at((k + 1) as f64 * h).temporal_freq_rad_s)
+            })
             .sum();
         assert!((integral - n.phase_at(d)).abs() < 1e-6, "{integral}");
     }

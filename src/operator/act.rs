@@ -22,15 +22,26 @@ pub enum Calibration {
 #[derive(Debug, Clone, PartialEq)]
 pub enum Act {
     /// Blend into this gait (arms a held or limp robot).
-    SetGait { gait: GaitKind },
+    SetGait {
+        gait: GaitKind,
+    },
     /// A controlled stop: the gait at rest within `within_s`.
-    StopGait { within_s: f64 },
+    StopGait {
+        within_s: f64,
+    },
     /// The gait moves again within `within_s`.
-    ResumeGait { within_s: f64 },
+    ResumeGait {
+        within_s: f64,
+    },
     /// Change some of a gait's parameters (a driving controller follows them).
-    SetParams { gait: GaitKind, patch: ParamPatch },
+    SetParams {
+        gait: GaitKind,
+        patch: ParamPatch,
+    },
     /// The blend time of gait switches, s.
-    SetBlendTime { blend_time_s: f64 },
+    SetBlendTime {
+        blend_time_s: f64,
+    },
     /// Build `selection` for `gait` (on the gait's parameters after `patch`) and
     /// install it, with `patch` if it changes anything.
     SetController {

@@ -96,7 +96,9 @@ impl Operator {
     /// Runs on the API's runtime, whichever runtime awaits it.
     pub async fn act(&self, who: &str, act: Act) -> Result<Done, OperatorError> {
         let (shared, who) = (self.shared.clone(), who.to_owned());
-        let task = self.runtime.spawn(async move { carry_out(&shared, &who, act).await });
+        let task = self
+            .runtime
+            .spawn(async move { carry_out(&shared, &who, act).await });
         task.await.unwrap_or_else(|_| {
             Err(OperatorError::new(
                 code::NOT_READY,

@@ -15,9 +15,9 @@ use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use super::act::{Act, Done};
-use super::navigator_runner::{NavigatorRunner, RunnerView};
 use super::controllers;
 use super::error::{OperatorError, code};
+use super::navigator_runner::{NavigatorRunner, RunnerView};
 use super::shared::Shared;
 use crate::gait::GaitKind;
 use crate::navigation::navigator::{NavView, Navigator, NavigatorConfig};

@@ -37,7 +37,12 @@ impl NavigatorRunner {
     /// (a choice's) already runs `gait`.
     pub fn new(nav: Navigator, installed: impl Fn(GaitKind, &str) -> bool) -> Self {
         let mut known = [None; KINDS];
-        for c in [Choice::Sidewind, Choice::BackOff, Choice::Slither, Choice::Turn] {
+        for c in [
+            Choice::Sidewind,
+            Choice::BackOff,
+            Choice::Slither,
+            Choice::Turn,
+        ] {
             if known[c.gait().index()].is_none() && installed(c.gait(), c.controller()) {
                 known[c.gait().index()] = Some(c.controller());
             }

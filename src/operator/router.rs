@@ -52,9 +52,7 @@ impl Drop for TicketGuard<'_> {
     }
 }
 
-fn lock(
-    p: &Pending,
-) -> std::sync::MutexGuard<'_, HashMap<u64, oneshot::Sender<LoopResult>>> {
+fn lock(p: &Pending) -> std::sync::MutexGuard<'_, HashMap<u64, oneshot::Sender<LoopResult>>> {
     // A panic while holding this lock leaves the map consistent (single inserts/removes).
     p.lock().unwrap_or_else(|e| e.into_inner())
 }
@@ -113,7 +111,10 @@ impl AckRouter {
 
     /// Send `request` to the loop and wait for its ack (at most `ack_timeout`); what
     /// became of the gait's controller, for a change of its parameters or controller.
-    pub(crate) async fn call(&self, request: LoopRequest) -> Result<Option<Continuity>, OperatorError> {
+    pub(crate) async fn call(
+        &self,
+        request: LoopRequest,
+    ) -> Result<Option<Continuity>, OperatorError> {
         self.call_with(request, None).await
     }
 

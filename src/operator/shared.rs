@@ -1,12 +1,12 @@
 //! What the operator API shares between its callers.
 use crossbeam_channel::Receiver;
 
+use super::handle::{DaemonInfo, RecordView};
 use super::router::AckRouter;
 use crate::controller_interface::catalog::Catalog;
 use crate::gait::BodyLayout;
 use crate::rt::controller_slots::Installed;
 use crate::rt::telemetry::TelemetryReader;
-use super::handle::{DaemonInfo, RecordView};
 
 pub(crate) struct Shared {
     pub(crate) router: AckRouter,

@@ -192,7 +192,10 @@ fn a_request_s_continuity_is_recorded() {
     assert_eq!(v["continuity"], "followed");
     let why = "a reversal of the wave's direction";
     let v = record(Ok(Some(Continuity::HandedBack { why })));
-    assert_eq!((v["continuity"].as_str(), v["why"].as_str()), (Some("handed_back"), Some(why)));
+    assert_eq!(
+        (v["continuity"].as_str(), v["why"].as_str()),
+        (Some("handed_back"), Some(why))
+    );
     let v = record(Ok(None));
     assert!(v.get("continuity").is_none(), "{v}");
 }

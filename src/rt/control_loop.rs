@@ -18,9 +18,7 @@ use crate::navigation::state::NavigatorState;
 use crate::navigation::stuck::StuckConfig;
 use crate::rt::controller_slots::{ControllerSlots, Installed};
 use crate::rt::gait_clock::{DEFAULT_STOP_S, GaitClock, STOP_TIME_RANGE_S};
-use crate::rt::messages::{
-    Ack, Continuity, Envelope, LoopRequest, LoopResult, Refusal, Rejection,
-};
+use crate::rt::messages::{Ack, Continuity, Envelope, LoopRequest, LoopResult, Refusal, Rejection};
 use crate::rt::observer::CycleObserver;
 use crate::rt::pacer::{Cycle, Pacer};
 use crate::rt::setpoint_guard::{NonFiniteSetpoint, SetpointGuard};

@@ -23,8 +23,8 @@ use serde::Serialize;
 use crate::controller_interface::catalog::NO_CONTROLLER;
 use crate::controller_interface::report::ControllerReport;
 use crate::controller_interface::{
-    CannotFollow, Capabilities, Controller, ControllerCommand, Handover, NominalMismatch, Observation,
-    TickClock,
+    CannotFollow, Capabilities, Controller, ControllerCommand, Handover, NominalMismatch,
+    Observation, TickClock,
 };
 use crate::gait::{GaitKind, GaitParams, GaitSelector};
 use crate::rt::messages::Rejection;

@@ -549,11 +549,18 @@ fn a_driving_controller_follows_the_operator_s_speed_changes() {
     let c = h.telemetry.latest().controller;
     assert_eq!(driven, 40 * 500, "the controller drove every cycle");
     assert_eq!(c.takeovers, 1, "never handed back");
-    assert!(step <= MAX_STEP_RAD, "a set-point jumped {step} rad in a cycle");
+    assert!(
+        step <= MAX_STEP_RAD,
+        "a set-point jumped {step} rad in a cycle"
+    );
     let guard = h.control.guard_counters();
     assert_eq!(guard.slew_limited_cycles, 0, "{guard:?}");
     assert_eq!(guard.range_clamped_cycles, 0, "{guard:?}");
-    assert!(c.report.signals[3] >= 1.0, "its windows live on: {:?}", c.report);
+    assert!(
+        c.report.signals[3] >= 1.0,
+        "its windows live on: {:?}",
+        c.report
+    );
 }
 
 /// Issue 45: a gain changed every second is taken in place: the same controller
@@ -566,12 +573,19 @@ fn a_gain_change_is_taken_in_place() {
     let mut back = retired(&h).len();
     for k in 0..20 {
         let damping = if k % 2 == 0 { 8.0 } else { 5.0 };
-        let c = build_with(&h, "a_ws_omega", serde_json::json!({
-            "amplitude": {"gains": {"damping": damping}},
-            "torque_cutoff_hz": 4.0 + k as f64 * 0.1,
-        }));
+        let c = build_with(
+            &h,
+            "a_ws_omega",
+            serde_json::json!({
+                "amplitude": {"gains": {"damping": damping}},
+                "torque_cutoff_hz": 4.0 + k as f64 * 0.1,
+            }),
+        );
         let id = c.id;
-        assert_eq!(answer(&mut h, SET, Some(c)), Ok(Some(Continuity::Reconfigured)));
+        assert_eq!(
+            answer(&mut h, SET, Some(c)),
+            Ok(Some(Continuity::Reconfigured))
+        );
         assert_eq!(h.telemetry.latest().controller.active_id, id);
         driven += usize::from(engagement(&h) == Engagement::Engaged);
         drive(&mut h, 999, &mut driven, &mut step);
@@ -627,9 +641,23 @@ fn what_cannot_be_taken_in_place_says_why() {
         temporal_freq_rad_s: Some(w),
         ..ParamPatch::default()
     };
-    let a = answer(&mut h, LoopRequest::SetParams { gait, patch: patch(1.4) }, None);
+    let a = answer(
+        &mut h,
+        LoopRequest::SetParams {
+            gait,
+            patch: patch(1.4),
+        },
+        None,
+    );
     assert_eq!(a, Ok(Some(Continuity::Followed)));
-    let a = answer(&mut h, LoopRequest::SetParams { gait, patch: patch(-1.0) }, None);
+    let a = answer(
+        &mut h,
+        LoopRequest::SetParams {
+            gait,
+            patch: patch(-1.0),
+        },
+        None,
+    );
     assert!(
         matches!(a, Ok(Some(Continuity::HandedBack { why })) if why.contains("reversal")),
         "{a:?}"

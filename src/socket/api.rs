@@ -192,7 +192,12 @@ impl Params {
     }
 
     /// A number param that must lie in `min..=max`.
-    pub fn take_f64_in(&mut self, name: &str, min: f64, max: f64) -> Result<Option<f64>, OperatorError> {
+    pub fn take_f64_in(
+        &mut self,
+        name: &str,
+        min: f64,
+        max: f64,
+    ) -> Result<Option<f64>, OperatorError> {
         match self.take_f64(name)? {
             Some(v) if !(min..=max).contains(&v) => Err(OperatorError::invalid_params(format!(
                 "`{name}` = {} is out of range [{}, {}]",

@@ -74,8 +74,10 @@ pub(crate) async fn serve<S>(
                 } else {
                     "closing: idle for too long (no request and no telemetry stream)"
                 };
-                let line =
-                    api::error_line(&api::null_id(), &OperatorError::new(code::TOO_MANY_CLIENTS, why));
+                let line = api::error_line(
+                    &api::null_id(),
+                    &OperatorError::new(code::TOO_MANY_CLIENTS, why),
+                );
                 let _ = session.send(line).await;
                 break;
             }

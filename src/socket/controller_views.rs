@@ -136,7 +136,9 @@ pub(crate) fn compliance_selection(
 /// A controller's view with what became of it (`continuity`, and `why` where it
 /// could not take the change in place).
 pub(crate) fn with_continuity(mut view: Value, continuity: Option<Continuity>) -> Value {
-    if let (Value::Object(map), Ok(Value::Object(c))) = (&mut view, serde_json::to_value(continuity)) {
+    if let (Value::Object(map), Ok(Value::Object(c))) =
+        (&mut view, serde_json::to_value(continuity))
+    {
         map.extend(c);
     }
     view
@@ -197,4 +199,3 @@ pub(crate) fn telemetry_view(c: &ControllerTelemetry, catalog: &Catalog) -> Valu
     v["fields"] = Value::Array(fields);
     v
 }
-

@@ -4,7 +4,7 @@
 //! use the same mapping ([`call_json`]), so both edges answer alike.
 use serde_json::{Value, json};
 
-use super::api::{PATCH_FIELDS, Params, OperatorError, code};
+use super::api::{OperatorError, PATCH_FIELDS, Params, code};
 use super::controller_views::{self, info_view, telemetry_view, with_continuity};
 use super::session::Session;
 use super::shared::Shared;
@@ -389,7 +389,11 @@ pub fn controller_set_params(mut p: Params) -> Result<(GaitKind, Selection), Ope
 pub const AUTH_FAILURE_DELAY: std::time::Duration = std::time::Duration::from_secs(1);
 pub const MAX_FAILED_AUTHS: u32 = 3;
 
-async fn auth(shared: &Shared, session: &mut Session, mut p: Params) -> Result<Value, OperatorError> {
+async fn auth(
+    shared: &Shared,
+    session: &mut Session,
+    mut p: Params,
+) -> Result<Value, OperatorError> {
     let token = p.take_str("token")?.ok_or_else(|| missing("token"))?;
     p.finish(&["token"])?;
     let ok = shared.tcp_token.as_deref().is_some_and(|t| {

@@ -14,9 +14,9 @@ use tokio::net::{TcpListener, UnixListener};
 
 use super::api::{self, OperatorError, code};
 use super::clients::{Admission, Clients};
-use crate::operator::{Operator, OperatorConfig};
 use super::shared::Shared;
 use super::{LoopHandle, ServerConfig, conn};
+use crate::operator::{Operator, OperatorConfig};
 
 /// How long a shutdown waits for the connections to answer what they are doing and
 /// close (an answer the loop owes comes within its ack timeout, or at once when the

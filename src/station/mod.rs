@@ -97,7 +97,12 @@ impl Station {
 
     /// A control-socket method with its JSON params, as `who`: the services' edge
     /// (the socket's own mapping, so both answer alike).
-    pub async fn call_json(&self, who: &str, method: &str, params: &Value) -> Result<Value, OperatorError> {
+    pub async fn call_json(
+        &self,
+        who: &str,
+        method: &str,
+        params: &Value,
+    ) -> Result<Value, OperatorError> {
         crate::socket::call_json(self.operator()?, who, method, params).await
     }
 

@@ -142,7 +142,10 @@ fn act_for(l: &Live, name: &str, value: Value) -> Result<Act, String> {
     }
     let c = &l.controller;
     if !c.is_object() {
-        return Err(format!("{name}: the {} gait has no controller", l.gait.name()));
+        return Err(format!(
+            "{name}: the {} gait has no controller",
+            l.gait.name()
+        ));
     }
     let text = |v: &Value| v.as_str().map(str::to_owned);
     let mut sel = Selection {
@@ -275,7 +278,10 @@ impl ParameterHandler for Parameters {
                         }
                     };
                     let answer = match act_for(&l, &p.name, json_of(v)) {
-                        Ok(act) => op.act_logged(&who, "", act).await.map_err(|e| e.to_string()),
+                        Ok(act) => op
+                            .act_logged(&who, "", act)
+                            .await
+                            .map_err(|e| e.to_string()),
                         Err(e) => Err(e),
                     };
                     if let Err(e) = answer {

@@ -10,9 +10,9 @@ use foxglove::Schema;
 use foxglove::websocket::service::{Request, Service, ServiceSchema};
 use serde_json::{Value, json};
 
+use super::Station;
 use super::access::Access;
 use super::actions::Actions;
-use super::Station;
 use crate::operator::{Act, Done, OperatorError, code};
 
 /// The services, in the order they are advertised.
@@ -51,7 +51,12 @@ impl Operating {
     }
 
     /// Carries out `method` for `client` (privilege checked), logs it, answers.
-    pub async fn call(&self, client: u32, method: &str, params: Value) -> Result<Value, OperatorError> {
+    pub async fn call(
+        &self,
+        client: u32,
+        method: &str,
+        params: Value,
+    ) -> Result<Value, OperatorError> {
         let name = Self::client_name(client);
         let answer = if method == "auth" {
             self.auth(client, &params).await
@@ -77,12 +82,7 @@ impl Operating {
     /// Carries a typed `act` out as `who` (teleop, the Parameters panel) and records it
     /// on `/operator` as the socket's method with its params and answer; a refusal is
     /// logged, `what` naming where it came from ("teleop ", or "").
-    pub async fn act_logged(
-        &self,
-        who: &str,
-        what: &str,
-        act: Act,
-    ) -> Result<Done, OperatorError> {
+    pub async fn act_logged(&self, who: &str, what: &str, act: Act) -> Result<Done, OperatorError> {
         let (method, params) = (act.method(), crate::socket::act_params(&act));
         let answer = self.station.act(who, act).await;
         let logged = match (&answer, self.station.operator()) {
@@ -190,17 +190,8 @@ mod tests {
             params_of(br#"{"gait":"rolling"}"#).unwrap()["gait"],
             "rolling"
         );
-        assert_eq!(
-            params_of(b"[1]").unwrap_err().code,
-            code::INVALID_PARAMS
-        );
-        assert_eq!(
-            params_of(b"{").unwrap_err().code,
-            code::PARSE_ERROR
-        );
-        assert_eq!(
-            params_of(&[0xff]).unwrap_err().code,
-            code::INVALID_PARAMS
-        );
+        assert_eq!(params_of(b"[1]").unwrap_err().code, code::INVALID_PARAMS);
+        assert_eq!(params_of(b"{").unwrap_err().code, code::PARSE_ERROR);
+        assert_eq!(params_of(&[0xff]).unwrap_err().code, code::INVALID_PARAMS);
     }
 }

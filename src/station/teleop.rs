@@ -243,9 +243,7 @@ impl Teleop {
         let mut out = Vec::new();
         if self.state != TeleopState::Driving {
             // A session starts (or restarts after the dead-man): the gait moves again.
-            out.push(Act::ResumeGait {
-                within_s: c.stop_s,
-            });
+            out.push(Act::ResumeGait { within_s: c.stop_s });
         }
         self.state = TeleopState::Driving;
         let speed = (twist.forward * c.speed_rad_s).clamp(-c.max_speed_rad_s, c.max_speed_rad_s);
@@ -300,9 +298,7 @@ impl Teleop {
         match self.state {
             TeleopState::Driving if age >= c.timeout_s => {
                 self.state = TeleopState::Stopped;
-                Some(Act::StopGait {
-                    within_s: c.stop_s,
-                })
+                Some(Act::StopGait { within_s: c.stop_s })
             }
             TeleopState::Stopped if age >= c.timeout_s + c.hold_after_s => {
                 self.state = TeleopState::Idle;

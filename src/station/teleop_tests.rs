@@ -25,11 +25,13 @@ fn a_twist_sets_speed_and_steering_within_limits() {
         .pop()
         .unwrap();
     assert_eq!(
-        params(&r)["temporal_freq_rad_s"], 2.0,
+        params(&r)["temporal_freq_rad_s"],
+        2.0,
         "clamped to max_speed_rad_s"
     );
     assert_eq!(
-        params(&r)["offset_lat_rad"], 0.25,
+        params(&r)["offset_lat_rad"],
+        0.25,
         "clamped to max_offset_rad"
     );
     // Backing: the turn keeps its sense.

@@ -8,8 +8,8 @@ use crate::controller_interface::report::{
     ControllerReport, MAX_WINDOWS as REPORT_WINDOWS, WindowField,
 };
 use crate::controller_interface::{
-    CannotFollow, Capabilities, CommandRefused, Controller, ControllerCommand, Handover, NominalMismatch,
-    Observation, Tick, same_kind,
+    CannotFollow, Capabilities, CommandRefused, Controller, ControllerCommand, Handover,
+    NominalMismatch, Observation, Tick, same_kind,
 };
 use crate::controllers::steering::HeadingHold;
 use crate::gait::{BodyLayout, GaitParams, Plane};

@@ -13,8 +13,8 @@ use super::sections::Sections;
 use crate::controller_interface::nominal::{Nominal, lateral_room, within};
 use crate::controller_interface::report::ControllerReport;
 use crate::controller_interface::{
-    CannotFollow, Capabilities, CommandRefused, Controller, ControllerCommand, Handover, NominalMismatch,
-    Observation, Tick, same_kind,
+    CannotFollow, Capabilities, CommandRefused, Controller, ControllerCommand, Handover,
+    NominalMismatch, Observation, Tick, same_kind,
 };
 use crate::controllers::steering::HeadingHold;
 use crate::gait::{BodyLayout, GaitParams, JOINT_LIMIT_RAD, Plane};

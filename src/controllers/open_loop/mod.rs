@@ -4,11 +4,11 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::controller_interface::report::{ControllerReport, ReportSpec, SignalSpec};
 use crate::controller_interface::nominal::Nominal;
+use crate::controller_interface::report::{ControllerReport, ReportSpec, SignalSpec};
 use crate::controller_interface::{
-    BuildContext, CannotFollow, Capabilities, CommandRefused, ConfigError, Controller, ControllerCommand,
-    ControllerKind, Handover, NominalMismatch, Observation, Tick, same_kind,
+    BuildContext, CannotFollow, Capabilities, CommandRefused, ConfigError, Controller,
+    ControllerCommand, ControllerKind, Handover, NominalMismatch, Observation, Tick, same_kind,
 };
 use crate::controllers::steering::{HeadingHold, SteeringConfig};
 use crate::gait::{BodyLayout, GaitKind, GaitParams, Serpenoid};

@@ -11,8 +11,8 @@ use super::reversal::{Reversal, wrap_pi};
 use crate::controller_interface::nominal::{Nominal, lateral_room, within};
 use crate::controller_interface::report::ControllerReport;
 use crate::controller_interface::{
-    CannotFollow, Capabilities, CommandRefused, Controller, ControllerCommand, Handover, NominalMismatch,
-    Observation, Tick, same_kind,
+    CannotFollow, Capabilities, CommandRefused, Controller, ControllerCommand, Handover,
+    NominalMismatch, Observation, Tick, same_kind,
 };
 use crate::controllers::compliant_slithering::CompliantSlithering;
 use crate::gait::{BodyLayout, GaitParams, JOINT_LIMIT_RAD, Plane};

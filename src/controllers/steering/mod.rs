@@ -175,7 +175,11 @@ struct CycleTurn {
 
 /// A gait cycle of a wave at `omega` rad/s, s (a stopped wave counts as 2π s).
 fn cycle_of(omega: f64) -> f64 {
-    if omega.abs() > 1e-6 { TAU / omega.abs() } else { TAU }
+    if omega.abs() > 1e-6 {
+        TAU / omega.abs()
+    } else {
+        TAU
+    }
 }
 
 /// A cycle whose |heading error| grew by this much was lost to the terrain, rad.

@@ -70,7 +70,10 @@ fn teleop_and_gain_changes_keep_compliant_slithering_driving_among_pegs() {
         if s["controller"]["preset"] == "a_ws_omega" && s["controller"]["state"] == "engaged" {
             break s;
         }
-        assert!(start.elapsed() < Duration::from_secs(30), "never engaged: {s}");
+        assert!(
+            start.elapsed() < Duration::from_secs(30),
+            "never engaged: {s}"
+        );
     };
 
     // 20 s of teleop: a new speed and steering every 0.5 s, twists at 10 Hz.
@@ -95,10 +98,8 @@ fn teleop_and_gain_changes_keep_compliant_slithering_driving_among_pegs() {
     let mut edits = 0;
     while start.elapsed() < Duration::from_secs(20) {
         let damping = if edits % 2 == 0 { 8.0 } else { 6.0 };
-        let now = fx.set_parameters(&[(
-            "controller.config.amplitude.gains.damping",
-            json!(damping),
-        )]);
+        let now =
+            fx.set_parameters(&[("controller.config.amplitude.gains.damping", json!(damping))]);
         assert_eq!(
             now["controller.config.amplitude.gains.damping"],
             json!(damping),
@@ -140,6 +141,9 @@ fn teleop_and_gain_changes_keep_compliant_slithering_driving_among_pegs() {
         );
         assert!(cycles > 15_000, "{what}: {cycles} cycles recorded");
         assert!(share >= 0.95, "{what}: the controller drove {share}");
-        assert!(step <= MAX_SPEED_RAD_S, "{what}: a set-point jumped ({step} rad/s)");
+        assert!(
+            step <= MAX_SPEED_RAD_S,
+            "{what}: a set-point jumped ({step} rad/s)"
+        );
     }
 }
