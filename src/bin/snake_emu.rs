@@ -11,9 +11,9 @@ use anyhow::Context;
 use clap::Parser;
 use snaked::emu::Plant;
 use snaked::emu::faults::{FaultConfig, Silence};
+use snaked::emu::model_file::ModelFile;
 use snaked::emu::module::ModuleConfig;
 use snaked::emu::plant::JointSpacePlant;
-use snaked::emu::scenario::Scenario;
 use snaked::emu::server::{Mode, Server, ServerConfig};
 use snaked::emu::world::physics::{PhysicsConfig, PhysicsPlant};
 use snaked::emu::world::scenario::WorldScenario;
@@ -58,14 +58,15 @@ struct Args {
     /// Silence module K (0-based) from T s, for D s or for good: K@T[+D]. Repeatable.
     #[arg(long, value_name = "K@T[+D]")]
     silence: Vec<Silence>,
-    /// Scenario file (TOML): scripted torques, obstacles, servo and noise parameters.
-    #[arg(long, value_name = "FILE.toml")]
-    scenario: Option<PathBuf>,
+    /// Model file (TOML): servo and noise parameters, the first joint's plane, and for
+    /// the joint-space plant scripted torques and obstacles (`--scenario` is its old name).
+    #[arg(long, value_name = "FILE.toml", alias = "scenario")]
+    model: Option<PathBuf>,
     /// Write the ground truth (one CSV row per physics step) to this file.
     #[arg(long, value_name = "FILE.csv")]
     record: Option<PathBuf>,
     /// Use the rigid-body physics plant in this world scenario (docs/scenarios.md, e.g.
-    /// scenarios/peg-board-40.toml). The scenario's first plane, servo and noise
+    /// scenarios/peg-board-40.toml). The model file's first plane, servo and noise
     /// parameters still apply; its scripted torques and obstacles do not.
     #[arg(long, value_name = "FILE.toml")]
     world: Option<PathBuf>,
@@ -87,27 +88,27 @@ fn main() -> anyhow::Result<()> {
     snaked::daemon::logging::init("info");
     let args = Args::parse();
 
-    let scenario = match &args.scenario {
-        Some(path) => Scenario::load(path)?,
-        None => Scenario::default(),
+    let model = match &args.model {
+        Some(path) => ModelFile::load(path)?,
+        None => ModelFile::default(),
     };
     let plant: Box<dyn Plant> = match &args.world {
         Some(path) => {
             let spec = WorldScenario::load(path)?.generate_trial(args.modules, args.world_trial)?;
             let config = PhysicsConfig {
                 modules: args.modules,
-                first_plane: scenario.first_plane,
-                servo: scenario.servo,
-                noise: scenario.noise,
+                first_plane: model.first_plane,
+                servo: model.servo,
+                noise: model.noise,
                 seed: args.seed,
-                temperature_c: scenario.temperature_c,
-                voltage_v: scenario.voltage_v,
+                temperature_c: model.temperature_c,
+                voltage_v: model.voltage_v,
                 ..PhysicsConfig::default()
             };
             Box::new(PhysicsPlant::new(&spec, config).context("invalid physics plant")?)
         }
         None => Box::new(
-            JointSpacePlant::new(scenario.plant_config(args.modules, args.seed))
+            JointSpacePlant::new(model.plant_config(args.modules, args.seed))
                 .context("invalid plant configuration")?,
         ),
     };

@@ -5,10 +5,10 @@
 //! joint-space model without touching the network side.
 
 pub mod faults;
+pub mod model_file;
 pub mod module;
 pub mod plant;
 pub mod pose_csv;
-pub mod scenario;
 pub mod server;
 pub mod servo;
 pub mod sim_bus;

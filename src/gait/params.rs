@@ -241,22 +241,17 @@ impl Field {
     }
 
     pub fn get(self, p: &GaitParams) -> f64 {
-        match self {
-            Field::AmplitudeLat => p.amplitude_lat_rad,
-            Field::AmplitudeDor => p.amplitude_dor_rad,
-            Field::OffsetLat => p.offset_lat_rad,
-            Field::OffsetDor => p.offset_dor_rad,
-            Field::SpatialFreq => p.spatial_freq_rad,
-            Field::TemporalFreq => p.temporal_freq_rad_s,
-            Field::PhaseShift => p.phase_shift_rad,
-            Field::Taper => p.taper,
-            Field::HelixRadius => p.helix_radius_m,
-            Field::HelixPitch => p.helix_pitch_m,
-        }
+        let mut copy = *p;
+        *self.slot_mut(&mut copy)
     }
 
     pub fn set(self, p: &mut GaitParams, value: f64) {
-        let slot = match self {
+        *self.slot_mut(p) = value;
+    }
+
+    /// This field's place in `p`.
+    fn slot_mut(self, p: &mut GaitParams) -> &mut f64 {
+        match self {
             Field::AmplitudeLat => &mut p.amplitude_lat_rad,
             Field::AmplitudeDor => &mut p.amplitude_dor_rad,
             Field::OffsetLat => &mut p.offset_lat_rad,
@@ -267,58 +262,39 @@ impl Field {
             Field::Taper => &mut p.taper,
             Field::HelixRadius => &mut p.helix_radius_m,
             Field::HelixPitch => &mut p.helix_pitch_m,
-        };
-        *slot = value;
+        }
+    }
+
+    /// This field's place in `patch`.
+    pub fn in_patch_mut(self, patch: &mut ParamPatch) -> &mut Option<f64> {
+        match self {
+            Field::AmplitudeLat => &mut patch.amplitude_lat_rad,
+            Field::AmplitudeDor => &mut patch.amplitude_dor_rad,
+            Field::OffsetLat => &mut patch.offset_lat_rad,
+            Field::OffsetDor => &mut patch.offset_dor_rad,
+            Field::SpatialFreq => &mut patch.spatial_freq_rad,
+            Field::TemporalFreq => &mut patch.temporal_freq_rad_s,
+            Field::PhaseShift => &mut patch.phase_shift_rad,
+            Field::Taper => &mut patch.taper,
+            Field::HelixRadius => &mut patch.helix_radius_m,
+            Field::HelixPitch => &mut patch.helix_pitch_m,
+        }
     }
 
     /// Sets this field's value in `patch`.
     pub fn set_in_patch(self, patch: &mut ParamPatch, value: f64) {
-        let slot = match self {
-            Field::AmplitudeLat => &mut patch.amplitude_lat_rad,
-            Field::AmplitudeDor => &mut patch.amplitude_dor_rad,
-            Field::OffsetLat => &mut patch.offset_lat_rad,
-            Field::OffsetDor => &mut patch.offset_dor_rad,
-            Field::SpatialFreq => &mut patch.spatial_freq_rad,
-            Field::TemporalFreq => &mut patch.temporal_freq_rad_s,
-            Field::PhaseShift => &mut patch.phase_shift_rad,
-            Field::Taper => &mut patch.taper,
-            Field::HelixRadius => &mut patch.helix_radius_m,
-            Field::HelixPitch => &mut patch.helix_pitch_m,
-        };
-        *slot = Some(value);
+        *self.in_patch_mut(patch) = Some(value);
     }
 
     /// Removes this field from `patch`.
     pub fn clear_in_patch(self, patch: &mut ParamPatch) {
-        let slot = match self {
-            Field::AmplitudeLat => &mut patch.amplitude_lat_rad,
-            Field::AmplitudeDor => &mut patch.amplitude_dor_rad,
-            Field::OffsetLat => &mut patch.offset_lat_rad,
-            Field::OffsetDor => &mut patch.offset_dor_rad,
-            Field::SpatialFreq => &mut patch.spatial_freq_rad,
-            Field::TemporalFreq => &mut patch.temporal_freq_rad_s,
-            Field::PhaseShift => &mut patch.phase_shift_rad,
-            Field::Taper => &mut patch.taper,
-            Field::HelixRadius => &mut patch.helix_radius_m,
-            Field::HelixPitch => &mut patch.helix_pitch_m,
-        };
-        *slot = None;
+        *self.in_patch_mut(patch) = None;
     }
 
     /// The patch's value for this field, if it carries one.
     pub fn in_patch(self, patch: &ParamPatch) -> Option<f64> {
-        match self {
-            Field::AmplitudeLat => patch.amplitude_lat_rad,
-            Field::AmplitudeDor => patch.amplitude_dor_rad,
-            Field::OffsetLat => patch.offset_lat_rad,
-            Field::OffsetDor => patch.offset_dor_rad,
-            Field::SpatialFreq => patch.spatial_freq_rad,
-            Field::TemporalFreq => patch.temporal_freq_rad_s,
-            Field::PhaseShift => patch.phase_shift_rad,
-            Field::Taper => patch.taper,
-            Field::HelixRadius => patch.helix_radius_m,
-            Field::HelixPitch => patch.helix_pitch_m,
-        }
+        let mut copy = *patch;
+        *self.in_patch_mut(&mut copy)
     }
 }
 

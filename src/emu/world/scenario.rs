@@ -3,7 +3,7 @@
 //! an explicit [`WorldSpec`] by [`WorldScenario::generate`]. `docs/scenarios.md` documents
 //! every key and its default; `scenarios/` holds examples.
 //!
-//! A separate file type from the emulator's scenario (`emu::scenario`): that one describes
+//! A separate file type from the emulator's model file (`emu::model_file`): that one describes
 //! the robot model (servo, noise), this one the world; the lab varies them independently.
 
 use std::path::{Path, PathBuf};

@@ -1,4 +1,6 @@
-//! The emulator's scenario file (TOML): the scripted world and the model's parameters.
+//! The emulator's model file (TOML): the model's parameters (servo, noise, first plane)
+//! and, for the joint-space plant, scripted torques and obstacles. Not a world scenario
+//! (`emu::world::scenario`, `scenarios/`): that one describes the world.
 //! Every key is optional; `config/snake-emu.example.toml` documents them all.
 
 use std::path::{Path, PathBuf};
@@ -7,10 +9,10 @@ use super::plant::{NoiseConfig, Obstacle, PlantConfig, ScriptedTorque};
 use super::servo::ServoParams;
 use crate::gait::Plane;
 
-/// Contents of a scenario file.
+/// Contents of a model file.
 #[derive(Debug, Clone, PartialEq, serde::Deserialize)]
 #[serde(default, deny_unknown_fields)]
-pub struct Scenario {
+pub struct ModelFile {
     /// Plane of joint 0 (`"lateral"` or `"dorsal"`); the others alternate.
     pub first_plane: Plane,
     /// Reported module temperature, °C.
@@ -27,7 +29,7 @@ pub struct Scenario {
     pub obstacles: Vec<Obstacle>,
 }
 
-impl Default for Scenario {
+impl Default for ModelFile {
     fn default() -> Self {
         let p = PlantConfig::new(1);
         Self {
@@ -43,14 +45,14 @@ impl Default for Scenario {
 }
 
 #[derive(Debug, thiserror::Error)]
-pub enum EmuScenarioError {
-    #[error("scenario {path}: {source}")]
+pub enum ModelFileError {
+    #[error("model file {path}: {source}")]
     Read {
         path: PathBuf,
         #[source]
         source: std::io::Error,
     },
-    #[error("scenario {path}: {source}")]
+    #[error("model file {path}: {source}")]
     Parse {
         path: PathBuf,
         #[source]
@@ -58,14 +60,14 @@ pub enum EmuScenarioError {
     },
 }
 
-impl Scenario {
+impl ModelFile {
     /// Read and parse `path` (unknown keys are errors).
-    pub fn load(path: &Path) -> Result<Self, EmuScenarioError> {
-        let text = std::fs::read_to_string(path).map_err(|source| EmuScenarioError::Read {
+    pub fn load(path: &Path) -> Result<Self, ModelFileError> {
+        let text = std::fs::read_to_string(path).map_err(|source| ModelFileError::Read {
             path: path.to_owned(),
             source,
         })?;
-        Self::parse(&text).map_err(|source| EmuScenarioError::Parse {
+        Self::parse(&text).map_err(|source| ModelFileError::Parse {
             path: path.to_owned(),
             source,
         })
@@ -75,7 +77,7 @@ impl Scenario {
         toml::from_str(text)
     }
 
-    /// The plant this scenario describes, for `modules` modules and noise `seed`.
+    /// The plant this model file describes, for `modules` modules and noise `seed`.
     pub fn plant_config(&self, modules: usize, seed: u64) -> PlantConfig {
         PlantConfig {
             modules,
@@ -98,12 +100,12 @@ mod tests {
 
     #[test]
     fn empty_file_is_the_defaults() {
-        assert_eq!(Scenario::parse("").unwrap(), Scenario::default());
+        assert_eq!(ModelFile::parse("").unwrap(), ModelFile::default());
     }
 
     #[test]
-    fn full_scenario_parses() {
-        let s = Scenario::parse(
+    fn a_full_model_file_parses() {
+        let s = ModelFile::parse(
             r#"
             first_plane = "dorsal"
             voltage_v = 47.5
@@ -136,15 +138,15 @@ mod tests {
 
     #[test]
     fn unknown_keys_are_errors_naming_the_file() {
-        assert!(Scenario::parse("stiffness = 3").is_err());
-        assert!(Scenario::parse("[servo]\nstifness = 3").is_err());
-        assert!(Scenario::parse("[[obstacle]]\njoint = 1\nangle_rad = 0\nside = \"up\"").is_err());
+        assert!(ModelFile::parse("stiffness = 3").is_err());
+        assert!(ModelFile::parse("[servo]\nstifness = 3").is_err());
+        assert!(ModelFile::parse("[[obstacle]]\njoint = 1\nangle_rad = 0\nside = \"up\"").is_err());
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("bad.toml");
         std::fs::write(&path, "[noise]\nfoo = 1\n").unwrap();
-        let msg = Scenario::load(&path).unwrap_err().to_string();
+        let msg = ModelFile::load(&path).unwrap_err().to_string();
         assert!(msg.contains("bad.toml") && msg.contains("foo"), "{msg}");
-        let missing = Scenario::load(&dir.path().join("none.toml"))
+        let missing = ModelFile::load(&dir.path().join("none.toml"))
             .unwrap_err()
             .to_string();
         assert!(missing.contains("none.toml"), "{missing}");
@@ -153,7 +155,7 @@ mod tests {
     #[test]
     fn example_config_parses() {
         let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("config/snake-emu.example.toml");
-        let s = Scenario::load(&path).unwrap();
+        let s = ModelFile::load(&path).unwrap();
         crate::emu::plant::JointSpacePlant::new(s.plant_config(18, 0)).unwrap();
     }
 }
