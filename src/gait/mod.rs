@@ -5,13 +5,13 @@
 //! construction, nothing reads a clock. See `docs/gaits.md`.
 
 pub mod kinematics;
-pub mod layout;
+pub mod body;
 pub mod params;
 pub mod selector;
 pub mod serpenoid;
 pub mod slew;
 
-pub use layout::{BodyLayout, Plane};
+pub use body::{BodyLayout, Plane};
 pub use params::{Field, GaitKind, GaitParams, GaitTable, JOINT_LIMIT_RAD, ParamError, ParamPatch};
 pub use selector::{BLEND_TIME_RANGE_S, DEFAULT_BLEND_TIME_S, GaitSelector, smoothstep};
 pub use serpenoid::{Serpenoid, Wave, helix_wave};

@@ -350,8 +350,8 @@ impl GaitParams {
         // Body length only changes ωS, which neither check below depends on.
         let wave = Serpenoid::from_params(kind, self, module_length_m, 1.0);
         for (plane, name) in [
-            (super::layout::Plane::Lateral, "lateral"),
-            (super::layout::Plane::Dorsal, "dorsal"),
+            (super::body::Plane::Lateral, "lateral"),
+            (super::body::Plane::Dorsal, "dorsal"),
         ] {
             let excursion_rad = wave.max_excursion_rad(plane);
             if excursion_rad.is_nan() || excursion_rad > JOINT_LIMIT_RAD {

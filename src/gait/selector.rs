@@ -9,7 +9,7 @@
 //! running while it fades out, so switching mid-blend is as smooth as switching from
 //! a pure gait. A layer whose blend has finished hides everything below it and those
 //! are dropped. See `docs/gaits.md` for the reasoning.
-use super::layout::BodyLayout;
+use super::body::BodyLayout;
 use super::params::{GaitKind, GaitParams, GaitTable, ParamError, ParamPatch};
 use super::serpenoid::Serpenoid;
 use super::slew::SlewLimiter;

@@ -1,6 +1,6 @@
 //! Blending, resync, parameter changes and the slew limiter.
 use super::*;
-use crate::gait::layout::Plane;
+use crate::gait::body::Plane;
 use crate::module::{MODULE_LENGTH_M, MODULE_MAX_SPEED_RAD_S};
 
 const DT: f64 = 1e-3;

@@ -14,7 +14,7 @@
 //! `docs/gaits.md`.
 use std::f64::consts::FRAC_PI_2;
 
-use super::layout::{BodyLayout, Plane};
+use super::body::{BodyLayout, Plane};
 use super::params::{GaitKind, GaitParams};
 
 /// One plane's wave: `offset + amplitude · sin(spatial_freq · s − ψ + phase)`.

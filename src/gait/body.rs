@@ -1,4 +1,6 @@
-//! Where the joints are: their plane (lateral / dorsal) and normalised arc length.
+//! The body as the gaits see it (`BodyLayout`): where the joints are, their plane
+//! (lateral / dorsal) and normalised arc length. (A lab "layout" is one world of an
+//! experiment: `lab::layout`.)
 
 /// Joint plane. Neighbouring joints alternate.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
