@@ -1,8 +1,8 @@
 //! snaked: a real-time control daemon for modular series-elastic snake robots.
 //!
 //! Layout, one folder per concern (docs/architecture.md has the table):
-//! - [`protocol`], [`module`]: the module network's wire format and a module's
-//!   command and feedback.
+//! - [`protocol`], [`module`]: the module network's wire format; a module's command and
+//!   feedback and the body's constants.
 //! - [`bus`]: the loop's view of the modules (UDP or in-process emulator).
 //! - [`emu`]: the module emulator (plant, module endpoints, faults).
 //! - [`estimation`]: the body's pose from its IMUs and joint angles (virtual chassis).
@@ -10,11 +10,14 @@
 //! - [`controller_interface`], [`controllers`]: the controller seam and registry, and
 //!   every controller (one folder each).
 //! - [`shape`]: shape-based compliance the controllers are built on.
-//! - [`navigation`]: pursuing a direction on its own (stuck detection so far).
+//! - [`navigation`]: pursuing a direction on its own: stuck detection, the navigator.
 //! - [`safety`]: the failsafe state machine.
 //! - [`rt`]: pacing, the 1 kHz loop, statistics, telemetry.
-//! - [`socket`]: the JSON control socket.
-//! - [`station`]: operating from Foxglove (services, teleop, parameters).
+//! - [`operator`]: the operator API: one typed path for everything an operator asks
+//!   (`Act` → `Done`, one error and code table), the drive lease, the navigator's runner.
+//! - [`socket`]: the JSON control socket, a thin adapter over [`operator`].
+//! - [`station`]: operating from Foxglove (services, teleop, parameters), a thin adapter
+//!   over [`operator`].
 //! - [`record`]: MCAP recording.
 //! - [`live`]: the Foxglove live view (WebSocket server) the recorder starts; it carries
 //!   the station.
