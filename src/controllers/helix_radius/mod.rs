@@ -12,9 +12,11 @@
 //! docs/compliance.md, "Rolling helix".
 
 use crate::controller_interface::config::ConfigError;
+use crate::controller_interface::nominal::Nominal;
 use crate::controller_interface::report::{ControllerReport, FieldSpec, ReportSpec, SignalSpec};
 use crate::controller_interface::{
-    BuildContext, Controller, ControllerKind, Handover, NominalMismatch, Observation, Tick,
+    BuildContext, CannotFollow, Controller, ControllerKind, Handover, NominalMismatch, Observation,
+    Tick,
 };
 use crate::gait::{BodyLayout, GaitKind, GaitParams, JOINT_LIMIT_RAD, Plane, Serpenoid};
 use crate::module::MODULE_MAX_SPEED_RAD_S;
@@ -143,6 +145,9 @@ pub struct HelixRadius {
     /// R_0, rad per body length, and ωT, rad/s.
     r0: f64,
     temporal_freq: f64,
+    /// The roll's speed over roll time (the loop's less the holds, from the roll's
+    /// start): steady, or ramping to a followed change of speed.
+    speed: Nominal,
     rho: ParamState,
     /// The half turns' state (windowed).
     windows: RadiusWindows,
@@ -181,6 +186,7 @@ impl HelixRadius {
             ),
             r0,
             temporal_freq: wt,
+            speed: Nominal::at_phase(params, 0.0, 0.0),
             rho: ParamState::default(),
             windows: RadiusWindows::new(&layout.s, layout.body_length_m() / layout.module_length_m),
             set_point: 1.0,
@@ -300,6 +306,7 @@ impl Controller for HelixRadius {
         self.windows.reset();
         self.r0 = r0;
         self.temporal_freq = wt;
+        self.speed = Nominal::at_phase(h.params, 0.0, 0.0);
         self.rho = ParamState::default();
         self.set_point = 1.0;
         self.grip = 0.0;
@@ -314,6 +321,30 @@ impl Controller for HelixRadius {
         self.held_s = 0.0;
     }
 
+    /// A change of speed alone (same sense) once climbing or without getting on: the
+    /// roll ramps to it (`Nominal::follow` over the roll's time), the coil and what it
+    /// learnt stay. A change of the helix (radius, pitch, offsets), a reversal, or any
+    /// change while getting on the pole: a fresh takeover.
+    fn follow(&mut self, t_s: f64, params: &GaitParams) -> Result<(), CannotFollow> {
+        let mut same = *params;
+        same.temporal_freq_rad_s = self.params.temporal_freq_rad_s;
+        if same != self.params {
+            return Err(CannotFollow(
+                "the helix's radius, pitch and offsets set its coil",
+            ));
+        }
+        if params.temporal_freq_rad_s * self.params.temporal_freq_rad_s < 0.0 {
+            return Err(CannotFollow("a reversal of the roll"));
+        }
+        if self.own_way && self.getting_on.stage() != Stage::Climb {
+            return Err(CannotFollow("getting on the pole"));
+        }
+        let roll_s = (t_s - self.t0 - self.held_s).max(0.0);
+        self.speed.follow(roll_s, params);
+        self.params = *params;
+        Ok(())
+    }
+
     fn takes_over_at_switch(&self) -> bool {
         self.config.getting_on.enabled
     }
@@ -322,12 +353,12 @@ impl Controller for HelixRadius {
         let Tick { t_s, dt_s: dt } = tick;
         self.filter.update(dt, obs.torque_nm, &mut self.tau_ext);
         let grip = self.tau_ext.iter().map(|t| t.abs()).sum::<f64>() / self.tau_ext.len() as f64;
-        let mut rate = self.temporal_freq;
+        let mut direction = 1.0;
         if self.own_way {
             self.getting_on.update(t_s, obs.position_rad, obs.imu, grip);
             self.phase0 = self.getting_on.coil_phase();
             self.t0 = self.getting_on.roll_start_s();
-            rate *= self.getting_on.direction();
+            direction = self.getting_on.direction();
         }
         // Slipping: hold the roll and squeeze harder (once climbing).
         let mut config = self.config;
@@ -336,7 +367,9 @@ impl Controller for HelixRadius {
             self.held_s += dt;
             config.gains.bias_force *= config.slip.squeeze_gain;
         }
-        self.phase = self.phase0 + rate * (t_s - self.t0 - self.held_s).max(0.0);
+        // ψ₀ + ∫ωT over the roll's time (ωT·τ while steady).
+        let roll_s = (t_s - self.t0 - self.held_s).max(0.0);
+        self.phase = self.phase0 + direction * self.speed.phase_at(roll_s);
         self.shape.set_phase(self.phase);
         if !self.getting_on.coil_active() {
             // Held or lapping: the coil waits at its nominal (again after a miss).

@@ -285,3 +285,42 @@ fn ctx<'a>(layout: &'a BodyLayout, params: &'a GaitParams) -> BuildContext<'a> {
         params,
     }
 }
+
+/// Issue 45: a change of speed alone is followed (the coil rolls on, no step); a change
+/// of the helix is a fresh takeover.
+#[test]
+fn it_follows_a_change_of_speed_but_not_of_the_helix() {
+    use crate::controller_interface::TickClock;
+    use crate::controller_interface::testing::ObservationBuf;
+    let (layout, params) = setup();
+    let mut config = bare(HelixRadiusConfig::windowed().on_the_pole());
+    config.gains.bias_force = 0.0;
+    let mut c = HelixRadius::new(config, &layout, &params);
+    engage_at(&mut c, &layout, &params, 0.0);
+    let buf = ObservationBuf::new(N);
+    let (pos, tau) = ([0.0; N], [0.0; N]);
+    let (mut out, mut last) = (vec![0.0; N], vec![0.0; N]);
+    let mut clock = TickClock::default();
+    let mut largest = 0.0f64;
+    for k in 0..6000 {
+        let t = k as f64 * 1e-3;
+        if k == 2000 || k == 4000 {
+            let mut faster = params;
+            faster.temporal_freq_rad_s *= if k == 2000 { 1.5 } else { 0.5 };
+            c.follow(t, &faster).expect("a change of speed is followed");
+        }
+        c.step(clock.tick(t), &buf.observe(&pos, &tau), &mut out);
+        if k > 0 {
+            let step = out.iter().zip(&last).map(|(a, b)| (a - b).abs());
+            largest = largest.max(step.fold(0.0, f64::max));
+        }
+        last.copy_from_slice(&out);
+    }
+    assert!(
+        largest < 3.46e-3,
+        "a set-point jumped {largest} rad in 1 ms"
+    );
+    let mut wider = params;
+    wider.helix_radius_m *= 1.1;
+    assert!(c.follow(6.0, &wider).is_err(), "a new helix is a takeover");
+}
