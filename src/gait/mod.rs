@@ -4,8 +4,8 @@
 //! Everything here is pure: time comes in as an argument, nothing allocates after
 //! construction, nothing reads a clock. See `docs/gaits.md`.
 
-pub mod kinematics;
 pub mod body;
+pub mod kinematics;
 pub mod params;
 pub mod selector;
 pub mod serpenoid;

@@ -196,3 +196,80 @@ pub enum Done {
     },
     Ok,
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The drive lease's and the navigator's rules by method, as the socket has
+    /// documented them (docs/control-socket.md, "One operator drives", `navigate`).
+    #[test]
+    fn which_acts_drive_stop_and_take_over_from_the_navigator() {
+        let gait = GaitKind::Slithering;
+        let all = [
+            Act::SetGait { gait },
+            Act::StopGait { within_s: 0.3 },
+            Act::ResumeGait { within_s: 0.3 },
+            Act::SetParams {
+                gait,
+                patch: ParamPatch::default(),
+            },
+            Act::SetBlendTime { blend_time_s: 2.0 },
+            Act::SetController {
+                gait,
+                selection: Selection::named("open_loop"),
+                patch: ParamPatch::default(),
+            },
+            Act::Calibrate {
+                gait: None,
+                what: Calibration::Clear,
+            },
+            Act::SetHeading {
+                gait: None,
+                heading_rad: None,
+            },
+            Act::Navigate {
+                travel_rad: 0.0,
+                config: NavigatorConfig::DEFAULT,
+            },
+            Act::NavigateOff,
+            Act::TakeOver,
+            Act::Hold,
+            Act::Limp,
+            Act::EStop,
+            Act::Arm,
+        ];
+        let named = |f: fn(&Act) -> bool| -> Vec<&str> {
+            let mut v: Vec<&str> = all.iter().filter(|a| f(a)).map(Act::method).collect();
+            v.dedup();
+            v
+        };
+        assert_eq!(
+            named(Act::drives),
+            [
+                "gait.set",
+                "gait.resume",
+                "params.set",
+                "controller.set",
+                "controller.calibrate",
+                "controller.heading",
+                "navigate",
+                "arm"
+            ]
+        );
+        assert_eq!(named(Act::stops), ["gait.stop", "hold", "limp", "estop"]);
+        assert_eq!(
+            named(Act::takes_over_navigation),
+            [
+                "gait.set",
+                "controller.set",
+                "controller.calibrate",
+                "controller.heading",
+                "take_over",
+                "hold",
+                "limp",
+                "estop"
+            ]
+        );
+    }
+}

@@ -4,7 +4,8 @@
 //! adapters over it: each turns its input into an [`Act`], calls [`Operator::act`] as
 //! the client it serves, and presents the [`Done`] or the [`OperatorError`] (one type,
 //! one table of codes: [`code`]) in its own terms. Reads are typed too: the loop's
-//! [`Snapshot`], subscribed to ([`Operator::subscribe`]) or taken ([`Operator::snapshot`]),
+//! [`Snapshot`], subscribed to at a rate ([`Operator::subscribe`]) or taken
+//! ([`Operator::snapshot`]),
 //! and the catalog of controllers.
 //!
 //! Every act meets the same rules whoever sends it: one operator drives at a time
@@ -42,9 +43,6 @@ use crate::rt::telemetry::Snapshot;
 use handle::{DaemonInfo, LoopHandle, RecordView};
 use router::AckRouter;
 use shared::Shared;
-
-/// How often a subscription hears of a new snapshot, at most.
-pub const SUBSCRIPTION_PERIOD: Duration = Duration::from_millis(20);
 
 /// The API (cheap to clone). Its async methods run on the runtime that made it.
 #[derive(Clone)]
@@ -128,13 +126,13 @@ impl Operator {
         self.shared.telemetry.latest()
     }
 
-    /// The loop's snapshots as they come, at most every [`SUBSCRIPTION_PERIOD`]: the
-    /// receiver sees the newest (`changed().await`); it ends with the API.
-    pub fn subscribe(&self) -> tokio::sync::watch::Receiver<Arc<Snapshot>> {
+    /// The loop's snapshots as they come, at most one every `period`: the receiver
+    /// sees the newest (`changed().await`); it ends with the API or when dropped.
+    pub fn subscribe(&self, period: Duration) -> tokio::sync::watch::Receiver<Arc<Snapshot>> {
         let (tx, rx) = tokio::sync::watch::channel(Arc::new(self.snapshot()));
         let shared = self.shared.clone();
         self.runtime.spawn(async move {
-            let mut tick = tokio::time::interval(SUBSCRIPTION_PERIOD);
+            let mut tick = tokio::time::interval(period);
             tick.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
             let mut closing = shared.closing.clone();
             let mut last = u64::MAX;

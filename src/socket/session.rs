@@ -102,10 +102,11 @@ impl Session {
         if let Some(rate_hz) = self.pending_rate_hz.take() {
             self.unsubscribe().await;
             self.dropped.store(0, Ordering::Relaxed);
+            let period = Duration::from_secs_f64(1.0 / rate_hz);
             self.stream = Some(tokio::spawn(stream_telemetry(
-                op.subscribe(),
+                op.subscribe(period),
                 op.catalog().clone(),
-                Duration::from_secs_f64(1.0 / rate_hz),
+                period,
                 self.out.clone(),
                 self.dropped.clone(),
             )));

@@ -199,7 +199,7 @@ pub async fn publish_changes(
     // The operator API is bound once the control socket runs.
     let mut snapshots = loop {
         if let Ok(api) = op.station.operator() {
-            break api.subscribe();
+            break api.subscribe(UPDATE_EVERY);
         }
         tokio::time::sleep(UPDATE_EVERY).await;
     };
@@ -207,7 +207,6 @@ pub async fn publish_changes(
         if snapshots.changed().await.is_err() {
             return; // The API stopped.
         }
-        tokio::time::sleep(UPDATE_EVERY).await;
         if subscribed.load(Ordering::Relaxed) == 0 {
             last.clear();
             continue;
