@@ -19,6 +19,9 @@ use super::controllers;
 use super::error::{OperatorError, code};
 use super::navigator_runner::{NavigatorRunner, RunnerView};
 use super::shared::Shared;
+use crate::controller_interface::Selection;
+use crate::controller_interface::registry;
+use crate::controllers::REGISTRY;
 use crate::gait::GaitKind;
 use crate::navigation::navigator::{NavView, Navigator, NavigatorConfig};
 use crate::navigation::state::{NavigatorState, StopReason};
@@ -139,10 +142,15 @@ async fn report(shared: &Shared, state: NavigatorState) -> Result<(), OperatorEr
 async fn run(shared: Arc<Shared>, nav: Navigator) {
     let catalog = shared.catalog.clone();
     let installed = shared.telemetry.latest().controller.installed;
+    // What runs each gait, against what a choice names, both resolved by the registry
+    // (its controller and preset), not compared as strings.
     let mut runner = NavigatorRunner::new(nav, |gait, name| {
-        catalog
-            .get(installed[gait.index()])
-            .is_some_and(|i| i.preset == name || i.controller == name)
+        let wanted = registry::resolve(REGISTRY, gait, &Selection::named(name));
+        let running = catalog.get(installed[gait.index()]);
+        match (wanted, running) {
+            (Ok((family, preset)), Some(i)) => i.controller == family.name() && i.preset == preset,
+            _ => false,
+        }
     });
     let why = drive(&shared, &mut runner).await;
     tracing::info!(reason = ?why, "navigation stopped: {}", why.explain());
