@@ -173,6 +173,54 @@ impl GaitSelector {
         }
     }
 
+    /// While only changes of the active gait's parameters blend (every layer the active
+    /// gait's, no hand-back fade, no frozen pose) and they differ only in what the blend
+    /// mixes linearly (amplitudes, offsets, and ωT, the layers sharing the gait's phase),
+    /// the output at the last update is that gait's serpenoid with these parameters: a
+    /// controller may take over from them mid-blend and follow the rest of the change.
+    /// `None` otherwise.
+    pub fn same_gait_blend(&self) -> Option<GaitParams> {
+        use super::params::Field::{self, *};
+        const LINEAR: [Field; 5] = [
+            AmplitudeLat,
+            AmplitudeDor,
+            OffsetLat,
+            OffsetDor,
+            TemporalFreq,
+        ];
+        let t = self.last_t_s?;
+        if self.pose_base || self.fading.active || self.len < 2 {
+            return None;
+        }
+        let layers = &self.layers[..self.len];
+        if layers.iter().any(|l| l.kind != self.active) {
+            return None;
+        }
+        let base = layers[0].params;
+        let nonlinear = Field::ALL.into_iter().filter(|f| !LINEAR.contains(f));
+        for f in nonlinear {
+            if layers.iter().any(|l| f.get(&l.params) != f.get(&base)) {
+                return None;
+            }
+        }
+        // Each layer's share of the output, as `compose` mixes them.
+        let mut p = base;
+        for f in LINEAR {
+            f.set(&mut p, 0.0);
+        }
+        let mut above = 1.0;
+        for j in (0..self.len).rev() {
+            let w = if j >= 1 { layers[j].weight(t).0 } else { 1.0 };
+            for f in LINEAR {
+                let mixed = f.get(&p) + above * w * f.get(&layers[j].params);
+                f.set(&mut p, mixed);
+            }
+            above *= 1.0 - w;
+        }
+        p.temporal_freq_rad_s = self.psi_rate[self.active.index()];
+        Some(p)
+    }
+
     /// Duration of new blends, s.
     pub fn blend_time_s(&self) -> f64 {
         self.blend_time_s

@@ -10,7 +10,9 @@
 //! - **Continuity.** A change of the gait's parameters or of the controller's
 //!   configuration while it drives is taken in place where the controller can
 //!   ([`Controller::follow`], [`Controller::reconfigure`]): it keeps driving and
-//!   keeps what it has learnt. The answer says which ([`Continuity`]).
+//!   keeps what it has learnt. The answer says which ([`Continuity`]). A controller
+//!   waiting for its gait's blend while only that gait's parameters blend takes over
+//!   from where the blend is and follows the rest (`GaitSelector::same_gait_blend`).
 //! - **Hand back.** The selector's output continues from the set-points sent last
 //!   cycle: their difference from the selector's own fades out over the blend time
 //!   while the gait keeps moving; the controller takes over again after that.
@@ -274,14 +276,24 @@ impl ControllerSlots {
             return false;
         };
         let ready = selector.blend_progress() >= 1.0 || slot.controller.takes_over_at_switch();
-        if self.engaged.is_none() && ready {
+        // Only the gait's own parameters blending: take over from where the blend is and
+        // follow the rest (an operator changing speed often is not kept waiting).
+        let mid_blend = match (self.engaged, ready) {
+            (None, false) => selector.same_gait_blend(),
+            _ => None,
+        };
+        if self.engaged.is_none() && (ready || mid_blend.is_some()) {
+            let target = selector.table().get(gait);
             slot.controller.engage(&Handover {
                 t_s,
                 phase_rad: selector.phase(),
                 set_points_rad: pos,
-                params: selector.table().get(gait),
+                params: mid_blend.as_ref().unwrap_or(target),
                 layout: selector.layout(),
             });
+            if mid_blend.is_some() && slot.controller.follow(t_s, target).is_err() {
+                return false; // It cannot: it takes over when the blend ends.
+            }
             self.engaged = Some(gait);
             self.clock.restart();
             self.takeovers[gait.index()] += 1;

@@ -669,3 +669,41 @@ fn what_cannot_be_taken_in_place_says_why() {
     let c = h.telemetry.latest().controller;
     assert_eq!((c.engagement, c.takeovers), (Engagement::Engaged, 2));
 }
+
+/// Issue 45: a controller waiting for its gait's blend is not kept waiting by the
+/// operator's speed changes: once only the gait's own parameters blend, it takes over
+/// from where the blend is and follows the rest, without a jump.
+#[test]
+fn speed_changes_before_the_takeover_do_not_keep_the_controller_waiting() {
+    let mut h = harness(Some(pegs));
+    run(&mut h, None, 100);
+    let c = build(&h, "a_ws_omega");
+    request(&mut h, SET, Some(c)).unwrap();
+    let gait = GaitKind::Slithering;
+    let (mut step, mut engaged_at) = (0.0f64, None);
+    let mut last = setpoints(&h);
+    for k in 0..8000 {
+        if k % 500 == 0 {
+            let patch = ParamPatch {
+                temporal_freq_rad_s: Some(if (k / 500) % 2 == 0 { 1.4 } else { 0.7 }),
+                ..ParamPatch::default()
+            };
+            request(&mut h, LoopRequest::SetParams { gait, patch }, None).unwrap();
+        } else {
+            h.control.step();
+        }
+        let now = setpoints(&h);
+        step = step.max(max_diff(&now, &last));
+        last = now;
+        if engaged_at.is_none() && engagement(&h) == Engagement::Engaged {
+            engaged_at = Some(k);
+        }
+    }
+    // The hand-back's fade takes the blend time (2 s); the takeover follows it.
+    let at = engaged_at.expect("the controller took over");
+    assert!(at < 2200, "took over after {at} cycles");
+    assert_eq!(engagement(&h), Engagement::Engaged);
+    assert_eq!(h.telemetry.latest().controller.takeovers, 1);
+    assert!(step <= MAX_STEP_RAD, "{step}");
+    assert_eq!(h.control.guard_counters().slew_limited_cycles, 0);
+}
