@@ -34,6 +34,11 @@ fn foxglove_drives_the_robot_and_the_dead_man_stops_then_holds_it() {
     // A service answers what the socket answers, results and errors alike (each
     // socket connection drives only while connected: one operator at a time).
     let via_sock = d.once().call("gait.set", json!({"gait": "slithering"}));
+    // The server frees that connection's drive once it has seen it close.
+    d.sock
+        .wait_status(Duration::from_secs(5), "the drive freed", |s| {
+            s["driver"].is_null()
+        });
     let via_fox = fx
         .call("gait.set", json!({"gait": "slithering"}))
         .expect("gait.set");

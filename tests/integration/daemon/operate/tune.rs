@@ -11,6 +11,11 @@ fn the_parameters_panel_reads_live_values_and_sets_them_with_the_sockets_checks(
     let mut d = daemon("");
     let mut fx = FoxgloveClient::connect(d.fox, Duration::from_secs(30));
     d.once().call("gait.set", json!({"gait": "slithering"}));
+    // The server frees that connection's drive once it has seen it close.
+    d.sock
+        .wait_status(Duration::from_secs(5), "the drive freed", |s| {
+            s["driver"].is_null()
+        });
     // The robot's model is served as an asset: a URDF of the 18 modules.
     let urdf = fx
         .fetch_asset(snaked::record::urdf::URDF_URI)
