@@ -38,7 +38,12 @@ impl CpgGains {
             JOINT_LIMIT_RAD,
         )?;
         check_range("torque_cutoff_hz", self.torque_cutoff_hz, 0.01, 200.0)?;
-        check_range("torque_deadband_nm", self.torque_deadband_nm, 0.0, 7.0)?;
+        check_range(
+            "torque_deadband_nm",
+            self.torque_deadband_nm,
+            0.0,
+            crate::module::MODULE_MAX_TORQUE_NM,
+        )?;
         Ok(())
     }
 }

@@ -459,7 +459,12 @@ impl DirectionalComplianceConfig {
             }
         }
         check_range("torque_cutoff_hz", self.torque_cutoff_hz, 0.01, 200.0)?;
-        check_range("torque_deadband_nm", self.torque_deadband_nm, 0.0, 7.0)?;
+        check_range(
+            "torque_deadband_nm",
+            self.torque_deadband_nm,
+            0.0,
+            crate::module::MODULE_MAX_TORQUE_NM,
+        )?;
         check_range("edge_width_modules", self.edge_width_modules, 0.05, 4.0)?;
         self.steering.check().map_err(|e| e.under("steering"))
     }

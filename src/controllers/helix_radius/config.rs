@@ -153,10 +153,25 @@ impl HelixRadiusConfig {
             ));
         }
         check_range("torque_cutoff_hz", self.torque_cutoff_hz, 0.01, 200.0)?;
-        check_range("torque_deadband_nm", self.torque_deadband_nm, 0.0, 7.0)?;
+        check_range(
+            "torque_deadband_nm",
+            self.torque_deadband_nm,
+            0.0,
+            crate::module::MODULE_MAX_TORQUE_NM,
+        )?;
         let a = &self.adaptive;
-        check_range("adaptive.low_nm", a.low_nm, 0.0, 7.0)?;
-        check_range("adaptive.high_nm", a.high_nm, a.low_nm, 7.0)?;
+        check_range(
+            "adaptive.low_nm",
+            a.low_nm,
+            0.0,
+            crate::module::MODULE_MAX_TORQUE_NM,
+        )?;
+        check_range(
+            "adaptive.high_nm",
+            a.high_nm,
+            a.low_nm,
+            crate::module::MODULE_MAX_TORQUE_NM,
+        )?;
         check_range("adaptive.rate_per_s", a.rate_per_s, 0.0, 1.0)?;
         let (lo, hi) = RHO_RANGE;
         if self.gains.bias_force * self.slip.squeeze_gain > self.gains.stiffness * (hi - lo) {

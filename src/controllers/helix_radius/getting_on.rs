@@ -90,7 +90,13 @@ impl GettingOnConfig {
         check_range("open_s", self.open_s, 0.2, 30.0).map_err(k)?;
         check_range("lap_pitch_m", self.lap_pitch_m, 0.001, 0.05).map_err(k)?;
         check_range("lap_clearance_m", self.lap_clearance_m, 0.0, 0.1).map_err(k)?;
-        check_range("found_nm", self.found_nm, 0.0, 7.0).map_err(k)?;
+        check_range(
+            "found_nm",
+            self.found_nm,
+            0.0,
+            crate::module::MODULE_MAX_TORQUE_NM,
+        )
+        .map_err(k)?;
         check_range("retries", f64::from(self.retries), 0.0, 5.0).map_err(k)
     }
 }

@@ -51,7 +51,13 @@ impl Default for SlipConfig {
 impl SlipConfig {
     pub fn check(&self) -> Result<(), ConfigError> {
         let k = |e: ConfigError| e.under("slip");
-        check_range("lost_nm", self.lost_nm, 0.0, 7.0).map_err(k)?;
+        check_range(
+            "lost_nm",
+            self.lost_nm,
+            0.0,
+            crate::module::MODULE_MAX_TORQUE_NM,
+        )
+        .map_err(k)?;
         check_range("falling_g", self.falling_g, 0.0, 1.0).map_err(k)?;
         check_range("grace_s", self.grace_s, 0.0, 10.0).map_err(k)?;
         check_range("recover_s", self.recover_s, 0.0, 30.0).map_err(k)?;

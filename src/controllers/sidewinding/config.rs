@@ -191,7 +191,12 @@ impl SidewindingConfig {
             ));
         }
         check_range("torque_cutoff_hz", self.torque_cutoff_hz, 0.01, 200.0)?;
-        check_range("torque_deadband_nm", self.torque_deadband_nm, 0.0, 7.0)?;
+        check_range(
+            "torque_deadband_nm",
+            self.torque_deadband_nm,
+            0.0,
+            crate::module::MODULE_MAX_TORQUE_NM,
+        )?;
         check_range("edge_width_modules", self.edge_width_modules, 0.05, 4.0)?;
         check_range("heading_filter_s", self.heading_filter_s, 0.0, 30.0)?;
         let r = &self.reversal;
