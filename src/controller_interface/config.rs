@@ -89,6 +89,18 @@ impl ConfigError {
 }
 
 /// `value` must be finite and within `[min, max]`.
+/// The joint-torque filter every torque-driven controller has: its low-pass cutoff
+/// (0.01 to 200 Hz) and its dead-band (up to the module's torque).
+pub fn check_torque_filter(cutoff_hz: f64, deadband_nm: f64) -> Result<(), ConfigError> {
+    check_range("torque_cutoff_hz", cutoff_hz, 0.01, 200.0)?;
+    check_range(
+        "torque_deadband_nm",
+        deadband_nm,
+        0.0,
+        crate::module::MODULE_MAX_TORQUE_NM,
+    )
+}
+
 pub fn check_range(field: &str, value: f64, min: f64, max: f64) -> Result<(), ConfigError> {
     if value.is_nan() || !(min..=max).contains(&value) {
         return Err(ConfigError::OutOfRange {

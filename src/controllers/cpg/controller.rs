@@ -4,7 +4,7 @@
 //! and frequency. Output `θ_i = r_i·sin(ωS·s_i − ϑ_i)`; with no torque it is the
 //! open-loop serpenoid.
 
-use crate::controller_interface::config::{ConfigError, check_range};
+use crate::controller_interface::config::{ConfigError, check_range, check_torque_filter};
 use crate::controller_interface::nominal::{Nominal, lateral_room, within};
 use crate::controller_interface::report::ControllerReport;
 use crate::controller_interface::{
@@ -37,13 +37,7 @@ impl CpgGains {
             self.amplitude_min_rad,
             JOINT_LIMIT_RAD,
         )?;
-        check_range("torque_cutoff_hz", self.torque_cutoff_hz, 0.01, 200.0)?;
-        check_range(
-            "torque_deadband_nm",
-            self.torque_deadband_nm,
-            0.0,
-            crate::module::MODULE_MAX_TORQUE_NM,
-        )?;
+        check_torque_filter(self.torque_cutoff_hz, self.torque_deadband_nm)?;
         Ok(())
     }
 }

@@ -6,7 +6,7 @@ use std::f64::consts::{FRAC_PI_2, PI};
 
 use serde::{Deserialize, Serialize};
 
-use crate::controller_interface::config::{ConfigError, check_range};
+use crate::controller_interface::config::{ConfigError, check_range, check_torque_filter};
 use crate::controllers::compliant_slithering::SPATIAL_FREQ_GAINS;
 use crate::controllers::steering::SteeringConfig;
 use crate::gait::JOINT_LIMIT_RAD;
@@ -458,13 +458,7 @@ impl DirectionalComplianceConfig {
                 }
             }
         }
-        check_range("torque_cutoff_hz", self.torque_cutoff_hz, 0.01, 200.0)?;
-        check_range(
-            "torque_deadband_nm",
-            self.torque_deadband_nm,
-            0.0,
-            crate::module::MODULE_MAX_TORQUE_NM,
-        )?;
+        check_torque_filter(self.torque_cutoff_hz, self.torque_deadband_nm)?;
         check_range("edge_width_modules", self.edge_width_modules, 0.05, 4.0)?;
         self.steering.check().map_err(|e| e.under("steering"))
     }

@@ -3,7 +3,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::{GettingOnConfig, SlipConfig};
-use crate::controller_interface::config::{ConfigError, check_range};
+use crate::controller_interface::config::{ConfigError, check_range, check_torque_filter};
 use crate::shape::admittance::{AdmittanceGains, AdmittanceSign};
 
 /// The controller's configuration.
@@ -152,13 +152,7 @@ impl HelixRadiusConfig {
                 "the range of ρ = R/R0 must contain its nominal value 1",
             ));
         }
-        check_range("torque_cutoff_hz", self.torque_cutoff_hz, 0.01, 200.0)?;
-        check_range(
-            "torque_deadband_nm",
-            self.torque_deadband_nm,
-            0.0,
-            crate::module::MODULE_MAX_TORQUE_NM,
-        )?;
+        check_torque_filter(self.torque_cutoff_hz, self.torque_deadband_nm)?;
         let a = &self.adaptive;
         check_range(
             "adaptive.low_nm",

@@ -8,7 +8,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::controller_interface::config::{ConfigError, check_range};
+use crate::controller_interface::config::{ConfigError, check_torque_filter};
 use crate::controller_interface::nominal::Nominal;
 use crate::controller_interface::report::{ControllerReport, ReportSpec, SignalSpec};
 use crate::controller_interface::{
@@ -83,13 +83,7 @@ impl SerpenoidAdmittanceConfig {
                 ));
             }
         }
-        check_range("torque_cutoff_hz", self.torque_cutoff_hz, 0.01, 200.0)?;
-        check_range(
-            "torque_deadband_nm",
-            self.torque_deadband_nm,
-            0.0,
-            crate::module::MODULE_MAX_TORQUE_NM,
-        )
+        check_torque_filter(self.torque_cutoff_hz, self.torque_deadband_nm)
     }
 
     fn plane(&self, p: Plane) -> &PlaneConfig {

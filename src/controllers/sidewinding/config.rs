@@ -8,7 +8,7 @@ use serde::{Deserialize, Serialize};
 
 use super::heading::HeadingConfig;
 use super::reversal::ReversalConfig;
-use crate::controller_interface::config::{ConfigError, check_range};
+use crate::controller_interface::config::{ConfigError, check_range, check_torque_filter};
 use crate::controllers::compliant_slithering::{
     Centralization, CompliantSlitheringConfig, ParamConfig,
 };
@@ -190,13 +190,7 @@ impl SidewindingConfig {
                 "must be `windowed` or `central`",
             ));
         }
-        check_range("torque_cutoff_hz", self.torque_cutoff_hz, 0.01, 200.0)?;
-        check_range(
-            "torque_deadband_nm",
-            self.torque_deadband_nm,
-            0.0,
-            crate::module::MODULE_MAX_TORQUE_NM,
-        )?;
+        check_torque_filter(self.torque_cutoff_hz, self.torque_deadband_nm)?;
         check_range("edge_width_modules", self.edge_width_modules, 0.05, 4.0)?;
         check_range("heading_filter_s", self.heading_filter_s, 0.0, 30.0)?;
         let r = &self.reversal;
