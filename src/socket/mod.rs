@@ -15,8 +15,9 @@
 //!   (its telemetry stream).
 //! - `clients`: the client table (the limit, eviction of the idlest, stops over the
 //!   limit); `conn`: one connection: reading lines, answering in order, the writer.
-//! - `methods`: each method's params read into the operator API's typed requests
-//!   (`crate::operator`), and its answer written; `views`: JSON views of a snapshot;
+//! - `methods`: each method: a read, or an act carried out by the operator API
+//!   (`crate::operator`); `wire`: acts' params read into the API's typed requests and
+//!   their answers written; `views`: JSON views of a snapshot;
 //!   `controller_views`: JSON views of controllers (`controller.list/get`, any gait's
 //!   controller in `status` and telemetry).
 //! - [`client`]: a small blocking client (used by `snakectl` and the tests).
@@ -33,17 +34,16 @@ mod server;
 mod session;
 mod shared;
 mod views;
+mod wire;
 
 use std::path::PathBuf;
 use std::time::Duration;
 
 pub use crate::operator::handle::{BusKind, DaemonInfo, LoopHandle, Pacing, RecordView};
 
-pub use methods::{
-    DEFAULT_RATE_HZ, METHODS, RATE_RANGE_HZ, act_params, answer_json, call_json,
-    controller_set_params,
-};
+pub use methods::{DEFAULT_RATE_HZ, METHODS, RATE_RANGE_HZ, call_json};
 pub use server::{RunningServer, ServerError, start};
+pub use wire::{act_params, answer_json, controller_set_params};
 
 /// The system service's socket (see [`paths`] for how "auto" resolves).
 pub const DEFAULT_SOCKET_PATH: &str = paths::SYSTEM_SOCKET;
