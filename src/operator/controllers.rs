@@ -81,7 +81,7 @@ pub(crate) async fn set(
 
 /// The latest snapshot, `gait` (the running one by default), its installed
 /// controller's id and info; an error naming the gait when it has none.
-pub(crate) fn installed(
+pub(crate) fn installed_controller(
     shared: &Shared,
     gait: Option<GaitKind>,
 ) -> Result<(Snapshot, GaitKind, u64, Arc<ControllerInfo>), OperatorError> {
@@ -106,7 +106,7 @@ pub(crate) async fn calibrate(
     gait: Option<GaitKind>,
     what: Calibration,
 ) -> Result<Done, OperatorError> {
-    let (snap, gait, id, info) = installed(shared, gait)?;
+    let (snap, gait, id, info) = installed_controller(shared, gait)?;
     let done = |outcome| Done::Calibration {
         gait,
         controller: info.controller,
@@ -204,7 +204,7 @@ pub(crate) async fn set_heading(
     gait: Option<GaitKind>,
     heading_rad: Option<f64>,
 ) -> Result<Done, OperatorError> {
-    let (_, gait, _, info) = installed(shared, gait)?;
+    let (_, gait, _, info) = installed_controller(shared, gait)?;
     let cmd = ControllerCommand::SetHeading { heading_rad };
     shared
         .router

@@ -351,3 +351,7 @@ impl ControllerSlots {
 #[cfg(test)]
 #[path = "controller_slots_tests.rs"]
 mod tests;
+
+#[cfg(test)]
+#[path = "controller_slots_continuity_tests.rs"]
+mod continuity_tests;

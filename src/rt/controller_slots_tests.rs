@@ -5,16 +5,16 @@
 use crate::bus::echo::{EchoBus, TorqueModel};
 use crate::controller_interface::Selection;
 use crate::gait::{GaitKind, GaitTable, ParamPatch};
-use crate::rt::controller_slots::{Continuity, Engagement, Installed};
+use crate::rt::controller_slots::{Engagement, Installed};
 use crate::rt::harness::{Harness, PERIOD_NS, build_installed, echo_harness_on};
 use crate::rt::messages::{Envelope, LoopRequest, Rejection};
 use crate::safety::failsafe::FailsafeConfig;
 
 const N: usize = 18;
 /// Largest set-point step per cycle the loop allows (max joint speed × period).
-const MAX_STEP_RAD: f64 = 3.46e-3 * 1.001;
+pub(super) const MAX_STEP_RAD: f64 = 3.46e-3 * 1.001;
 
-fn table() -> GaitTable {
+pub(super) fn table() -> GaitTable {
     let mut t = GaitTable::default();
     let s = t.get_mut(GaitKind::Slithering);
     // Steering offsets too: the controller's wave is added to them (within what every
@@ -24,7 +24,7 @@ fn table() -> GaitTable {
     t
 }
 
-fn harness(torque: Option<TorqueModel>) -> Harness {
+pub(super) fn harness(torque: Option<TorqueModel>) -> Harness {
     let mut bus = EchoBus::new(N, PERIOD_NS);
     if let Some(m) = torque {
         bus = bus.with_torque(m);
@@ -35,7 +35,7 @@ fn harness(torque: Option<TorqueModel>) -> Harness {
 
 /// Obstacles against the bend of joints 0, 4 and 8 (protocol sign: the reported torque
 /// has the sign of the bend).
-fn pegs(i: usize, position_rad: f32) -> f32 {
+pub(super) fn pegs(i: usize, position_rad: f32) -> f32 {
     if i.is_multiple_of(4) && i <= 8 && position_rad.abs() > 0.05 {
         3.0 * position_rad.signum()
     } else {
@@ -44,17 +44,17 @@ fn pegs(i: usize, position_rad: f32) -> f32 {
 }
 
 /// The named controller of slithering for the harness's body and `table()`.
-fn build(h: &Harness, name: &str) -> Installed {
+pub(super) fn build(h: &Harness, name: &str) -> Installed {
     let sel = Selection::named(name);
     build_installed(&h.catalog, &h.layout, &table(), GaitKind::Slithering, &sel)
 }
 
-const SET: LoopRequest = LoopRequest::SetController {
+pub(super) const SET: LoopRequest = LoopRequest::SetController {
     gait: GaitKind::Slithering,
 };
 
 /// Sends a request (with a controller) and runs the cycle that applies it.
-fn request(
+pub(super) fn request(
     h: &mut Harness,
     request: LoopRequest,
     controller: Option<Installed>,
@@ -63,7 +63,7 @@ fn request(
 }
 
 /// [`request`], with what became of the gait's controller.
-fn answer(
+pub(super) fn answer(
     h: &mut Harness,
     request: LoopRequest,
     controller: Option<Installed>,
@@ -78,7 +78,7 @@ fn answer(
     h.acks.try_recv().expect("answered within the cycle").result
 }
 
-fn setpoints(h: &Harness) -> Vec<f64> {
+pub(super) fn setpoints(h: &Harness) -> Vec<f64> {
     h.control
         .commands()
         .iter()
@@ -86,19 +86,19 @@ fn setpoints(h: &Harness) -> Vec<f64> {
         .collect()
 }
 
-fn engagement(h: &Harness) -> Engagement {
+pub(super) fn engagement(h: &Harness) -> Engagement {
     h.telemetry.latest().controller.engagement
 }
 
 /// The presets of the controllers the loop sent back, in order.
-fn retired(h: &Harness) -> Vec<&'static str> {
+pub(super) fn retired(h: &Harness) -> Vec<&'static str> {
     h.retired
         .try_iter()
         .map(|c| h.catalog.get(c.id).expect("named").preset)
         .collect()
 }
 
-fn max_diff(a: &[f64], b: &[f64]) -> f64 {
+pub(super) fn max_diff(a: &[f64], b: &[f64]) -> f64 {
     a.iter()
         .zip(b)
         .map(|(x, y)| (x - y).abs())
@@ -107,7 +107,7 @@ fn max_diff(a: &[f64], b: &[f64]) -> f64 {
 
 /// Steps `h` (and `twin`, if given) `k` cycles; returns the largest set-point step of
 /// `h` and the largest difference from the twin.
-fn run(h: &mut Harness, mut twin: Option<&mut Harness>, k: usize) -> (f64, f64) {
+pub(super) fn run(h: &mut Harness, mut twin: Option<&mut Harness>, k: usize) -> (f64, f64) {
     let (mut step, mut diff) = (0.0f64, 0.0f64);
     let mut last = setpoints(h);
     for _ in 0..k {
@@ -490,220 +490,4 @@ fn a_controller_that_makes_its_own_way_takes_over_at_the_switch() {
     assert_eq!(engagement(&h), Engagement::Engaged, "engaged mid-blend");
     let (step, _) = run(&mut h, None, 4000);
     assert!(step <= MAX_STEP_RAD, "{step}");
-}
-
-/// Builds `name` with `config` overrides for slithering.
-fn build_with(h: &Harness, name: &str, config: serde_json::Value) -> Installed {
-    let sel = Selection {
-        config: Some(config),
-        ..Selection::named(name)
-    };
-    build_installed(&h.catalog, &h.layout, &table(), GaitKind::Slithering, &sel)
-}
-
-/// Engages `name` among the pegs: the returned harness's controller drives.
-fn engaged_among_pegs(name: &str) -> Harness {
-    let mut h = harness(Some(pegs));
-    run(&mut h, None, 100);
-    let c = build(&h, name);
-    request(&mut h, SET, Some(c)).unwrap();
-    run(&mut h, None, 2100);
-    let c = h.telemetry.latest().controller;
-    assert_eq!((c.engagement, c.takeovers), (Engagement::Engaged, 1));
-    h
-}
-
-/// Steps `k` cycles; counts those in which the controller drove, and the largest
-/// set-point step.
-fn drive(h: &mut Harness, k: usize, driven: &mut usize, step: &mut f64) {
-    let mut last = setpoints(h);
-    for _ in 0..k {
-        h.control.step();
-        let now = setpoints(h);
-        *step = step.max(max_diff(&now, &last));
-        last = now;
-        *driven += usize::from(engagement(h) == Engagement::Engaged);
-    }
-}
-
-/// Issue 45: the teleop's speed (and steering) changes every 0.5 s for 20 s while
-/// compliant slithering drives among pegs: it follows every one, never hands back,
-/// keeps what it learnt, and nothing jumps or is limited by the guard.
-#[test]
-fn a_driving_controller_follows_the_operator_s_speed_changes() {
-    let mut h = engaged_among_pegs("a_ws_omega");
-    let (mut driven, mut step) = (0, 0.0f64);
-    let speeds = [1.5, 0.6, 2.0, 1.0, 0.3, 1.8];
-    for k in 0..40 {
-        let patch = ParamPatch {
-            temporal_freq_rad_s: Some(speeds[k % speeds.len()]),
-            offset_lat_rad: Some(if k % 3 == 0 { 0.15 } else { -0.05 }),
-            ..ParamPatch::default()
-        };
-        let gait = GaitKind::Slithering;
-        let answer = answer(&mut h, LoopRequest::SetParams { gait, patch }, None);
-        assert_eq!(answer, Ok(Some(Continuity::Followed)), "change {k}");
-        driven += usize::from(engagement(&h) == Engagement::Engaged);
-        drive(&mut h, 499, &mut driven, &mut step);
-    }
-    let c = h.telemetry.latest().controller;
-    assert_eq!(driven, 40 * 500, "the controller drove every cycle");
-    assert_eq!(c.takeovers, 1, "never handed back");
-    assert!(
-        step <= MAX_STEP_RAD,
-        "a set-point jumped {step} rad in a cycle"
-    );
-    let guard = h.control.guard_counters();
-    assert_eq!(guard.slew_limited_cycles, 0, "{guard:?}");
-    assert_eq!(guard.range_clamped_cycles, 0, "{guard:?}");
-    assert!(
-        c.report.signals[3] >= 1.0,
-        "its windows live on: {:?}",
-        c.report
-    );
-}
-
-/// Issue 45: a gain changed every second is taken in place: the same controller
-/// drives on under the new id, with what it learnt.
-#[test]
-fn a_gain_change_is_taken_in_place() {
-    let mut h = engaged_among_pegs("a_ws_omega");
-    let (mut driven, mut step) = (0, 0.0f64);
-    let born_before = h.telemetry.latest().controller.report.signals[4];
-    let mut back = retired(&h).len();
-    for k in 0..20 {
-        let damping = if k % 2 == 0 { 8.0 } else { 5.0 };
-        let c = build_with(
-            &h,
-            "a_ws_omega",
-            serde_json::json!({
-                "amplitude": {"gains": {"damping": damping}},
-                "torque_cutoff_hz": 4.0 + k as f64 * 0.1,
-            }),
-        );
-        let id = c.id;
-        assert_eq!(
-            answer(&mut h, SET, Some(c)),
-            Ok(Some(Continuity::Reconfigured))
-        );
-        assert_eq!(h.telemetry.latest().controller.active_id, id);
-        driven += usize::from(engagement(&h) == Engagement::Engaged);
-        drive(&mut h, 999, &mut driven, &mut step);
-        back += retired(&h).len();
-    }
-    let c = h.telemetry.latest().controller;
-    assert_eq!(driven, 20 * 1000);
-    assert_eq!(c.takeovers, 1);
-    assert!(step <= MAX_STEP_RAD, "{step}");
-    assert_eq!(h.control.guard_counters().slew_limited_cycles, 0);
-    assert!(
-        c.report.signals[4] > born_before,
-        "the windows born count on from before the edits (not a fresh controller)"
-    );
-    assert_eq!(back, 21, "the default and each built copy go back");
-    assert_eq!(c.freed_in_loop, 0);
-}
-
-/// What a controller cannot take in place is handed back or installed afresh, and
-/// the answer says why.
-#[test]
-fn what_cannot_be_taken_in_place_says_why() {
-    let mut h = engaged_among_pegs("a_ws_omega");
-    // Another kind.
-    let c = build(&h, "open_loop");
-    assert_eq!(
-        answer(&mut h, SET, Some(c)),
-        Ok(Some(Continuity::Installed {
-            why: "another controller"
-        }))
-    );
-    assert_eq!(engagement(&h), Engagement::Waiting);
-    // One that does not drive starts afresh anyway.
-    let c = build(&h, "open_loop");
-    let a = answer(&mut h, SET, Some(c));
-    assert!(
-        matches!(a, Ok(Some(Continuity::Installed { why })) if why.contains("not driving")),
-        "{a:?}"
-    );
-    // Another shape (the amplitude central, not windowed): installed afresh.
-    let mut h = engaged_among_pegs("a_ws_omega");
-    let c = build(&h, "a_ws_omega_central");
-    let a = answer(&mut h, SET, Some(c));
-    assert!(
-        matches!(a, Ok(Some(Continuity::Installed { why })) if why.contains("spread")),
-        "{a:?}"
-    );
-    assert_eq!(engagement(&h), Engagement::Waiting);
-    // Directional compliance follows a speed change but not a reversal.
-    let mut h = engaged_among_pegs("dc_switching");
-    let gait = GaitKind::Slithering;
-    let patch = |w| ParamPatch {
-        temporal_freq_rad_s: Some(w),
-        ..ParamPatch::default()
-    };
-    let a = answer(
-        &mut h,
-        LoopRequest::SetParams {
-            gait,
-            patch: patch(1.4),
-        },
-        None,
-    );
-    assert_eq!(a, Ok(Some(Continuity::Followed)));
-    let a = answer(
-        &mut h,
-        LoopRequest::SetParams {
-            gait,
-            patch: patch(-1.0),
-        },
-        None,
-    );
-    assert!(
-        matches!(a, Ok(Some(Continuity::HandedBack { why })) if why.contains("reversal")),
-        "{a:?}"
-    );
-    assert_eq!(engagement(&h), Engagement::Waiting);
-    let (mut driven, mut step) = (0, 0.0f64);
-    drive(&mut h, 2100, &mut driven, &mut step);
-    assert!(step <= MAX_STEP_RAD, "{step}");
-    let c = h.telemetry.latest().controller;
-    assert_eq!((c.engagement, c.takeovers), (Engagement::Engaged, 2));
-}
-
-/// Issue 45: a controller waiting for its gait's blend is not kept waiting by the
-/// operator's speed changes: once only the gait's own parameters blend, it takes over
-/// from where the blend is and follows the rest, without a jump.
-#[test]
-fn speed_changes_before_the_takeover_do_not_keep_the_controller_waiting() {
-    let mut h = harness(Some(pegs));
-    run(&mut h, None, 100);
-    let c = build(&h, "a_ws_omega");
-    request(&mut h, SET, Some(c)).unwrap();
-    let gait = GaitKind::Slithering;
-    let (mut step, mut engaged_at) = (0.0f64, None);
-    let mut last = setpoints(&h);
-    for k in 0..8000 {
-        if k % 500 == 0 {
-            let patch = ParamPatch {
-                temporal_freq_rad_s: Some(if (k / 500) % 2 == 0 { 1.4 } else { 0.7 }),
-                ..ParamPatch::default()
-            };
-            request(&mut h, LoopRequest::SetParams { gait, patch }, None).unwrap();
-        } else {
-            h.control.step();
-        }
-        let now = setpoints(&h);
-        step = step.max(max_diff(&now, &last));
-        last = now;
-        if engaged_at.is_none() && engagement(&h) == Engagement::Engaged {
-            engaged_at = Some(k);
-        }
-    }
-    // The hand-back's fade takes the blend time (2 s); the takeover follows it.
-    let at = engaged_at.expect("the controller took over");
-    assert!(at < 2200, "took over after {at} cycles");
-    assert_eq!(engagement(&h), Engagement::Engaged);
-    assert_eq!(h.telemetry.latest().controller.takeovers, 1);
-    assert!(step <= MAX_STEP_RAD, "{step}");
-    assert_eq!(h.control.guard_counters().slew_limited_cycles, 0);
 }
