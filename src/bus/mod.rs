@@ -6,6 +6,7 @@
 
 mod counters;
 pub mod echo;
+pub mod hebi;
 pub mod udp;
 
 use std::any::Any;
