@@ -44,6 +44,10 @@ struct Args {
     /// panels (foxglove.operate; implies --foxglove; off loopback it needs a token file).
     #[arg(long)]
     operate: bool,
+    /// Look up HEBI modules on hebi.interfaces for hebi.lookup_timeout_s, print what
+    /// answers (family, name, MAC) and exit: the names for hebi.names.
+    #[arg(long)]
+    list_modules: bool,
     /// Validate the configuration, print it, and exit.
     #[arg(long)]
     check_config: bool,
@@ -115,6 +119,18 @@ fn main() -> ExitCode {
     if args.check_config {
         println!("{cfg:#?}");
         return ExitCode::SUCCESS;
+    }
+    if args.list_modules {
+        return match daemon::bus_setup::list_hebi_modules(&cfg.hebi) {
+            Ok(text) => {
+                print!("{text}");
+                ExitCode::SUCCESS
+            }
+            Err(e) => {
+                eprintln!("snaked: {e:#}");
+                ExitCode::FAILURE
+            }
+        };
     }
     if let Some(n) = args.urdf {
         if !(1..=64).contains(&n) {

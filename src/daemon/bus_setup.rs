@@ -5,8 +5,9 @@ use std::time::Duration;
 use anyhow::{Context, Result, bail};
 
 use crate::bus::Bus;
+use crate::bus::hebi;
 use crate::bus::udp::{self, UdpBus};
-use crate::daemon::config::{Config, LookupBy, parse_mac};
+use crate::daemon::config::{BusChoice, Config, LookupBy, parse_mac};
 use crate::emu::Plant;
 use crate::emu::module::{EMULATOR_FIRMWARE, ModuleIdentity};
 use crate::emu::plant::{JointSpacePlant, PlantConfig};
@@ -36,9 +37,129 @@ pub fn build(
 ) -> Result<BuiltBus> {
     if emulated {
         emulated_bus(cfg, period_ns)
+    } else if cfg.bus.kind == BusChoice::Hebi {
+        hebi_bus(cfg)
     } else {
         udp_bus(cfg, stop)
     }
+}
+
+/// The `[hebi]` spec of the group to make.
+pub fn hebi_spec(h: &crate::daemon::config::HebiConfig) -> hebi::lookup::Spec {
+    use hebi::lookup::Source;
+    let source = if h.imitation > 0 {
+        Source::Imitation(h.imitation)
+    } else if !h.names.is_empty() {
+        Source::Names {
+            family: h.family.clone(),
+            names: h.names.clone(),
+        }
+    } else {
+        Source::Family {
+            family: h.family.clone(),
+            expected: h.modules,
+        }
+    };
+    hebi::lookup::Spec {
+        interfaces: h.interfaces.clone(),
+        source,
+        order: h.order.clone(),
+        timeout: Duration::from_secs_f64(h.lookup_timeout_s),
+    }
+}
+
+/// The library `[hebi]` names (or finds), loaded and checked.
+pub fn hebi_library(h: &crate::daemon::config::HebiConfig) -> Result<&'static hebi::library::Api> {
+    let configured = (!h.library.as_os_str().is_empty()).then_some(h.library.as_path());
+    let path = hebi::library::find(configured)?;
+    let api = hebi::library::load(&path)?;
+    tracing::info!(path = %api.path.display(), version = %api.version_string(), "libhebi loaded");
+    Ok(api)
+}
+
+/// `snaked --list-modules`: what a HEBI lookup on `[hebi] interfaces` finds, one module
+/// per line, sorted by family and name.
+pub fn list_hebi_modules(h: &crate::daemon::config::HebiConfig) -> Result<String> {
+    let api = hebi_library(h)?;
+    let wait = Duration::from_secs_f64(h.lookup_timeout_s);
+    let mut found = hebi::lookup::list(api, &h.interfaces, wait).map_err(anyhow::Error::msg)?;
+    found.sort_by(|a, b| (&a.family, &a.name).cmp(&(&b.family, &b.name)));
+    let on = if h.interfaces.is_empty() {
+        "every interface but loopback".to_owned()
+    } else {
+        h.interfaces.join(", ")
+    };
+    let mut out = format!(
+        "# libhebi {} ({}): {} module(s) answered on {on} in {:.1} s\n",
+        api.version_string(),
+        api.path.display(),
+        found.len(),
+        wait.as_secs_f64()
+    );
+    out += &format!("{:<12} {:<16} mac\n", "family", "name");
+    for f in &found {
+        out += &format!("{f}\n");
+    }
+    Ok(out)
+}
+
+/// `[bus] kind = "hebi"`: the group from a lookup (or an imitation group), its gains
+/// by role, its lifetime from `network.command_lifetime_s`.
+fn hebi_bus(cfg: &Config) -> Result<BuiltBus> {
+    let h = &cfg.hebi;
+    let api = hebi_library(h)?;
+    let spec = hebi_spec(h);
+    tracing::info!(?spec, "making the HEBI group");
+    let opened = hebi::lookup::open(api, &spec).map_err(anyhow::Error::msg)?;
+    let n = opened.names.len();
+    let (writer, output) = hebi::mailbox::mailbox(opened.order.clone());
+    let counters = writer.counters();
+    // SAFETY: a live group of n modules from `open`, handed over.
+    let group = unsafe {
+        hebi::group::LibGroup::new(
+            api,
+            opened.group,
+            opened.lookup,
+            &opened.order,
+            opened.imitation,
+            writer,
+        )
+    }
+    .map_err(anyhow::Error::msg)?;
+    let layout = crate::gait::body::BodyLayout::alternating(
+        n,
+        cfg.body.first_joint_plane,
+        cfg.body.module_length_m,
+    );
+    let g = &h.gains;
+    let settings = if g.all.is_empty() && g.lateral.is_empty() && g.dorsal.is_empty() {
+        vec![]
+    } else {
+        layout
+            .planes
+            .iter()
+            .map(|p| {
+                let role = match p {
+                    crate::gait::Plane::Lateral => &g.lateral,
+                    crate::gait::Plane::Dorsal => &g.dorsal,
+                };
+                hebi::gains::merge(&g.all, role)
+            })
+            .collect()
+    };
+    let start = hebi::Start {
+        feedback_rate_hz: cfg.network.feedback_rate_hz as f32,
+        command_lifetime_ms: (cfg.network.command_lifetime_s * 1000.0).ceil().max(1.0) as i32,
+        settings,
+    };
+    let bus = hebi::HebiBus::start(Box::new(group), output, counters, &start)
+        .map_err(|e| anyhow::anyhow!("starting the HEBI group: {e}"))?;
+    Ok(BuiltBus {
+        bus: Box::new(bus),
+        names: opened.names,
+        kind: BusKind::Hebi,
+        world: None,
+    })
 }
 
 /// What a lookup asks for, as an operator reads it.

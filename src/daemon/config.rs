@@ -7,6 +7,7 @@ use serde::Deserialize;
 
 use crate::gait::{GaitKind, Plane};
 
+pub use super::config_bus::{BusChoice, BusSection, HebiConfig, HebiGains};
 pub use super::config_record::{FoxgloveConfig, RecordConfig};
 
 #[derive(Debug, Clone, Default, PartialEq, Deserialize)]
@@ -15,7 +16,9 @@ pub struct Config {
     #[serde(rename = "loop")]
     pub loop_: LoopConfig,
     pub body: BodyConfig,
+    pub bus: BusSection,
     pub network: NetworkConfig,
+    pub hebi: HebiConfig,
     pub failsafe: FailsafeSection,
     pub gait: GaitSection,
     pub control: ControlConfig,

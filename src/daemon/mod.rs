@@ -3,6 +3,7 @@
 
 pub mod bus_setup;
 pub mod config;
+mod config_bus;
 mod config_record;
 pub mod files;
 pub mod logging;

@@ -63,6 +63,8 @@ pub enum BusKind {
     Udp,
     /// The in-process emulator (`snaked --emulated`).
     Emulated,
+    /// HEBI modules through libhebi (`[bus] kind = "hebi"`).
+    Hebi,
 }
 
 /// How the loop is paced.

@@ -226,6 +226,7 @@ impl ControlLoop {
 
         // Read.
         let wait = self.p.pacer.feedback_wait(c, self.last_module_time_us);
+        let io_started_ns = self.p.pacer.elapsed_ns();
         if self
             .p
             .bus
@@ -234,6 +235,7 @@ impl ControlLoop {
         {
             self.stats.bus_errors += 1;
         }
+        let mut io_ns = self.p.pacer.elapsed_ns().saturating_sub(io_started_ns);
         let health = self.assess(c);
 
         // Operator requests, at the cycle boundary.
@@ -304,9 +306,12 @@ impl ControlLoop {
         };
 
         // Write.
+        let send_started_ns = self.p.pacer.elapsed_ns();
         if self.p.bus.send(&self.commands).is_err() {
             self.stats.bus_errors += 1;
         }
+        io_ns += self.p.pacer.elapsed_ns().saturating_sub(send_started_ns);
+        self.stats.bus_io.record(io_ns);
 
         // Measure and publish.
         let compute_ns = self.p.pacer.elapsed_ns().saturating_sub(started_ns);

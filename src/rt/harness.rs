@@ -96,9 +96,34 @@ pub fn echo_harness_sized(
     failsafe: FailsafeConfig,
     capacity: usize,
 ) -> Harness {
-    use crate::bus::Bus;
-    let n = bus.module_count();
     let faults = bus.faults();
+    let pacer = Box::new(LockstepPacer::new(PERIOD_NS, 1_000_000_000));
+    let mut h = harness_on_bus(
+        Box::new(bus),
+        pacer,
+        table,
+        gait,
+        hold_at_start,
+        failsafe,
+        capacity,
+    );
+    h.faults = faults;
+    h
+}
+
+/// A loop over any `bus` paced by `pacer` (e.g. the HEBI bus in real time); the
+/// harness's `faults` are inert then.
+pub fn harness_on_bus(
+    bus: Box<dyn crate::bus::Bus>,
+    pacer: Box<dyn crate::rt::pacer::Pacer>,
+    table: GaitTable,
+    gait: GaitKind,
+    hold_at_start: bool,
+    failsafe: FailsafeConfig,
+    capacity: usize,
+) -> Harness {
+    let n = bus.module_count();
+    let faults = EchoBus::new(n, PERIOD_NS).faults();
     let layout = BodyLayout::alternating(n, Plane::Lateral, MODULE_LENGTH_M);
     let estimators = crate::estimation::standard_estimators(&layout);
     let (control_ends, loop_ends) = super::channels::loop_channels(capacity);
@@ -111,8 +136,8 @@ pub fn echo_harness_sized(
         .map(|g| (g, build_installed(&catalog, &layout, &table, g, &open_loop)))
         .collect();
     let control = ControlLoop::new(LoopParts {
-        bus: Box::new(bus),
-        pacer: Box::new(LockstepPacer::new(PERIOD_NS, 1_000_000_000)),
+        bus,
+        pacer,
         selector: GaitSelector::new(
             layout.clone(),
             table,

@@ -132,6 +132,8 @@ pub struct LoopStats {
     pub period_error: Histogram,
     /// Time from cycle start to commands sent.
     pub compute: Histogram,
+    /// Time in the bus's `receive` and `send` within a cycle (part of `compute`).
+    pub bus_io: Histogram,
     /// Age of the oldest module's newest feedback at the cycle's start.
     pub feedback_age: Histogram,
     /// Cycles whose work ran past the next deadline (those periods are skipped).
@@ -149,6 +151,8 @@ pub struct StatsReport {
     pub cycles: u64,
     pub period_error: Summary,
     pub compute: Summary,
+    /// Time in the bus's `receive` and `send` per cycle.
+    pub bus_io: Summary,
     pub feedback_age: Summary,
     pub overruns: u64,
     pub skipped_periods: u64,
@@ -162,6 +166,7 @@ impl LoopStats {
             cycles: self.cycles,
             period_error: self.period_error.summary(),
             compute: self.compute.summary(),
+            bus_io: self.bus_io.summary(),
             feedback_age: self.feedback_age.summary(),
             overruns: self.overruns,
             skipped_periods: self.skipped_periods,

@@ -75,8 +75,9 @@ pub struct LibGroup {
     command: GroupCommandPtr,
     /// Each body position's command message reference (head first).
     refs: Vec<MessageRef>,
-    /// An imitation group echoes only what was commanded (`message::write_command`).
-    imitation: bool,
+    /// For an imitation group, which echoes only what was commanded, each module's
+    /// last commanded position (`message::write_command`); `None` for real modules.
+    imitation: Option<Vec<f32>>,
     handler: *mut Handler,
 }
 
@@ -117,8 +118,8 @@ impl LibGroup {
             group,
             lookup,
             command,
+            imitation: imitation.then(|| vec![0.0; refs.len()]),
             refs,
-            imitation,
             handler,
         };
         // SAFETY: the handler and its state stay valid until `release` clears it.
@@ -151,9 +152,15 @@ impl Group for LibGroup {
     }
 
     fn send(&mut self, commands: &[Command]) -> bool {
-        for (r, c) in self.refs.iter().zip(commands) {
+        for (i, (r, c)) in self.refs.iter().zip(commands).enumerate() {
+            let last = self.imitation.as_mut().map(|p| {
+                if c.position_rad.is_finite() {
+                    p[i] = c.position_rad;
+                }
+                p[i]
+            });
             // SAFETY: a live command message of ours, laid out by the loaded library.
-            unsafe { message::write_command(r, &self.api.command, c, self.imitation) };
+            unsafe { message::write_command(r, &self.api.command, c, last) };
         }
         // SAFETY: live group and command; this call only queues the datagram.
         unsafe { (self.api.f.group_send_command)(self.group, self.command) == STATUS_SUCCESS }

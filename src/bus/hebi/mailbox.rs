@@ -12,7 +12,7 @@ use super::message::Sample;
 pub struct GroupSample {
     /// How many group feedbacks the writer has published, this one included.
     pub number: u64,
-    /// When it arrived, ns on the loop's clock (CLOCK_MONOTONIC).
+    /// When it arrived, CLOCK_MONOTONIC ns (the bus maps it to the loop's clock).
     pub arrival_ns: u64,
     pub modules: Vec<Sample>,
 }

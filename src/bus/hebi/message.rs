@@ -156,19 +156,32 @@ pub unsafe fn read_feedback(r: &MessageRef, m: &Metadata) -> Sample {
 
 /// Writes one module's set-points into its command message: each of position,
 /// velocity and effort as given, NaN included (HEBI reads a NaN target as "this loop
-/// does not drive"; a limp command sets all three NaN, an explicit stop). With
-/// `fill_unset` (an imitation group, which echoes only what was commanded) a NaN
-/// velocity or effort goes out as 0 so that its echo is a number.
+/// does not drive"; a limp command sets all three NaN, an explicit stop).
+///
+/// An imitation group echoes only what was commanded, and has no position of its own:
+/// for it (`imitation` = the module's last commanded position) a NaN position goes out
+/// as that last position (the module stays where it was, as a limp module at rest
+/// does) and a NaN velocity or effort as 0, so that its echo is a number.
 ///
 /// # Safety
 /// `r` is a reference the library filled for a live command message laid out by `m`,
 /// not in use by another thread.
-pub unsafe fn write_command(r: &MessageRef, m: &Metadata, c: &Command, fill_unset: bool) {
-    let fill = |v: f32| if fill_unset && v.is_nan() { 0.0 } else { v };
+pub unsafe fn write_command(r: &MessageRef, m: &Metadata, c: &Command, imitation: Option<f32>) {
+    let fill = |v: f32| {
+        if imitation.is_some() && v.is_nan() {
+            0.0
+        } else {
+            v
+        }
+    };
+    let position = match imitation {
+        Some(last) if c.position_rad.is_nan() => last,
+        _ => c.position_rad,
+    };
     let bits = r.message_bitfield;
     // SAFETY: the indices are below the counts checked at load.
     unsafe {
-        *r.high_res_angle_fields.add(field::CMD_POSITION as usize) = high_res(c.position_rad);
+        *r.high_res_angle_fields.add(field::CMD_POSITION as usize) = high_res(position);
         *r.float_fields.add(field::CMD_VELOCITY as usize) = fill(c.velocity_rad_s);
         *r.float_fields.add(field::CMD_EFFORT as usize) = fill(c.torque_nm);
     }

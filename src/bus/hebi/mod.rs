@@ -11,13 +11,15 @@ pub mod gains;
 pub mod group;
 pub mod library;
 pub mod lookup;
+#[cfg(test)]
+mod loop_tests;
 pub mod mailbox;
 pub mod message;
 #[cfg(test)]
 mod tests;
 
 use std::sync::Arc;
-use std::sync::atomic::Ordering::Relaxed;
+use std::sync::atomic::{AtomicU32, Ordering::Relaxed};
 
 use crate::bus::{Bus, BusCounters, BusError, CounterSet, FeedbackWait, GroupFeedback};
 use crate::module::Command;
@@ -37,6 +39,21 @@ pub struct HebiBus {
     counters: BusCounters,
     repeated: u64,
     released: bool,
+    /// A feedback rate asked for from another thread (f32 bits; `NO_REQUEST` = none).
+    rate_request: Arc<AtomicU32>,
+}
+
+const NO_REQUEST: u32 = u32::MAX;
+
+/// Changes the group's feedback rate from another thread, at the bus's next send
+/// (0 Hz stops the stream: how the tests stall a live group).
+#[derive(Clone)]
+pub struct FeedbackSwitch(Arc<AtomicU32>);
+
+impl FeedbackSwitch {
+    pub fn set_rate_hz(&self, hz: f32) {
+        self.0.store(hz.to_bits(), Relaxed);
+    }
 }
 
 /// How the bus sets up its group at start.
@@ -75,12 +92,18 @@ impl HebiBus {
             },
             repeated: 0,
             released: false,
+            rate_request: Arc::new(AtomicU32::new(NO_REQUEST)),
         })
     }
 
     /// Stops (hz = 0) or restarts the group's feedback stream.
     pub fn set_feedback_rate_hz(&mut self, hz: f32) -> Result<(), String> {
         self.group.set_feedback_rate_hz(hz)
+    }
+
+    /// A handle that changes the feedback rate while the loop owns the bus.
+    pub fn feedback_switch(&self) -> FeedbackSwitch {
+        FeedbackSwitch(self.rate_request.clone())
     }
 }
 
@@ -97,6 +120,15 @@ impl Bus for HebiBus {
                 got: commands.len(),
             });
         }
+        let asked = self.rate_request.swap(NO_REQUEST, Relaxed);
+        if asked != NO_REQUEST
+            && self
+                .group
+                .set_feedback_rate_hz(f32::from_bits(asked))
+                .is_err()
+        {
+            self.counters.send_errors += 1;
+        }
         if self.group.send(commands) {
             self.counters.commands_sent += 1;
         } else {
@@ -108,7 +140,7 @@ impl Bus for HebiBus {
     fn receive(
         &mut self,
         group: &mut GroupFeedback,
-        _now_ns: u64,
+        now_ns: u64,
         wait: FeedbackWait,
     ) -> Result<(), BusError> {
         // The library paces its own feedback: lockstep is refused at --check-config.
@@ -122,6 +154,9 @@ impl Bus for HebiBus {
             return Ok(());
         }
         self.last_number = s.number;
+        // Arrival on the loop's clock: `now_ns` less how long ago (monotonic) it came.
+        let ago_ns = crate::rt::sys::monotonic_ns().saturating_sub(s.arrival_ns);
+        let arrived_ns = now_ns.saturating_sub(ago_ns);
         for ((m, smp), last) in group
             .modules
             .iter_mut()
@@ -137,7 +172,7 @@ impl Bus for HebiBus {
             }
             *last = smp.receive_time_us;
             m.feedback = smp.feedback;
-            m.received_ns = Some(s.arrival_ns);
+            m.received_ns = Some(arrived_ns);
             m.fresh = true;
             self.counters.feedback_received += 1;
         }

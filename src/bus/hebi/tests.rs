@@ -157,7 +157,7 @@ pub fn test_library() -> &'static library::Api {
     library::load(&path).unwrap_or_else(|e| panic!("{e}"))
 }
 
-fn imitation_bus(n: usize) -> HebiBus {
+pub(super) fn imitation_bus(n: usize) -> HebiBus {
     let api = test_library();
     let spec = Spec {
         interfaces: vec!["127.0.0.1".into()],
