@@ -13,3 +13,6 @@ pub mod setpoint_guard;
 pub mod stats;
 pub mod sys;
 pub mod telemetry;
+
+#[cfg(test)]
+mod hebi_loop_tests;

@@ -90,7 +90,7 @@ impl FakeGroup {
         }
         self.time_us += 1000;
         let (positions, body_of, t) = (&self.positions, &self.body_of, self.time_us);
-        self.writer.publish(crate::rt::sys::monotonic_ns(), |g| {
+        self.writer.publish(super::mailbox::monotonic_ns(), |g| {
             if c.lost[body_of[g]].load(Relaxed) {
                 return Sample::default();
             }
@@ -136,7 +136,7 @@ impl Group for FakeGroup {
             let mut log = self.control.log.lock().unwrap();
             log.commands += 1;
             log.limp_commands += u64::from(commands.iter().all(Command::is_limp));
-            log.last_command_ns = crate::rt::sys::monotonic_ns();
+            log.last_command_ns = super::mailbox::monotonic_ns();
             log.last_commands.clear();
             log.last_commands.extend_from_slice(commands);
         }

@@ -45,7 +45,7 @@ unsafe extern "C" fn on_feedback(fbk: GroupFeedbackPtr, user: *mut c_void) {
     let api = h.api;
     // SAFETY: `fbk` is live for the duration of the call.
     let size = unsafe { (api.f.group_feedback_get_size)(fbk) };
-    let arrival_ns = crate::rt::sys::monotonic_ns();
+    let arrival_ns = super::mailbox::monotonic_ns();
     h.writer.publish(arrival_ns, |g| {
         if g >= size {
             return Sample::default();

@@ -156,8 +156,14 @@ fn open(path: &Path) -> Result<Api, LibraryError> {
         path: path.to_owned(),
         why,
     };
+    // libloading's error says only "dlopen failed"; the loader's reason is its source.
     // SAFETY: loading runs the library's initialisers; libhebi's are known to be sound.
-    let lib = unsafe { libloading::Library::new(path) }.map_err(|e| load_err(e.to_string()))?;
+    let lib = unsafe { libloading::Library::new(path) }.map_err(|e| {
+        load_err(match std::error::Error::source(&e) {
+            Some(why) => format!("{e}: {why}"),
+            None => e.to_string(),
+        })
+    })?;
     macro_rules! sym {
         ($name:literal) => {
             // SAFETY: the type is hebi.h's declaration of the symbol (ffi.rs).

@@ -7,6 +7,18 @@ use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
 
 use super::message::Sample;
 
+/// CLOCK_MONOTONIC, ns: the loop's pacer's clock (`rt::sys::monotonic_ns`, which the
+/// bus cannot use without depending on `rt`).
+pub fn monotonic_ns() -> u64 {
+    let mut ts = libc::timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
+    // SAFETY: a valid timespec; CLOCK_MONOTONIC always exists on Linux.
+    unsafe { libc::clock_gettime(libc::CLOCK_MONOTONIC, &mut ts) };
+    ts.tv_sec as u64 * 1_000_000_000 + ts.tv_nsec as u64
+}
+
 /// One whole group feedback, head first.
 #[derive(Debug, Clone, Default)]
 pub struct GroupSample {

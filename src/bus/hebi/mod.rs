@@ -11,12 +11,10 @@ pub mod gains;
 pub mod group;
 pub mod library;
 pub mod lookup;
-#[cfg(test)]
-mod loop_tests;
 pub mod mailbox;
 pub mod message;
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;
 
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU32, Ordering::Relaxed};
@@ -155,7 +153,7 @@ impl Bus for HebiBus {
         }
         self.last_number = s.number;
         // Arrival on the loop's clock: `now_ns` less how long ago (monotonic) it came.
-        let ago_ns = crate::rt::sys::monotonic_ns().saturating_sub(s.arrival_ns);
+        let ago_ns = mailbox::monotonic_ns().saturating_sub(s.arrival_ns);
         let arrived_ns = now_ns.saturating_sub(ago_ns);
         for ((m, smp), last) in group
             .modules

@@ -7,11 +7,11 @@ use std::time::Duration;
 use super::fake::FakeGroup;
 use super::gains::ModuleSettings;
 use super::lookup::{Source, Spec};
-use super::mailbox::mailbox;
+use super::mailbox::{self, mailbox};
 use super::*;
 use crate::bus::GroupFeedback;
 
-fn fake_bus(n: usize, order: Vec<usize>) -> (HebiBus, Arc<fake::FakeControl>) {
+pub(crate) fn fake_bus(n: usize, order: Vec<usize>) -> (HebiBus, Arc<fake::FakeControl>) {
     assert_eq!(order.len(), n);
     let (writer, output) = mailbox(order);
     let counters = writer.counters();
@@ -39,7 +39,7 @@ fn start_sets_lifetime_rate_and_gains_and_release_commands_limp() {
     assert_eq!(settings.len(), 4);
     assert_eq!(settings[3].floats, vec![(2, 3.0)]);
     bus.send(&[Command::position(0.1); 4]).unwrap();
-    assert!(control.acting(crate::rt::sys::monotonic_ns()));
+    assert!(control.acting(mailbox::monotonic_ns()));
     bus.release();
     let log = control.log.lock().unwrap().clone();
     assert!(log.released);
@@ -157,7 +157,7 @@ pub fn test_library() -> &'static library::Api {
     library::load(&path).unwrap_or_else(|e| panic!("{e}"))
 }
 
-pub(super) fn imitation_bus(n: usize) -> HebiBus {
+pub(crate) fn imitation_bus(n: usize) -> HebiBus {
     let api = test_library();
     let spec = Spec {
         interfaces: vec!["127.0.0.1".into()],
