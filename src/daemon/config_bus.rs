@@ -154,3 +154,64 @@ impl Config {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn refused(text: &str) -> String {
+        Config::parse(text, Path::new("x.toml"))
+            .unwrap_err()
+            .to_string()
+    }
+
+    #[test]
+    fn hebi_keys_are_checked_with_their_names() {
+        let hebi = "[bus]\nkind = \"hebi\"\n[hebi]\nimitation = 4\n";
+        let e = refused(&format!("{hebi}order = [0, 1, 1, 3]\n"));
+        assert!(e.contains("hebi.order") && e.contains("once"), "{e}");
+        let e = refused(&format!("{hebi}order = [0, 1]\n"));
+        assert!(
+            e.contains("hebi.order") && e.contains("2 entries for 4"),
+            "{e}"
+        );
+        let e = refused(&format!("{hebi}[loop]\npacing = \"lockstep\"\n"));
+        assert!(e.contains("loop.pacing") && e.contains("libhebi"), "{e}");
+        let e = refused("[bus]\nkind = \"hebi\"\n[hebi]\nmodules = 0\n");
+        assert!(e.contains("hebi.modules"), "{e}");
+        let e = refused(&format!(
+            "{hebi}library = \"/nonexistent/libhebi.so.2.27.0\"\n"
+        ));
+        assert!(
+            e.contains("hebi.library") && e.contains("/nonexistent/libhebi.so.2.27.0"),
+            "{e}"
+        );
+        // Keys every bus checks, whether or not the HEBI bus is chosen.
+        let e = refused("[hebi]\ninterfaces = [\"eth0\"]\n");
+        assert!(e.contains("hebi.interfaces") && e.contains("eth0"), "{e}");
+        let e = refused("[hebi.gains.dorsal]\nvelocity_kp = -2.0\n");
+        assert!(
+            e.contains("hebi.gains") && e.contains("dorsal.velocity_kp"),
+            "{e}"
+        );
+        let e = refused("[hebi.gains.all]\nposition_gain = 1.0\n");
+        assert!(
+            e.contains("all.position_gain") && e.contains("not a gain"),
+            "{e}"
+        );
+        let e = refused("[hebi]\nlookup_timeout_s = 0.0\n");
+        assert!(e.contains("hebi.lookup_timeout_s"), "{e}");
+        let e = refused("[bus]\nkind = \"can\"\n");
+        assert!(e.contains("kind") && e.contains("hebi"), "{e}");
+    }
+
+    #[test]
+    fn the_module_count_follows_the_source() {
+        let mut h = HebiConfig::default();
+        assert_eq!(h.module_count(), 18);
+        h.names = vec!["a".into(), "b".into()];
+        assert_eq!(h.module_count(), 2);
+        h.imitation = 5;
+        assert_eq!(h.module_count(), 5);
+    }
+}

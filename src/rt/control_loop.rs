@@ -226,13 +226,8 @@ impl ControlLoop {
 
         // Read.
         let wait = self.p.pacer.feedback_wait(c, self.last_module_time_us);
-        let io_started_ns = self.p.pacer.elapsed_ns();
-        if self
-            .p
-            .bus
-            .receive(&mut self.group, c.clock_ns, wait)
-            .is_err()
-        {
+        let (bus, io_started_ns) = (&mut self.p.bus, self.p.pacer.elapsed_ns());
+        if bus.receive(&mut self.group, c.clock_ns, wait).is_err() {
             self.stats.bus_errors += 1;
         }
         let mut io_ns = self.p.pacer.elapsed_ns().saturating_sub(io_started_ns);
