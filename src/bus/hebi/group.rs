@@ -101,6 +101,19 @@ impl LibGroup {
     ) -> Result<Self, String> {
         // SAFETY: live group (caller).
         let size = unsafe { (api.f.group_get_size)(group) };
+        if size != order.len() || order.iter().any(|&g| g >= size) {
+            // SAFETY: ours to release (caller).
+            unsafe {
+                (api.f.group_release)(group);
+                if !lookup.is_null() {
+                    (api.f.lookup_release)(lookup);
+                }
+            }
+            return Err(format!(
+                "the group has {size} modules, the body {}",
+                order.len()
+            ));
+        }
         let command = unsafe { (api.f.group_command_create)(size) };
         let mut refs = Vec::with_capacity(order.len());
         for &g in order {
