@@ -7,6 +7,7 @@
 mod alloc;
 mod daemon;
 mod emu;
+mod hebi;
 mod hil;
 mod lab;
 mod protocol;
