@@ -14,28 +14,26 @@ fn steps(h: &mut Harness, k: usize) {
     }
 }
 
-#[test]
-fn the_loop_drives_an_imitation_group_and_the_failsafe_catches_a_stalled_stream() {
-    let bus = crate::bus::hebi::tests::imitation_bus(18);
-    let switch = bus.feedback_switch();
+/// The daemon's loop over `bus` in real time, slithering.
+fn real_time_loop(bus: Box<dyn crate::bus::Bus>) -> Harness {
     let failsafe = FailsafeConfig {
-        // Generous: a loaded CI machine must not starve the library's thread into a
-        // hold while the stream runs.
+        // Generous: a loaded CI machine must not starve the library's thread (or the
+        // loop) into a hold while feedback flows.
         feedback_timeout_s: 0.2,
         limp_after_s: 0.3,
         auto_resume: false,
         shutdown_hold_s: 0.05,
     };
     let pacer = Box::new(RealTimePacer::new(crate::rt::harness::PERIOD_NS));
-    let mut h = harness_on_bus(
-        Box::new(bus),
-        pacer,
-        GaitTable::default(),
-        GaitKind::Slithering,
-        false,
-        failsafe,
-        16,
-    );
+    let (table, gait) = (GaitTable::default(), GaitKind::Slithering);
+    harness_on_bus(bus, pacer, table, gait, false, failsafe, 16)
+}
+
+#[test]
+fn the_loop_drives_an_imitation_group_and_the_failsafe_catches_a_stalled_stream() {
+    let bus = crate::bus::hebi::tests::imitation_bus(18);
+    let switch = bus.feedback_switch();
+    let mut h = real_time_loop(Box::new(bus));
     steps(&mut h, 800);
     assert_eq!(h.control.mode(), Mode::Running);
     // The imitation echoes the loop's commands: the feedback follows the gait.
@@ -83,24 +81,8 @@ fn the_loop_drives_an_imitation_group_and_the_failsafe_catches_a_stalled_stream(
 /// The loop over the fake group, in real time: what an imitation group cannot show.
 fn fake_loop(n: usize) -> (Harness, std::sync::Arc<crate::bus::hebi::fake::FakeControl>) {
     let (bus, control) = crate::bus::hebi::tests::fake_bus(n, (0..n).collect());
-    let failsafe = FailsafeConfig {
-        feedback_timeout_s: 0.2, // generous: a loaded machine must not hold early
-        limp_after_s: 0.3,
-        auto_resume: false,
-        shutdown_hold_s: 0.05,
-    };
-    // Real-time pacing: the fake answers each command at once, so feedback is fresh.
-    let pacer = Box::new(RealTimePacer::new(crate::rt::harness::PERIOD_NS));
-    let h = harness_on_bus(
-        Box::new(bus),
-        pacer,
-        GaitTable::default(),
-        GaitKind::Slithering,
-        false,
-        failsafe,
-        16,
-    );
-    (h, control)
+    // The fake answers each command at once, so its feedback is fresh in real time.
+    (real_time_loop(Box::new(bus)), control)
 }
 
 #[test]

@@ -178,15 +178,8 @@ pub fn open(api: &Api, spec: &Spec) -> Result<Opened, String> {
                     api.last_error()
                 ));
             }
-            let order = order_for(&spec.order, *n)?;
-            let names = order.iter().map(|g| format!("imitation{g}")).collect();
-            Ok(Opened {
-                group,
-                lookup: std::ptr::null_mut(),
-                names,
-                order,
-                imitation: true,
-            })
+            let names = (0..*n).map(|g| format!("imitation{g}")).collect();
+            finish(api, group, std::ptr::null_mut(), names, &spec.order, true)
         }
         Source::Names { family, names } => {
             let lookup = create_lookup(api, &spec.interfaces)?;
@@ -224,15 +217,7 @@ pub fn open(api: &Api, spec: &Spec) -> Result<Opened, String> {
                     &found,
                 ));
             }
-            let order = order_for(&spec.order, names.len())?;
-            let names = order.iter().map(|&g| names[g].clone()).collect();
-            Ok(Opened {
-                group,
-                lookup,
-                names,
-                order,
-                imitation: false,
-            })
+            finish(api, group, lookup, names.clone(), &spec.order, false)
         }
         Source::Family { family, expected } => {
             let lookup = create_lookup(api, &spec.interfaces)?;
@@ -262,25 +247,45 @@ pub fn open(api: &Api, spec: &Spec) -> Result<Opened, String> {
                     &found,
                 ));
             }
-            let order = order_for(&spec.order, size)?;
             // The group takes the family in the lookup's order.
-            let names = order
-                .iter()
-                .map(|&g| {
+            let names = (0..size)
+                .map(|g| {
                     of_family
                         .get(g)
                         .map_or(format!("{family}{g}"), |f| f.name.clone())
                 })
                 .collect();
-            Ok(Opened {
-                group,
-                lookup,
-                names,
-                order,
-                imitation: false,
-            })
+            finish(api, group, lookup, names, &spec.order, false)
         }
     }
+}
+
+/// The group with its names (group order) put in body order by `order`; released when
+/// the order does not fit.
+fn finish(
+    api: &Api,
+    group: GroupPtr,
+    lookup: LookupPtr,
+    names: Vec<String>,
+    order: &[usize],
+    imitation: bool,
+) -> Result<Opened, String> {
+    let order = order_for(order, names.len()).inspect_err(|_| {
+        // SAFETY: live handles we own, released once.
+        unsafe {
+            (api.f.group_release)(group);
+            if !lookup.is_null() {
+                (api.f.lookup_release)(lookup);
+            }
+        }
+    })?;
+    Ok(Opened {
+        group,
+        lookup,
+        names: order.iter().map(|&g| names[g].clone()).collect(),
+        order,
+        imitation,
+    })
 }
 
 fn not_found(what: &str, spec: &Spec, waited: Duration, found: &[Found]) -> String {

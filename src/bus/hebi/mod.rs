@@ -143,6 +143,12 @@ impl Bus for HebiBus {
     ) -> Result<(), BusError> {
         // The library paces its own feedback: lockstep is refused at --check-config.
         debug_assert_eq!(wait, FeedbackWait::None);
+        if group.len() != self.last_receive_us.len() {
+            return Err(BusError::WrongCount {
+                expected: self.last_receive_us.len(),
+                got: group.len(),
+            });
+        }
         for m in &mut group.modules {
             m.fresh = false;
         }
