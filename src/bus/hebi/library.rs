@@ -318,3 +318,72 @@ impl Api {
         format!("{a}.{b}.{c}")
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The counts libhebi 2.27.0 reports (hebi-py 2.16.1's enums agree).
+    fn v2_27() -> (Metadata, Metadata) {
+        let command = Metadata {
+            float_field_count: 61,
+            high_res_angle_field_count: 3,
+            enum_field_count: 4,
+            message_bitfield_count: 150,
+            ..Metadata::default()
+        };
+        let feedback = Metadata {
+            float_field_count: 48,
+            high_res_angle_field_count: 3,
+            vector3f_field_count: 6,
+            quaternionf_field_count: 2,
+            uint64_field_count: 8,
+            enum_field_count: 10,
+            message_bitfield_count: 135,
+            ..Metadata::default()
+        };
+        (command, feedback)
+    }
+
+    #[test]
+    fn another_major_version_or_missing_fields_are_refused_with_the_reason() {
+        let (c, f) = v2_27();
+        assert_eq!(check(2, &c, &f), Ok(()));
+        assert!(check(3, &c, &f).unwrap_err().contains("2.x"));
+        let few = Metadata {
+            quaternionf_field_count: 0,
+            ..f
+        };
+        let why = check(2, &c, &few).unwrap_err();
+        assert!(why.contains("feedback quaternion fields are 0"), "{why}");
+        let few = Metadata {
+            float_field_count: 40,
+            ..c
+        };
+        let why = check(2, &few, &f).unwrap_err();
+        assert!(why.contains("command float fields are 40, the bus needs 41"), "{why}");
+    }
+
+    #[test]
+    fn only_fully_versioned_names_count_and_the_newest_wins() {
+        let dir = tempfile::tempdir().unwrap();
+        for name in ["libhebi.so", "libhebi.so.2", "libhebi.so.2.27", "libhebi.so.2.9.1"] {
+            std::fs::write(dir.path().join(name), "x").unwrap();
+        }
+        assert_eq!(
+            newest_versioned(dir.path()),
+            Some(dir.path().join("libhebi.so.2.9.1"))
+        );
+        std::fs::write(dir.path().join("libhebi.so.2.27.0"), "x").unwrap();
+        assert_eq!(
+            newest_versioned(dir.path()),
+            Some(dir.path().join("libhebi.so.2.27.0"))
+        );
+    }
+
+    #[test]
+    fn a_configured_path_that_is_missing_names_itself() {
+        let e = find(Some(Path::new("/nowhere/libhebi.so.2.27.0"))).unwrap_err();
+        assert!(e.to_string().contains("/nowhere/libhebi.so.2.27.0 (hebi.library)"));
+    }
+}
