@@ -361,13 +361,21 @@ mod tests {
             ..c
         };
         let why = check(2, &few, &f).unwrap_err();
-        assert!(why.contains("command float fields are 40, the bus needs 41"), "{why}");
+        assert!(
+            why.contains("command float fields are 40, the bus needs 41"),
+            "{why}"
+        );
     }
 
     #[test]
     fn only_fully_versioned_names_count_and_the_newest_wins() {
         let dir = tempfile::tempdir().unwrap();
-        for name in ["libhebi.so", "libhebi.so.2", "libhebi.so.2.27", "libhebi.so.2.9.1"] {
+        for name in [
+            "libhebi.so",
+            "libhebi.so.2",
+            "libhebi.so.2.27",
+            "libhebi.so.2.9.1",
+        ] {
             std::fs::write(dir.path().join(name), "x").unwrap();
         }
         assert_eq!(
@@ -384,6 +392,9 @@ mod tests {
     #[test]
     fn a_configured_path_that_is_missing_names_itself() {
         let e = find(Some(Path::new("/nowhere/libhebi.so.2.27.0"))).unwrap_err();
-        assert!(e.to_string().contains("/nowhere/libhebi.so.2.27.0 (hebi.library)"));
+        assert!(
+            e.to_string()
+                .contains("/nowhere/libhebi.so.2.27.0 (hebi.library)")
+        );
     }
 }
