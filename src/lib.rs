@@ -43,6 +43,7 @@ pub mod num;
 pub mod operator;
 pub mod protocol;
 pub mod record;
+pub mod ros2;
 pub mod rt;
 pub mod safety;
 pub mod shape;
