@@ -12,7 +12,6 @@ mod hil;
 mod lab;
 mod protocol;
 mod record;
-mod ros2;
 mod socket;
 mod structure;
 mod support;
