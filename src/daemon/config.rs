@@ -9,6 +9,7 @@ use crate::gait::{GaitKind, Plane};
 
 pub use super::config_bus::{BusChoice, BusSection, HebiConfig, HebiGains};
 pub use super::config_record::{FoxgloveConfig, RecordConfig};
+pub use super::config_ros2::Ros2Config;
 
 #[derive(Debug, Clone, Default, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -25,6 +26,7 @@ pub struct Config {
     pub emulator: EmulatorConfig,
     pub record: RecordConfig,
     pub foxglove: FoxgloveConfig,
+    pub ros2: Ros2Config,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]

@@ -31,7 +31,9 @@ pub fn init(default: &str) {
     use tracing_subscriber::Layer;
     use tracing_subscriber::layer::SubscriberExt;
     use tracing_subscriber::util::SubscriberInitExt;
-    let filter = EnvFilter::try_from_default_env().unwrap_or_else(|_| EnvFilter::new(default));
+    // RustDDS (the ROS 2 node) logs its discovery's routine at info: warnings only.
+    let filter = EnvFilter::try_from_default_env()
+        .unwrap_or_else(|_| EnvFilter::new(format!("{default},rustdds=warn,ros2_client=warn")));
     let style = LogStyle::detect();
     let fmt = tracing_subscriber::fmt::layer()
         .with_writer(std::io::stderr)

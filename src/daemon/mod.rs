@@ -5,6 +5,7 @@ pub mod bus_setup;
 pub mod config;
 mod config_bus;
 mod config_record;
+mod config_ros2;
 pub mod files;
 pub mod logging;
 pub mod service;
@@ -361,7 +362,7 @@ fn start_recorder(
 ) -> Result<Option<(RecordTx, Recorder)>> {
     let rec = &cfg.record;
     let mcap = rec.mcap_options();
-    if mcap.is_none() && !cfg.foxglove.enabled {
+    if mcap.is_none() && !cfg.foxglove.enabled && !cfg.ros2.enabled {
         return Ok(None);
     }
     let opts = RecordOptions {
@@ -388,7 +389,24 @@ fn start_recorder(
             ("loop_rate_hz".into(), cfg.loop_.rate_hz.to_string()),
         ],
     };
-    let (tx, recorder) = crate::record::start(opts, info).context("starting the recorder")?;
+    let sink = if cfg.ros2.enabled {
+        let urdf = crate::record::urdf::urdf(layout, &built.names);
+        let (sink, _counters) =
+            crate::ros2::bridge::start(&cfg.ros2.options(), built.names.clone(), urdf)
+                .context("starting the ROS 2 node")?;
+        tracing::info!(
+            node = %cfg.ros2.node_name,
+            namespace = %cfg.ros2.namespace,
+            domain = cfg.ros2.domain_id,
+            "ROS 2 node publishing /joint_states and /robot_description"
+        );
+        // The node's thread ends when the recorder finishes and drops the sink.
+        Some(Box::new(sink) as Box<dyn crate::record::CycleSink>)
+    } else {
+        None
+    };
+    let (tx, recorder) =
+        crate::record::start_with(opts, info, sink).context("starting the recorder")?;
     if let Some(addr) = recorder.live_addr() {
         tracing::info!("live view (Foxglove WebSocket) on ws://{addr}");
     }

@@ -83,7 +83,7 @@ pub use options::{
     CapReason, DEFAULT_CHUNK_DURATION_S, FileState, McapOptions, RecordOptions, RecordState,
     RecordSummary, RecorderStatus, RecordingInfo,
 };
-pub use recorder::{Recorder, RecorderProbe, start};
+pub use recorder::{CycleSink, Recorder, RecorderProbe, start, start_with};
 pub use recover::{RECOVER_MAX_CHUNK_BYTES, RecoverError, Recovery, recover, recovered_path};
 pub use ring::RecordTx;
 pub use scene::{BODY_FRAME, WORLD_FRAME, link_frame};

@@ -18,6 +18,21 @@ pub fn start(
     opts: RecordOptions,
     info: RecordingInfo,
 ) -> Result<(RecordTx, Recorder), RecordError> {
+    start_with(opts, info, None)
+}
+
+/// Something else the writer thread hands every recorded cycle to (the ROS 2 node's
+/// sink), with its wall-clock stamp, ns since the Unix epoch. It must not wait.
+pub trait CycleSink: Send {
+    fn cycle(&mut self, rec: &super::cycle::CycleRecord, unix_ns: u64);
+}
+
+/// [`start`], with every cycle also handed to `sink`.
+pub fn start_with(
+    opts: RecordOptions,
+    info: RecordingInfo,
+    sink: Option<Box<dyn CycleSink>>,
+) -> Result<(RecordTx, Recorder), RecordError> {
     validate(&opts)?;
     let ring = Ring::new(opts.ring_capacity);
     let shared = Arc::new(Shared::new(ring.clone()));
@@ -29,7 +44,8 @@ pub fn start(
             let _close = CloseOnDrop(thread_shared.ring.clone());
             // Set up on this thread: the live view's runtime then never meets the
             // caller's (a runtime cannot be started or dropped inside another).
-            let (writer, setup) = Writer::open(&opts, info, thread_shared)?;
+            let (mut writer, setup) = Writer::open(&opts, info, thread_shared)?;
+            writer.sink = sink;
             let _ = setup_tx.send(setup);
             writer.run()
         })

@@ -133,6 +133,8 @@ pub(crate) struct Writer {
     t0_ns: Option<u64>,
     items: u64,
     shared: Arc<Shared>,
+    /// Also handed every cycle (the ROS 2 node).
+    pub sink: Option<Box<dyn super::recorder::CycleSink>>,
     _ctx: Arc<Context>,
 }
 
@@ -210,6 +212,7 @@ impl Writer {
             t0_ns: None,
             items: 0,
             shared,
+            sink: None,
             _ctx: ctx,
         };
         Ok((w, setup))
@@ -291,6 +294,9 @@ impl Writer {
 
     fn cycle(&mut self, rec: &CycleRecord) {
         let t = self.log_time(rec.t_ns);
+        if let Some(sink) = self.sink.as_mut() {
+            sink.cycle(rec, t);
+        }
         let info = self.controller(rec.controller_id, t);
         let info = info.as_deref();
         let ch = &mut self.channels;

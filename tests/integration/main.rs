@@ -12,6 +12,7 @@ mod hil;
 mod lab;
 mod protocol;
 mod record;
+mod ros2;
 mod socket;
 mod structure;
 mod support;
