@@ -39,6 +39,9 @@ pub struct BodyEstimate {
     /// Part of the body was lifted, so `odometry_m` stood on contacts; with the whole
     /// body down (slithering) it assumes the centroid does not drift.
     pub odometry_lifted: bool,
+    /// The head link's orientation (w, x, y, z) on the same world axes: with
+    /// `position_m` and `orientation_wxyz`, where the head sits in the chassis frame.
+    pub head_wxyz: [f64; 4],
 }
 
 impl BodyEstimate {
@@ -51,6 +54,7 @@ impl BodyEstimate {
         round: false,
         odometry_m: [0.0; 2],
         odometry_lifted: false,
+        head_wxyz: [1.0, 0.0, 0.0, 0.0],
     };
 }
 

@@ -32,8 +32,11 @@ pub fn init(default: &str) {
     use tracing_subscriber::layer::SubscriberExt;
     use tracing_subscriber::util::SubscriberInitExt;
     // RustDDS (the ROS 2 node) logs its discovery's routine at info: warnings only.
-    let filter = EnvFilter::try_from_default_env()
-        .unwrap_or_else(|_| EnvFilter::new(format!("{default},rustdds=warn,ros2_client=warn")));
+    let filter = EnvFilter::try_from_default_env().unwrap_or_else(|_| {
+        EnvFilter::new(format!(
+            "{default},rustdds=warn,ros2_client=warn,ros2_client::distributions=error"
+        ))
+    });
     let style = LogStyle::detect();
     let fmt = tracing_subscriber::fmt::layer()
         .with_writer(std::io::stderr)

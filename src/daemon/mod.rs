@@ -237,7 +237,7 @@ pub fn run(cfg: Config, emulated: bool) -> Result<()> {
     let heartbeat = Arc::new(AtomicU64::new(0));
 
     let mut server_cfg = server_config(&cfg);
-    server_cfg.record = recorder.as_ref().map(|(_, r)| {
+    server_cfg.record = recorder.as_ref().map(|(_, r, _)| {
         let probe = r.probe();
         socket::RecordView::new(move || serde_json::json!(probe.status()))
     });
@@ -277,6 +277,9 @@ pub fn run(cfg: Config, emulated: bool) -> Result<()> {
         },
     )
     .context("starting the control socket")?;
+    if let Some(ros2) = recorder.as_ref().and_then(|(_, _, r)| r.as_ref()) {
+        ros2.bind(server.operator());
+    }
     if let Some(station) = &station {
         station.bind(server.operator());
         let auth = if station.config.token.is_some() {
@@ -305,7 +308,7 @@ pub fn run(cfg: Config, emulated: bool) -> Result<()> {
         retired: loop_ends.retired,
         controllers,
         estimators,
-        observer: recorder.as_ref().map(|(tx, _)| {
+        observer: recorder.as_ref().map(|(tx, _, _)| {
             let out = LoopRecording {
                 tx: tx.clone(),
                 wait_when_full: false,
@@ -329,7 +332,7 @@ pub fn run(cfg: Config, emulated: bool) -> Result<()> {
         .map_err(|_| anyhow::anyhow!("the control loop panicked"))?;
     service::notify_stopping();
     server.shutdown();
-    if let Some((_, recorder)) = recorder {
+    if let Some((_, recorder, _)) = recorder {
         finish_recorder(recorder);
     }
     tracing::info!(
@@ -359,7 +362,7 @@ fn start_recorder(
     layout: &BodyLayout,
     catalog: &Catalog,
     station: Option<&Station>,
-) -> Result<Option<(RecordTx, Recorder)>> {
+) -> Result<Option<(RecordTx, Recorder, Option<crate::ros2::Ros2Handle>)>> {
     let rec = &cfg.record;
     let mcap = rec.mcap_options();
     if mcap.is_none() && !cfg.foxglove.enabled && !cfg.ros2.enabled {
@@ -389,28 +392,59 @@ fn start_recorder(
             ("loop_rate_hz".into(), cfg.loop_.rate_hz.to_string()),
         ],
     };
-    let sink = if cfg.ros2.enabled {
-        let urdf = crate::record::urdf::urdf(layout, &built.names);
-        let (sink, _counters) =
-            crate::ros2::bridge::start(&cfg.ros2.options(), built.names.clone(), urdf)
-                .context("starting the ROS 2 node")?;
-        tracing::info!(
-            node = %cfg.ros2.node_name,
-            namespace = %cfg.ros2.namespace,
-            domain = cfg.ros2.domain_id,
-            "ROS 2 node publishing /joint_states and /robot_description"
-        );
-        // The node's thread ends when the recorder finishes and drops the sink.
-        Some(Box::new(sink) as Box<dyn crate::record::CycleSink>)
-    } else {
-        None
+    let (sink, ros2) = match start_ros2(cfg, built, layout)? {
+        Some((sink, handle)) => (Some(sink), Some(handle)),
+        None => (None, None),
     };
     let (tx, recorder) =
         crate::record::start_with(opts, info, sink).context("starting the recorder")?;
     if let Some(addr) = recorder.live_addr() {
         tracing::info!("live view (Foxglove WebSocket) on ws://{addr}");
     }
-    Ok(Some((tx, recorder)))
+    Ok(Some((tx, recorder, ros2)))
+}
+
+/// The ROS 2 node `[ros2]` asks for (`None`: off), as the recorder's sink: its thread
+/// ends when the recorder finishes and drops the sink.
+fn start_ros2(
+    cfg: &Config,
+    built: &bus_setup::BuiltBus,
+    layout: &BodyLayout,
+) -> Result<Option<(Box<dyn crate::record::CycleSink>, crate::ros2::Ros2Handle)>> {
+    let r = &cfg.ros2;
+    if !r.enabled {
+        return Ok(None);
+    }
+    let urdf = crate::record::urdf::urdf(layout, &built.names);
+    // The daemon's pose input; the pose estimate does not read it yet (docs/ros2.md).
+    let (writer, _reader, counters) = crate::estimation::external_pose::pose_input();
+    let (sink, handle) = crate::ros2::start(
+        &r.options(cfg.foxglove.teleop()),
+        built.names.clone(),
+        urdf,
+        Some((writer, counters)),
+    )
+    .context("starting the ROS 2 node")?;
+    tracing::info!(
+        node = %r.node_name,
+        namespace = %r.namespace,
+        domain = r.domain_id,
+        operate = r.operate,
+        "ROS 2 node up"
+    );
+    if r.operate {
+        let beyond = crate::ros2::interfaces_beyond_loopback();
+        if !beyond.is_empty() {
+            tracing::warn!(
+                "ROS 2 may drive this robot ([ros2] operate) and DDS discovery reaches \
+                 beyond localhost (on {}): DDS has no authentication, so anyone on those \
+                 networks in domain {} can drive it",
+                beyond.join(", "),
+                r.domain_id
+            );
+        }
+    }
+    Ok(Some((Box::new(sink), handle)))
 }
 
 /// The operator's station the configuration asks for (`[foxglove] operate`), with its

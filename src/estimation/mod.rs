@@ -14,6 +14,7 @@
 
 pub mod attitude;
 pub mod chassis;
+pub mod external_pose;
 pub mod odometry;
 
 use nalgebra::{Isometry3, UnitQuaternion, Vector3};
@@ -128,6 +129,7 @@ impl Estimator for VirtualChassisEstimator {
             round: c.round,
             odometry_m: [travelled.x, travelled.y],
             odometry_lifted: self.odometry.lifted(),
+            head_wxyz: [head.w, head.i, head.j, head.k],
         };
     }
 }

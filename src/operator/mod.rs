@@ -26,6 +26,7 @@ pub mod error;
 pub mod handle;
 pub(crate) mod navigate;
 pub mod navigator_runner;
+pub mod parameters;
 pub(crate) mod router;
 pub(crate) mod shared;
 

@@ -25,6 +25,8 @@ pub fn start(
 /// sink), with its wall-clock stamp, ns since the Unix epoch. It must not wait.
 pub trait CycleSink: Send {
     fn cycle(&mut self, rec: &super::cycle::CycleRecord, unix_ns: u64);
+    /// The recording's context, once, before any cycle (for channels of its own).
+    fn attach(&mut self, _ctx: &Arc<foxglove::Context>) {}
 }
 
 /// [`start`], with every cycle also handed to `sink`.
@@ -45,6 +47,10 @@ pub fn start_with(
             // Set up on this thread: the live view's runtime then never meets the
             // caller's (a runtime cannot be started or dropped inside another).
             let (mut writer, setup) = Writer::open(&opts, info, thread_shared)?;
+            let mut sink = sink;
+            if let Some(sink) = &mut sink {
+                sink.attach(writer.context());
+            }
             writer.sink = sink;
             let _ = setup_tx.send(setup);
             writer.run()

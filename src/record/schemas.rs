@@ -72,6 +72,7 @@ pub fn body_estimate() -> Value {
             "round": {"type": "boolean", "description": "no clear main axis (coiled): the axis kept from before"},
             "odometry_m": numbers("the chassis origin's ground-plane position from contact odometry (the links on the ground taken to stay put), estimate's world, m"),
             "odometry_lifted": {"type": "boolean", "description": "part of the body was lifted, so odometry_m stood on contacts (false: the whole body down, it assumes no drift)"},
+            "head_wxyz": numbers("the head link's orientation on the same world axes (with position_m and orientation_wxyz: the head in the chassis frame)"),
         }),
     )
 }

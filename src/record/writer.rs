@@ -135,7 +135,7 @@ pub(crate) struct Writer {
     shared: Arc<Shared>,
     /// Also handed every cycle (the ROS 2 node).
     pub sink: Option<Box<dyn super::recorder::CycleSink>>,
-    _ctx: Arc<Context>,
+    ctx: Arc<Context>,
 }
 
 fn unix_ns_now() -> u64 {
@@ -150,6 +150,11 @@ fn timestamp(unix_ns: u64) -> Timestamp {
 }
 
 impl Writer {
+    /// The recording's context (its channels reach the file and the live view).
+    pub fn context(&self) -> &Arc<Context> {
+        &self.ctx
+    }
+
     /// Starts the live view, creates the file, writes the metadata and the world.
     pub fn open(
         opts: &RecordOptions,
@@ -213,7 +218,7 @@ impl Writer {
             items: 0,
             shared,
             sink: None,
-            _ctx: ctx,
+            ctx,
         };
         Ok((w, setup))
     }

@@ -18,6 +18,11 @@ impl Time {
             nanosec: (ns % 1_000_000_000) as u32,
         }
     }
+
+    /// ns since the Unix epoch (0 before it).
+    pub fn unix_ns(&self) -> u64 {
+        u64::try_from(self.sec).map_or(0, |s| s * 1_000_000_000 + u64::from(self.nanosec))
+    }
 }
 
 /// std_msgs/Header
@@ -220,3 +225,34 @@ pub struct DiagnosticArray {
 pub struct StringMsg {
     pub data: String,
 }
+
+/// std_srvs/Trigger's request: an empty message, which ROS 2's IDL gives one byte.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct Empty {
+    pub structure_needs_at_least_one_member: u8,
+}
+
+/// std_srvs/SetBool's request.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct SetBoolRequest {
+    pub data: bool,
+}
+
+/// std_srvs/Trigger's and SetBool's response.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct ServiceAnswer {
+    pub success: bool,
+    pub message: String,
+}
+
+impl ros2_client::Message for JointState {}
+impl ros2_client::Message for Imu {}
+impl ros2_client::Message for Odometry {}
+impl ros2_client::Message for TfMessage {}
+impl ros2_client::Message for PoseStamped {}
+impl ros2_client::Message for Twist {}
+impl ros2_client::Message for DiagnosticArray {}
+impl ros2_client::Message for StringMsg {}
+impl ros2_client::Message for Empty {}
+impl ros2_client::Message for SetBoolRequest {}
+impl ros2_client::Message for ServiceAnswer {}

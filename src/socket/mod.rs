@@ -26,7 +26,7 @@ pub mod api;
 pub mod client;
 mod clients;
 mod conn;
-mod controller_views;
+pub(crate) mod controller_views;
 mod lines;
 mod methods;
 pub mod paths;

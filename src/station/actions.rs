@@ -13,6 +13,7 @@ use serde_json::{Value, json};
 pub const TOPIC: &str = "/operator";
 
 /// Writes operator actions.
+#[derive(Clone)]
 pub struct Actions {
     channel: Option<Arc<RawChannel>>,
 }
@@ -24,6 +25,11 @@ impl Actions {
         Self {
             channel: json_channel(ctx, TOPIC, "snaked.OperatorAction", schema),
         }
+    }
+
+    /// Writes nothing (no recording).
+    pub fn off() -> Self {
+        Self { channel: None }
     }
 
     /// `client` (its name and id) did `action` with `params` and was answered `answer`.

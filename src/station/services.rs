@@ -58,25 +58,42 @@ impl Operating {
         params: Value,
     ) -> Result<Value, OperatorError> {
         let name = Self::client_name(client);
+        if method != "auth" && (OPEN.contains(&method) || self.access.may_operate(client)) {
+            return self.call_as(&name, method, params).await;
+        }
         let answer = if method == "auth" {
             self.auth(client, &params).await
-        } else if !OPEN.contains(&method) && !self.access.may_operate(client) {
+        } else {
             Err(OperatorError {
                 code: code::UNAUTHORIZED,
                 message: "unauthorized: call the `auth` service with the token first".into(),
             })
-        } else {
-            self.station.call_json(&name, method, &params).await
         };
+        let shown = if method == "auth" { json!({}) } else { params };
+        self.log(&name, method, &shown, &answer);
+        answer
+    }
+
+    /// Carries out `method` as `who`, who may operate; logs it (but `status`), answers.
+    pub async fn call_as(
+        &self,
+        who: &str,
+        method: &str,
+        params: Value,
+    ) -> Result<Value, OperatorError> {
+        let answer = self.station.call_json(who, method, &params).await;
         if method != "status" {
-            let shown = if method == "auth" { json!({}) } else { params };
-            let logged = answer.clone().map_err(|e| e.to_string());
-            self.actions.log(&name, method, &shown, &logged);
-            if let Err(e) = &answer {
-                tracing::warn!("station: {name}'s {method} refused: {e}");
-            }
+            self.log(who, method, &params, &answer);
         }
         answer
+    }
+
+    fn log(&self, who: &str, method: &str, params: &Value, answer: &Result<Value, OperatorError>) {
+        let logged = answer.clone().map_err(|e| e.to_string());
+        self.actions.log(who, method, params, &logged);
+        if let Err(e) = answer {
+            tracing::warn!("station: {who}'s {method} refused: {e}");
+        }
     }
 
     /// Carries a typed `act` out as `who` (teleop, the Parameters panel) and records it

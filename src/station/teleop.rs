@@ -15,6 +15,7 @@ use serde::Deserialize;
 use crate::gait::params::Field;
 use crate::gait::{GaitKind, ParamPatch};
 use crate::operator::Act;
+use crate::rt::telemetry::Snapshot;
 
 /// The teleop settings (`[foxglove]` `teleop_*`).
 #[derive(Debug, Clone, PartialEq)]
@@ -313,6 +314,40 @@ impl Teleop {
         self.state = TeleopState::Idle;
         Act::Hold
     }
+}
+
+/// The active gait in the loop's snapshot `s`, and how a turn steers it: by the nominal
+/// heading where its engaged controller declares it steers by one now (its
+/// `capabilities`: anti-compliant sidewinding, a heading hold that holds one), else by
+/// the gait's knob.
+pub fn active_gait(s: &Snapshot) -> (GaitKind, Steer) {
+    let steer = match (s.controller.capabilities.steers_by_heading, s.body.valid) {
+        (false, _) => Steer::Knob,
+        (true, true) if s.body.heading_rad.is_finite() => Steer::Heading(s.body.heading_rad),
+        (true, _) => Steer::NoEstimate,
+    };
+    (s.gait, steer)
+}
+
+/// `act` without the parameters that already have their values in `s` (`None`:
+/// nothing left to send).
+pub fn changed_only(s: Option<&Snapshot>, act: Act) -> Option<Act> {
+    let Act::SetParams { gait, mut patch } = act else {
+        return Some(act);
+    };
+    let Some(s) = s else {
+        return Some(Act::SetParams { gait, patch });
+    };
+    let live = s.params.get(gait);
+    let mut left = false;
+    for f in Field::ALL {
+        match f.in_patch(&patch) {
+            Some(v) if (f.get(live) - v).abs() < 1e-9 => f.clear_in_patch(&mut patch),
+            Some(_) => left = true,
+            None => {}
+        }
+    }
+    left.then_some(Act::SetParams { gait, patch })
 }
 
 #[cfg(test)]

@@ -1,0 +1,130 @@
+"""Runs in a network namespace with rclpy (scripts/ros2-peers.sh run): starts snaked
+(argv[1], config argv[2], `[ros2] operate = true`, node `snaked`) and drives and tunes it
+as a ROS 2 system would: the parameter services (list, get, set, refusals), Trigger
+services, /cmd_vel and its dead-man, watching /snaked/state. Prints one JSON line."""
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import rclpy
+from geometry_msgs.msg import Twist
+from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue
+from rcl_interfaces.srv import GetParameters, ListParameters, SetParameters
+from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from std_msgs.msg import String
+from std_srvs.srv import SetBool, Trigger
+
+snaked, config = sys.argv[1], sys.argv[2]
+env = {k: v for k, v in os.environ.items() if k != "LD_LIBRARY_PATH"}
+daemon = subprocess.Popen([snaked, "--emulated", "--config", config], env=env,
+                          stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+rclpy.init()
+node = Node("snaked_test_operator")
+state = {}
+latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL,
+                     reliability=ReliabilityPolicy.RELIABLE)
+node.create_subscription(String, "/snaked/state", lambda m: state.update(json.loads(m.data)),
+                         latched)
+cmd_vel = node.create_publisher(Twist, "/cmd_vel", 10)
+out = {}
+
+
+def spin_until(cond, timeout):
+    t0 = time.monotonic()
+    while time.monotonic() - t0 < timeout:
+        rclpy.spin_once(node, timeout_sec=0.02)
+        if cond():
+            return round(time.monotonic() - t0, 3)
+    return None
+
+
+def call(ty, name, req, timeout=15.0):
+    c = node.create_client(ty, name)
+    if not c.wait_for_service(timeout_sec=timeout):
+        return None
+    f = c.call_async(req)
+    rclpy.spin_until_future_complete(node, f, timeout_sec=timeout)
+    node.destroy_client(c)
+    return f.result()
+
+
+def trigger(name):
+    r = call(Trigger, "/snaked/" + name, Trigger.Request())
+    return None if r is None else {"success": r.success, "message": r.message}
+
+
+def value_of(v):
+    return {ParameterType.PARAMETER_DOUBLE: v.double_value,
+            ParameterType.PARAMETER_STRING: v.string_value,
+            ParameterType.PARAMETER_BOOL: v.bool_value}.get(v.type)
+
+
+def get(names):
+    r = call(GetParameters, "/snaked/get_parameters", GetParameters.Request(names=names))
+    return None if r is None else [value_of(v) for v in r.values]
+
+
+def set_param(name, value):
+    v = ParameterValue()
+    if isinstance(value, str):
+        v.type, v.string_value = ParameterType.PARAMETER_STRING, value
+    else:
+        v.type, v.double_value = ParameterType.PARAMETER_DOUBLE, float(value)
+    r = call(SetParameters, "/snaked/set_parameters",
+             SetParameters.Request(parameters=[Parameter(name=name, value=v)]))
+    return None if r is None else {"ok": r.results[0].successful, "reason": r.results[0].reason}
+
+
+def drive(forward, seconds):
+    t0 = time.monotonic()
+    while time.monotonic() - t0 < seconds:
+        m = Twist()
+        m.linear.x = forward
+        cmd_vel.publish(m)
+        spin_until(lambda: False, 0.05)
+
+
+try:
+    out["state_after_s"] = spin_until(lambda: state.get("mode") == "running", 30)
+    out["first_state"] = dict(state)
+    r = call(ListParameters, "/snaked/list_parameters", ListParameters.Request())
+    out["names"] = None if r is None else list(r.result.names)
+    speed = "params.temporal_freq_rad_s"
+    out["get"] = get(["gait", speed, "no.such"])
+    before = out["get"][1] if out["get"] else 1.0
+    out["set"] = set_param(speed, round(before * 0.75, 6))
+    out["after_set"] = get([speed])
+    out["set_out_of_range"] = set_param(speed, 1000.0)
+    out["set_bad_gait"] = set_param("gait", "swimming")
+    out["set_unknown"] = set_param("no.such", 1.0)
+    out["gait_service"] = trigger("gait/slithering")
+    out["gait_after_s"] = spin_until(lambda: state.get("gait") == "slithering", 10)
+    out["hold"] = trigger("hold")
+    out["held_after_s"] = spin_until(lambda: state.get("mode") == "hold", 10)
+    out["arm"] = trigger("arm")
+    out["armed_after_s"] = spin_until(lambda: state.get("mode") == "running", 10)
+    out["navigate_off"] = call(SetBool, "/snaked/navigate", SetBool.Request(data=False)).success
+    # Teleop: the gait's speed follows linear.x (1 rad/s per unit), then the dead-man.
+    drive(0.8, 1.5)
+    out["driven_motion"] = state.get("motion")
+    t_last = time.monotonic()
+    out["driven_speed"] = get([speed])
+    spin_until(lambda: state.get("motion") == "stopped", 10)
+    out["stopped_after_s"] = round(time.monotonic() - t_last, 3)
+    out["held_by_dead_man_after_s"] = spin_until(lambda: state.get("mode") == "hold", 10)
+    if out["held_by_dead_man_after_s"] is not None:
+        out["held_by_dead_man_after_s"] = round(time.monotonic() - t_last, 3)
+    out["estop"] = trigger("estop")
+    out["estopped_after_s"] = spin_until(lambda: state.get("mode") == "e_stop", 10)
+    out["last_state"] = dict(state)
+finally:
+    daemon.send_signal(signal.SIGTERM)
+    _, err = daemon.communicate(timeout=30)
+    out["daemon_exit"] = daemon.returncode
+    out["daemon_stopped_safely"] = "stopped safely" in err
+    out["warned_beyond_localhost"] = "beyond localhost" in err
+    print(json.dumps(out))
