@@ -108,7 +108,17 @@ req_block() {
         on { print; if ($0 !~ /\\$/) exit }' "$req"
 }
 
+# One install at a time: tests run the peers in parallel, each through `run`.
 install() {
+    mkdir -p "$dir"
+    exec {lock}>"$dir/.install.lock"
+    flock "$lock"
+    install_locked
+    flock -u "$lock"
+    exec {lock}>&-
+}
+
+install_locked() {
     [[ $(uname -m) == x86_64 ]] || { log "the pinned wheels are x86-64 only ($(uname -m))"; exit 1; }
     local pyver stamp
     pyver=$("$python" -c 'import sys; print("%d.%d" % sys.version_info[:2])')
@@ -139,7 +149,7 @@ install() {
 
 write_env() {
     mkdir -p "$dir/log"
-    cat >"$dir/env.sh.tmp" <<EOF
+    cat >"$dir/env.sh.$$" <<EOF
 # Written by scripts/ros2-peers.sh: the environment of the ROS 2 peers (rclpy on Fast DDS,
 # Cyclone DDS). Run the peers as "\$ROS2_PEERS_PYTHON" script.py, inside scripts/in-netns.sh.
 export ROS2_PEERS_PYTHON='$venv/bin/python'
@@ -147,7 +157,7 @@ export RMW_IMPLEMENTATION=rmw_fastrtps_cpp
 export FASTDDS_BUILTIN_TRANSPORTS=UDPv4
 export ROS_LOG_DIR='$dir/log'
 EOF
-    mv "$dir/env.sh.tmp" "$dir/env.sh"
+    mv "$dir/env.sh.$$" "$dir/env.sh"
 }
 
 case ${1:-install} in

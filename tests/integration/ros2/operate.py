@@ -24,11 +24,17 @@ daemon = subprocess.Popen([snaked, "--emulated", "--config", config], env=env,
                           stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
 rclpy.init()
 node = Node("snaked_test_operator")
-state = {}
+state, history = {}, []
+
+
+def on_state(m):
+    state.update(json.loads(m.data))
+    history.append((time.monotonic(), state.get("motion"), state.get("mode")))
+
+
 latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL,
                      reliability=ReliabilityPolicy.RELIABLE)
-node.create_subscription(String, "/snaked/state", lambda m: state.update(json.loads(m.data)),
-                         latched)
+node.create_subscription(String, "/snaked/state", on_state, latched)
 cmd_vel = node.create_publisher(Twist, "/cmd_vel", 10)
 out = {}
 
@@ -42,14 +48,25 @@ def spin_until(cond, timeout):
     return None
 
 
+clients = {}
+
+
 def call(ty, name, req, timeout=15.0):
-    c = node.create_client(ty, name)
+    # One client per service, kept: a new one would wait for discovery again.
+    if name not in clients:
+        clients[name] = node.create_client(ty, name)
+    c = clients[name]
     if not c.wait_for_service(timeout_sec=timeout):
         return None
     f = c.call_async(req)
     rclpy.spin_until_future_complete(node, f, timeout_sec=timeout)
-    node.destroy_client(c)
     return f.result()
+
+
+def first_after(t0, cond):
+    """Seconds from t0 to the first state after it for which cond(motion, mode) holds."""
+    return next((round(t - t0, 3) for t, motion, mode in history if t > t0 and cond(motion, mode)),
+                None)
 
 
 def trigger(name):
@@ -113,11 +130,10 @@ try:
     out["driven_motion"] = state.get("motion")
     t_last = time.monotonic()
     out["driven_speed"] = get([speed])
-    spin_until(lambda: state.get("motion") == "stopped", 10)
-    out["stopped_after_s"] = round(time.monotonic() - t_last, 3)
-    out["held_by_dead_man_after_s"] = spin_until(lambda: state.get("mode") == "hold", 10)
-    if out["held_by_dead_man_after_s"] is not None:
-        out["held_by_dead_man_after_s"] = round(time.monotonic() - t_last, 3)
+    spin_until(lambda: state.get("mode") == "hold", 10)
+    # When the state (published twice a second) first showed each, after the last twist.
+    out["stopped_after_s"] = first_after(t_last, lambda motion, mode: motion == "stopped")
+    out["held_by_dead_man_after_s"] = first_after(t_last, lambda motion, mode: mode == "hold")
     out["estop"] = trigger("estop")
     out["estopped_after_s"] = spin_until(lambda: state.get("mode") == "e_stop", 10)
     out["last_state"] = dict(state)
