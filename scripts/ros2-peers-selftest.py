@@ -218,39 +218,9 @@ def role_listener(seconds):
 
 
 def cyclone_types():
-    """sensor_msgs/JointState as Cyclone DDS IDL dataclasses, with ROS 2's DDS type names."""
-    from dataclasses import dataclass
-    from cyclonedds.idl import IdlStruct
-    from cyclonedds.idl.types import float64, int32, sequence, uint32
-
-    @dataclass
-    class Time(IdlStruct, typename="builtin_interfaces::msg::dds_::Time_"):
-        sec: int32
-        nanosec: uint32
-
-    @dataclass
-    class Header(IdlStruct, typename="std_msgs::msg::dds_::Header_"):
-        stamp: Time
-        frame_id: str
-
-    @dataclass
-    class JointState(IdlStruct, typename="sensor_msgs::msg::dds_::JointState_"):
-        header: Header
-        name: sequence[str]
-        position: sequence[float64]
-        velocity: sequence[float64]
-        effort: sequence[float64]
-
-    @dataclass
-    class Vector3(IdlStruct, typename="geometry_msgs::msg::dds_::Vector3_"):
-        x: float64
-        y: float64
-        z: float64
-
-    @dataclass
-    class Twist(IdlStruct, typename="geometry_msgs::msg::dds_::Twist_"):
-        linear: Vector3
-        angular: Vector3
+    """sensor_msgs/JointState and geometry_msgs/Twist as Cyclone DDS IDL dataclasses."""
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    from ros2_idl import JointState, Twist, Vector3
 
     return JointState, Twist, Vector3
 

@@ -81,39 +81,41 @@ pub(super) fn reliable_qos() -> QosPolicies {
         .build()
 }
 
+fn topic(
+    node: &mut Node,
+    ns: &str,
+    name: &str,
+    (package, ty): (&str, &str),
+    qos: &QosPolicies,
+) -> Result<ros2_client::dds::rustdds::Topic, Ros2Error> {
+    let name = super::name(ns, name).map_err(Ros2Error::Create)?;
+    node.create_topic(
+        &name,
+        MessageTypeName::new(package, ty),
+        &QosProfile::from(qos),
+    )
+    .map_err(err)
+}
+
 pub(super) fn publisher<M: serde::Serialize>(
     node: &mut Node,
     ns: &str,
-    topic: &str,
-    (package, ty): (&str, &str),
+    name: &str,
+    ty: (&str, &str),
     qos: &QosPolicies,
 ) -> Result<Publisher<M>, Ros2Error> {
-    let name = super::name(ns, topic).map_err(Ros2Error::Create)?;
-    let t = node
-        .create_topic(
-            &name,
-            MessageTypeName::new(package, ty),
-            &QosProfile::from(qos),
-        )
-        .map_err(err)?;
+    let t = topic(node, ns, name, ty, qos)?;
     node.create_publisher::<M>(&t, None).map_err(err)
 }
 
 pub(super) fn subscription<M: 'static>(
     node: &mut Node,
     ns: &str,
-    topic: &str,
-    (package, ty): (&str, &str),
+    name: &str,
+    ty: (&str, &str),
     qos: &QosPolicies,
 ) -> Result<Subscription<M>, Ros2Error> {
-    let name = super::name(ns, topic).map_err(Ros2Error::Create)?;
-    let t = node
-        .create_topic(
-            &name,
-            MessageTypeName::new(package, ty),
-            &QosProfile::from(qos),
-        )
-        .map_err(err)?;
+    let t = topic(node, ns, name, ty, qos)?;
     node.create_subscription::<M>(&t, None).map_err(err)
 }
 

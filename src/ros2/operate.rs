@@ -158,34 +158,50 @@ fn answer(a: Result<Value, OperatorError>) -> ServiceAnswer {
     }
 }
 
-async fn serve_trigger(server: Trigger, op: Arc<Operating>, method: &'static str, params: Value) {
-    loop {
-        let Ok((id, _)) = server.async_receive_request().await else {
-            continue;
-        };
-        let a = answer(op.call_as(WHO, method, params.clone()).await);
-        // A client that went away is no reason to stop serving.
-        let _ = server.async_send_response(id, a).await;
-    }
-}
-
-async fn serve_navigate(server: Server<SetBoolRequest, ServiceAnswer>, op: Arc<Operating>) {
+/// Answers `server`'s requests with `answer`, one at a time, while the task runs. A
+/// request that cannot be read is skipped; a client gone before its answer is no reason
+/// to stop serving.
+pub(super) async fn serve<Q, A, F, Fut>(server: Server<Q, A>, mut answer: F)
+where
+    Q: ros2_client::Message + Clone + 'static,
+    A: ros2_client::Message + 'static,
+    F: FnMut(Q) -> Fut,
+    Fut: std::future::Future<Output = A>,
+{
     loop {
         let Ok((id, req)) = server.async_receive_request().await else {
             continue;
         };
-        let params = if req.data {
-            // Along the body's heading now (the socket's `navigate` takes any).
-            match op.station.snapshot() {
-                Some(s) if s.body.valid => json!({ "heading_rad": s.body.heading_rad }),
-                _ => json!({ "heading_rad": null }),
-            }
-        } else {
-            json!({ "off": true })
-        };
-        let a = answer(op.call_as(WHO, "navigate", params).await);
+        let a = answer(req).await;
         let _ = server.async_send_response(id, a).await;
     }
+}
+
+async fn serve_trigger(server: Trigger, op: Arc<Operating>, method: &'static str, params: Value) {
+    serve(server, |_: Empty| {
+        let (op, params) = (op.clone(), params.clone());
+        async move { answer(op.call_as(WHO, method, params).await) }
+    })
+    .await;
+}
+
+async fn serve_navigate(server: Server<SetBoolRequest, ServiceAnswer>, op: Arc<Operating>) {
+    serve(server, |req: SetBoolRequest| {
+        let op = op.clone();
+        async move {
+            let params = if req.data {
+                // Along the body's heading now (the socket's `navigate` takes any).
+                match op.station.snapshot() {
+                    Some(s) if s.body.valid => json!({ "heading_rad": s.body.heading_rad }),
+                    _ => json!({ "heading_rad": null }),
+                }
+            } else {
+                json!({ "off": true })
+            };
+            answer(op.call_as(WHO, "navigate", params).await)
+        }
+    })
+    .await;
 }
 
 /// `/cmd_vel`'s client: every ROS 2 publisher is [`WHO`]; a refusal is logged, at most

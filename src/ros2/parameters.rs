@@ -21,7 +21,7 @@ use serde_json::{Value, json};
 use tokio::task::JoinSet;
 
 use super::node::Ros2Error;
-use super::operate::{WHO, server};
+use super::operate::{WHO, serve, server};
 use crate::operator::parameters::LiveParameters;
 use crate::station::services::Operating;
 
@@ -155,57 +155,30 @@ impl ParameterServers {
     /// Serves them in `tasks`.
     pub fn start(self, op: Arc<Operating>, tasks: &mut JoinSet<()>) {
         let o = op.clone();
-        let get = self.get;
-        tasks.spawn(async move {
-            loop {
-                let Ok((id, req)) = get.async_receive_request().await else {
-                    continue;
-                };
-                let values = values(&o, &req.names).into_iter().map(Into::into).collect();
-                let _ = get
-                    .async_send_response(id, GetParametersResponse { values })
-                    .await;
-            }
-        });
+        tasks.spawn(serve(self.get, move |req: GetParametersRequest| {
+            let values = values(&o, &req.names).into_iter().map(Into::into).collect();
+            std::future::ready(GetParametersResponse { values })
+        }));
         let o = op.clone();
-        let types = self.types;
-        tasks.spawn(async move {
-            loop {
-                let Ok((id, req)) = types.async_receive_request().await else {
-                    continue;
-                };
-                let values = values(&o, &req.names)
-                    .iter()
-                    .map(ParameterValue::to_parameter_type_raw)
-                    .collect();
-                let _ = types
-                    .async_send_response(id, GetParameterTypesResponse { values })
-                    .await;
-            }
-        });
+        tasks.spawn(serve(self.types, move |req: GetParameterTypesRequest| {
+            let values = values(&o, &req.names)
+                .iter()
+                .map(ParameterValue::to_parameter_type_raw)
+                .collect();
+            std::future::ready(GetParameterTypesResponse { values })
+        }));
         let o = op.clone();
-        let list_server = self.list;
-        tasks.spawn(async move {
-            loop {
-                let Ok((id, req)) = list_server.async_receive_request().await else {
-                    continue;
-                };
-                let names: Vec<String> = live(&o)
-                    .map(|(_, a)| a.into_iter().map(|(n, _)| n).collect())
-                    .unwrap_or_default();
-                let result = list(&names, &req.prefixes, req.depth);
-                let _ = list_server
-                    .async_send_response(id, ListParametersResponse { result })
-                    .await;
-            }
-        });
+        tasks.spawn(serve(self.list, move |req: ListParametersRequest| {
+            let names: Vec<String> = live(&o)
+                .map(|(_, a)| a.into_iter().map(|(n, _)| n).collect())
+                .unwrap_or_default();
+            let result = list(&names, &req.prefixes, req.depth);
+            std::future::ready(ListParametersResponse { result })
+        }));
         let o = op.clone();
-        let describe = self.describe;
-        tasks.spawn(async move {
-            loop {
-                let Ok((id, req)) = describe.async_receive_request().await else {
-                    continue;
-                };
+        tasks.spawn(serve(
+            self.describe,
+            move |req: DescribeParametersRequest| {
                 let values = req
                     .names
                     .iter()
@@ -215,51 +188,42 @@ impl ParameterServers {
                         v => ParameterDescriptor::from_value(n, &v).into(),
                     })
                     .collect();
-                let _ = describe
-                    .async_send_response(id, DescribeParametersResponse { values })
-                    .await;
-            }
-        });
+                std::future::ready(DescribeParametersResponse { values })
+            },
+        ));
         let o = op.clone();
-        let set = self.set;
-        tasks.spawn(async move {
-            loop {
-                let Ok((id, req)) = set.async_receive_request().await else {
-                    continue;
-                };
+        tasks.spawn(serve(self.set, move |req: SetParametersRequest| {
+            let o = o.clone();
+            async move {
                 let mut results = Vec::new();
                 for p in req.parameter {
                     results.push(set_one(&o, p).await);
                 }
-                let _ = set
-                    .async_send_response(id, SetParametersResponse { results })
-                    .await;
+                SetParametersResponse { results }
             }
-        });
-        let atomically = self.atomically;
-        tasks.spawn(async move {
-            loop {
-                let Ok((id, mut req)) = atomically.async_receive_request().await else {
-                    continue;
-                };
-                let result = match (req.parameter.pop(), req.parameter.is_empty()) {
-                    (Some(p), true) => set_one(&op, p).await,
-                    (None, _) => raw::SetParametersResult {
-                        successful: true,
-                        reason: String::new(),
-                    },
-                    _ => raw::SetParametersResult {
-                        successful: false,
-                        reason: "several parameters cannot be set as one: set them one \
+        }));
+        tasks.spawn(serve(
+            self.atomically,
+            move |mut req: SetParametersRequest| {
+                let o = op.clone();
+                async move {
+                    let result = match (req.parameter.pop(), req.parameter.is_empty()) {
+                        (Some(p), true) => set_one(&o, p).await,
+                        (None, _) => raw::SetParametersResult {
+                            successful: true,
+                            reason: String::new(),
+                        },
+                        _ => raw::SetParametersResult {
+                            successful: false,
+                            reason: "several parameters cannot be set as one: set them one \
                                  at a time"
-                            .into(),
-                    },
-                };
-                let _ = atomically
-                    .async_send_response(id, SetParametersAtomicallyResponse { result })
-                    .await;
-            }
-        });
+                                .into(),
+                        },
+                    };
+                    SetParametersAtomicallyResponse { result }
+                }
+            },
+        ));
     }
 }
 
