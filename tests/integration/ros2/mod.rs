@@ -280,3 +280,46 @@ fn rclpy_drives_and_tunes_the_robot_through_the_operator_api() {
     assert!(has("ros2", "gait.resume", true), "teleop: {actions:?}");
     assert!(has("dead-man (ros2)", "gait.stop", true), "{actions:?}");
 }
+
+/// The daemon's log when it runs `seconds` with `extra` configuration in a namespace
+/// that has, besides loopback, a veth pair up (an interface DDS would discover on; its
+/// packets stay in the namespace).
+fn log_with_a_second_interface(extra: &str, seconds: u32) -> String {
+    let dir = tempfile::tempdir().unwrap();
+    let config = config(dir.path(), extra);
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let out = Command::new(root.join("scripts/in-netns.sh"))
+        .args([
+            "bash",
+            "-c",
+            "ip link add v0 type veth peer name v1 && ip addr add 10.9.9.9/24 dev v0 && \
+             ip link set v0 up && ip link set v1 up && \
+             exec timeout --preserve-status -s INT \"$1\" \"$2\" --emulated --config \"$3\"",
+            "netns",
+            &seconds.to_string(),
+            &exe("snaked"),
+            config.to_str().unwrap(),
+        ])
+        .output()
+        .expect("running scripts/in-netns.sh");
+    let log = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(out.status.success(), "{log}");
+    log
+}
+
+#[test]
+fn operating_with_discovery_beyond_localhost_is_warned_at_start() {
+    let log = log_with_a_second_interface("[ros2]\nenabled = true\noperate = true\n", 3);
+    let warning = log
+        .lines()
+        .find(|l| l.contains("discovery reaches beyond localhost"))
+        .unwrap_or_else(|| panic!("no warning: {log}"));
+    assert!(
+        warning.contains("WARN") && warning.contains("v0"),
+        "{warning}"
+    );
+    assert!(log.contains("stopped safely"), "{log}");
+    // Publishing only: nothing to warn about.
+    let log = log_with_a_second_interface("[ros2]\nenabled = true\n", 2);
+    assert!(!log.contains("beyond localhost"), "{log}");
+}
