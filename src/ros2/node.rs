@@ -296,6 +296,7 @@ pub fn start(
         period_ns: rates.joints_ns,
         next_ns: 0,
         counters,
+        stamps: Default::default(),
         actions,
         _node: NodeThread {
             stop,
