@@ -42,6 +42,8 @@ pub struct BodyEstimate {
     /// The head link's orientation (w, x, y, z) on the same world axes: with
     /// `position_m` and `orientation_wxyz`, where the head sits in the chassis frame.
     pub head_wxyz: [f64; 4],
+    /// The newest external fix and its age (`estimation::external_pose`).
+    pub fix: crate::estimation::external_pose::FixState,
 }
 
 impl BodyEstimate {
@@ -55,6 +57,7 @@ impl BodyEstimate {
         odometry_m: [0.0; 2],
         odometry_lifted: false,
         head_wxyz: [1.0, 0.0, 0.0, 0.0],
+        fix: crate::estimation::external_pose::FixState::NONE,
     };
 }
 

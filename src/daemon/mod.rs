@@ -22,6 +22,7 @@ use crate::controller_interface::BuildContext;
 use crate::controller_interface::catalog::Catalog;
 use crate::controller_interface::registry;
 use crate::controllers::REGISTRY;
+use crate::estimation::external_pose;
 use crate::gait::{BodyLayout, GaitKind, GaitSelector, GaitTable};
 use crate::live::LiveOptions;
 use crate::record::{LoopRecorder, LoopRecording};
@@ -199,7 +200,7 @@ pub fn run(cfg: Config, emulated: bool) -> Result<()> {
     let layout = BodyLayout::alternating(n, cfg.body.first_joint_plane, cfg.body.module_length_m);
     let catalog = Catalog::default();
     let controllers = build_controllers(&cfg, &layout, &table, &catalog)?;
-    let estimators = crate::estimation::standard_estimators(&layout);
+    let mut estimators = crate::estimation::standard_estimators(&layout);
     let station = operator_station(&cfg)?;
     let recorder = start_recorder(&cfg, &built, &layout, &catalog, station.as_ref())?;
     let selector = GaitSelector::new(
@@ -226,6 +227,12 @@ pub fn run(cfg: Config, emulated: bool) -> Result<()> {
         )),
     };
 
+    // The pose input (`pose.external`, ROS 2's pose topic): sources write, the loop's
+    // last estimator reads.
+    let (pose, pose_reader) = external_pose::pose_input(pacer.epoch_monotonic_ns());
+    estimators.push(Box::new(external_pose::ExternalFixEstimator::new(
+        pose_reader,
+    )));
     let (control_ends, loop_ends) =
         crate::rt::channels::loop_channels(cfg.control.channel_capacity);
     let (tel_writer, tel_reader) = telemetry::channel(Snapshot::new(
@@ -237,6 +244,7 @@ pub fn run(cfg: Config, emulated: bool) -> Result<()> {
     let heartbeat = Arc::new(AtomicU64::new(0));
 
     let mut server_cfg = server_config(&cfg);
+    server_cfg.pose = Some(pose);
     server_cfg.record = recorder.as_ref().map(|(_, r, _)| {
         let probe = r.probe();
         socket::RecordView::new(move || serde_json::json!(probe.status()))
@@ -416,15 +424,9 @@ fn start_ros2(
         return Ok(None);
     }
     let urdf = crate::record::urdf::urdf(layout, &built.names);
-    // The daemon's pose input; the pose estimate does not read it yet (docs/ros2.md).
-    let (writer, _reader, counters) = crate::estimation::external_pose::pose_input();
-    let (sink, handle) = crate::ros2::start(
-        &r.options(cfg.foxglove.teleop()),
-        built.names.clone(),
-        urdf,
-        Some((writer, counters)),
-    )
-    .context("starting the ROS 2 node")?;
+    let (sink, handle) =
+        crate::ros2::start(&r.options(cfg.foxglove.teleop()), built.names.clone(), urdf)
+            .context("starting the ROS 2 node")?;
     tracing::info!(
         node = %r.node_name,
         namespace = %r.namespace,

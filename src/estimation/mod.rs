@@ -130,6 +130,8 @@ impl Estimator for VirtualChassisEstimator {
             odometry_m: [travelled.x, travelled.y],
             odometry_lifted: self.odometry.lifted(),
             head_wxyz: [head.w, head.i, head.j, head.k],
+            // The external fix's estimator, which runs after this one, keeps it.
+            fix: out.fix,
         };
     }
 }

@@ -38,6 +38,7 @@ pub use controllers::{CALIBRATION_DEFAULT_CYCLES, CALIBRATION_MAX_S};
 pub use error::{OperatorError, code};
 
 use crate::controller_interface::catalog::{Catalog, ControllerInfo};
+use crate::estimation::external_pose::{ExternalFix, PoseCounters, PoseInput};
 use crate::gait::{BodyLayout, GaitKind};
 use crate::rt::messages::LoopRequest;
 use crate::rt::telemetry::Snapshot;
@@ -61,6 +62,8 @@ pub struct OperatorConfig {
     pub driver_timeout: Duration,
     /// The recorder's state (`None`: no recorder).
     pub record: Option<RecordView>,
+    /// The daemon's pose input (`None`: external fixes are refused).
+    pub pose: Option<PoseInput>,
 }
 
 impl Operator {
@@ -83,6 +86,7 @@ impl Operator {
             navigation: Default::default(),
             driver: driver::DriverLease::new(config.driver_timeout),
             record: config.record,
+            pose: config.pose,
             closing,
         });
         Ok(Self {
@@ -177,6 +181,24 @@ impl Operator {
     /// The recorder's state as JSON (`{"state": "off"}` without one).
     pub fn record(&self) -> serde_json::Value {
         RecordView::read(self.shared.record.as_ref())
+    }
+
+    /// An external fix (`pose.external`, ROS 2's pose topic) into the pose estimate:
+    /// its loop time and how old it was on arrival, s. Not an act: a source is no
+    /// driver, and the loop never waits for it.
+    pub fn external_pose(&self, fix: &ExternalFix) -> Result<(f64, f64), OperatorError> {
+        let input =
+            self.shared.pose.as_ref().ok_or_else(|| {
+                OperatorError::new(code::REFUSED, "this daemon has no pose input")
+            })?;
+        input.write(fix).map_err(|why| {
+            OperatorError::invalid_params(format!("external pose from {}: {why}", fix.source))
+        })
+    }
+
+    /// What the pose input counts (`None`: no pose input).
+    pub fn pose_counters(&self) -> Option<&Arc<PoseCounters>> {
+        self.shared.pose.as_ref().map(PoseInput::counters)
     }
 
     /// Stops the ack thread (the daemon's shutdown).

@@ -27,6 +27,8 @@ pub(crate) struct Shared {
     pub(crate) navigation: super::navigate::Navigation,
     /// The recorder's state, if there is a recorder.
     pub(crate) record: Option<RecordView>,
+    /// The daemon's pose input, if it has one.
+    pub(crate) pose: Option<crate::estimation::external_pose::PoseInput>,
     /// True once the daemon shuts down (long requests give up).
     pub(crate) closing: tokio::sync::watch::Receiver<bool>,
 }

@@ -23,7 +23,7 @@ use super::sink::{Frame, Sink};
 use super::status::{Diagnostics, NodeCounts};
 use super::{Ros2Handle, Ros2Options, operate, publish};
 use crate::controller_interface::BodyEstimate;
-use crate::estimation::external_pose::{PoseCounters, PoseWriter};
+use crate::estimation::external_pose::ExternalFix;
 use crate::operator::Operator;
 
 /// What the node counts.
@@ -131,7 +131,7 @@ struct FramePublishers {
 pub(super) struct Background {
     pub diagnostics: Publisher<DiagnosticArray>,
     pub state: Publisher<StringMsg>,
-    pub pose: Option<(Subscription<PoseStamped>, PoseWriter, Arc<PoseCounters>)>,
+    pub pose: Option<Subscription<PoseStamped>>,
     pub operate: Option<operate::Edges>,
 }
 
@@ -151,13 +151,12 @@ impl Drop for NodeThread {
 }
 
 /// Starts the node: joint names `names` (the URDF's joints), `urdf` on
-/// `/robot_description`, external poses into `pose` (with `pose_topic`). Errors (a bad
-/// name, DDS that cannot start) come back here.
+/// `/robot_description`, external poses (`pose_topic`) into the operator API's pose
+/// input once it is bound. Errors (a bad name, DDS that cannot start) come back here.
 pub fn start(
     opts: &Ros2Options,
     names: Vec<String>,
     urdf: String,
-    pose: Option<(PoseWriter, Arc<PoseCounters>)>,
 ) -> Result<(Sink, Ros2Handle), Ros2Error> {
     let context =
         Context::with_options(ContextOptions::new().domain_id(opts.domain_id)).map_err(err)?;
@@ -205,18 +204,15 @@ pub fn start(
         ("std_msgs", "String"),
         &latched_qos(),
     )?;
-    let pose = match (&opts.pose_topic, pose) {
-        (Some(topic), Some((writer, counters))) => {
-            let sub = subscription(
-                &mut node,
-                ns,
-                topic,
-                ("geometry_msgs", "PoseStamped"),
-                &sensor,
-            )?;
-            Some((sub, writer, counters))
-        }
-        _ => None,
+    let pose = match &opts.pose_topic {
+        Some(topic) => Some(subscription(
+            &mut node,
+            ns,
+            topic,
+            ("geometry_msgs", "PoseStamped"),
+            &sensor,
+        )?),
+        None => None,
     };
     let background = Background {
         diagnostics: publisher(
@@ -394,9 +390,9 @@ pub(super) fn unix_ns() -> u64 {
         .map_or(0, |d| d.as_nanos() as u64)
 }
 
-/// The runtime's work: the pose input at once; once the operator API is bound,
-/// diagnostics, state and (with `operate`) the operator's edges. Until `stop`, when
-/// every task ends (and drops its readers and writers) before this returns.
+/// The runtime's work, once the operator API is bound: the pose input, diagnostics,
+/// state and (with `operate`) the operator's edges. Until `stop`, when every task ends
+/// (and drops its readers and writers) before this returns.
 async fn run_background(
     b: Background,
     handle: Ros2Handle,
@@ -404,50 +400,54 @@ async fn run_background(
     stop: tokio::sync::oneshot::Receiver<()>,
 ) {
     let mut tasks = tokio::task::JoinSet::new();
-    let pose_counters = b.pose.as_ref().map(|(_, _, c)| c.clone());
-    if let Some((sub, writer, _)) = b.pose {
-        tasks.spawn(read_poses(sub, writer));
-    }
-    let start = async {
-        let operator = loop {
+    let bound = async {
+        loop {
             if let Some(op) = handle.operator.get() {
                 break op.clone();
             }
             tokio::time::sleep(Duration::from_millis(50)).await;
-        };
-        (operator, b.operate, b.state, b.diagnostics)
+        }
     };
     tokio::pin!(stop);
-    let (operator, operate, state, diagnostics) = tokio::select! {
-        started = start => started,
-        _ = &mut stop => return tasks.shutdown().await,
+    let operator = tokio::select! {
+        op = bound => op,
+        _ = &mut stop => return,
     };
-    if let Some(edges) = operate {
+    if let Some(sub) = b.pose {
+        tasks.spawn(read_poses(sub, operator.clone()));
+    }
+    if let Some(edges) = b.operate {
         edges.start(operator.clone(), actions.get().cloned(), &mut tasks);
     }
-    tasks.spawn(publish_state(operator.clone(), state));
+    tasks.spawn(publish_state(operator.clone(), b.state));
     let counters = handle.counters.clone();
-    tasks.spawn(publish_diagnostics(
-        operator,
-        diagnostics,
-        counters,
-        pose_counters,
-    ));
+    tasks.spawn(publish_diagnostics(operator, b.diagnostics, counters));
     let _ = stop.await;
     tasks.shutdown().await;
 }
 
-async fn read_poses(sub: Subscription<PoseStamped>, mut writer: PoseWriter) {
+/// Poses from the topic into the operator API's pose input (a refusal logged, at
+/// most every few seconds: a source at 100 Hz would flood the log).
+async fn read_poses(sub: Subscription<PoseStamped>, op: Operator) {
+    let mut last_told = 0u64;
     loop {
         let Ok((m, _)) = sub.async_take().await else {
             continue;
         };
-        let p = &m.pose;
-        let stamp = m.header.stamp.unix_ns();
-        let q = p.orientation;
-        let pos = [p.position.x, p.position.y, p.position.z];
-        if let Err(why) = writer.write(stamp, unix_ns(), pos, [q.w, q.x, q.y, q.z]) {
-            tracing::debug!("external pose refused: {why}");
+        let (p, q) = (m.pose.position, m.pose.orientation);
+        let fix = ExternalFix {
+            stamp_unix_ns: m.header.stamp.unix_ns(),
+            position_m: [p.x, p.y, p.z],
+            orientation_wxyz: Some([q.w, q.x, q.y, q.z]),
+            position_sd_m: None,
+            source: format!("ros2 ({})", m.header.frame_id),
+        };
+        if let Err(e) = op.external_pose(&fix) {
+            let now = unix_ns();
+            if now.saturating_sub(last_told) > 5_000_000_000 {
+                last_told = now;
+                tracing::warn!("{e}");
+            }
         }
     }
 }
@@ -456,7 +456,6 @@ async fn publish_diagnostics(
     op: Operator,
     publisher: Publisher<DiagnosticArray>,
     counters: Arc<BridgeCounters>,
-    pose: Option<Arc<PoseCounters>>,
 ) {
     let mut d = Diagnostics::default();
     let mut tick = tokio::time::interval(Duration::from_secs(1));
@@ -469,7 +468,7 @@ async fn publish_diagnostics(
             publish_errors: counters.publish_errors.load(Relaxed),
             ..NodeCounts::default()
         };
-        if let Some(p) = &pose {
+        if let Some(p) = op.pose_counters() {
             counts.poses_received = p.received.load(Relaxed);
             counts.poses_refused = p.refused.load(Relaxed);
             let last = p.last_unix_ns.load(Relaxed);

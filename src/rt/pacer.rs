@@ -27,6 +27,13 @@ pub trait Pacer: Send {
     fn feedback_wait(&self, cycle: &Cycle, last_module_time_us: Option<u64>) -> FeedbackWait;
     /// Monotonic ns since the loop started, for measuring compute time.
     fn elapsed_ns(&self) -> u64;
+
+    /// The CLOCK_MONOTONIC instant of loop time 0, where loop time runs with it (real
+    /// time; `None` in lockstep, whose time is simulated): how a time stamped outside
+    /// becomes loop time.
+    fn epoch_monotonic_ns(&self) -> Option<u64> {
+        None
+    }
 }
 
 /// Absolute deadlines with `clock_nanosleep(TIMER_ABSTIME)`. When a cycle overruns
@@ -97,6 +104,10 @@ impl Pacer for RealTimePacer {
 
     fn elapsed_ns(&self) -> u64 {
         sys::monotonic_ns() - self.start_ns
+    }
+
+    fn epoch_monotonic_ns(&self) -> Option<u64> {
+        Some(self.start_ns)
     }
 }
 

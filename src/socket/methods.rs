@@ -13,7 +13,7 @@ use super::wire;
 use crate::operator::Operator;
 
 /// Every method the server knows (listed in the unknown-method error).
-pub const METHODS: [&str; 23] = [
+pub const METHODS: [&str; 24] = [
     "auth",
     "status",
     "gait.list",
@@ -29,6 +29,7 @@ pub const METHODS: [&str; 23] = [
     "controller.calibrate",
     "controller.heading",
     "navigate",
+    "pose.external",
     "hold",
     "limp",
     "estop",
@@ -100,6 +101,9 @@ pub async fn call_json(
 async fn call(op: &Operator, who: &str, method: &str, p: Params) -> Result<Value, OperatorError> {
     if READS.contains(&method) {
         return read(op, method, p);
+    }
+    if method == "pose.external" {
+        return super::pose_method::call(op, who, p);
     }
     let act = wire::parse_act(op, method, p)?;
     let done = op.act(who, act).await?;

@@ -30,6 +30,7 @@ pub(crate) mod controller_views;
 mod lines;
 mod methods;
 pub mod paths;
+mod pose_method;
 mod server;
 mod session;
 mod shared;
@@ -75,6 +76,8 @@ pub struct ServerConfig {
     /// The recorder's state, `record` in `status` and `stats` (`None`: no recorder,
     /// `{"state": "off"}`).
     pub record: Option<RecordView>,
+    /// Where `pose.external` fixes go (`None`: refused, no pose input).
+    pub pose: Option<crate::estimation::external_pose::PoseInput>,
 }
 
 impl Default for ServerConfig {
@@ -90,6 +93,7 @@ impl Default for ServerConfig {
             tcp_token: None,
             driver_timeout: crate::operator::driver::DEFAULT_DRIVER_TIMEOUT,
             record: None,
+            pose: None,
         }
     }
 }

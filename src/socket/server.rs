@@ -169,6 +169,7 @@ pub fn start(cfg: ServerConfig, handle: LoopHandle) -> Result<RunningServer, Ser
             ack_timeout: cfg.ack_timeout,
             driver_timeout: cfg.driver_timeout,
             record: cfg.record.clone(),
+            pose: cfg.pose.clone(),
         };
         Operator::start(handle, config, op_closing).map_err(ServerError::Runtime)?
     };

@@ -26,6 +26,7 @@ pub(crate) fn status(s: &Snapshot, info: &DaemonInfo, catalog: &Catalog) -> Valu
         "joints": joints_summary(s),
         "controller": telemetry_view(&s.controller, catalog),
         "body": body_view(&s.body),
+        "external_pose": s.body.fix,
         "progress": s.progress,
         "navigator": s.navigator,
         "guard": s.guard,

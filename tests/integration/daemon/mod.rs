@@ -1,3 +1,4 @@
 mod cli;
 mod operate;
+mod pose;
 mod record;
