@@ -44,6 +44,8 @@ pub struct BodyEstimate {
     pub head_wxyz: [f64; 4],
     /// The newest external fix and its age (`estimation::external_pose`).
     pub fix: crate::estimation::external_pose::FixState,
+    /// The chassis in the external source's world (`estimation::world_position`).
+    pub world: crate::estimation::world_position::WorldPosition,
 }
 
 impl BodyEstimate {
@@ -58,6 +60,7 @@ impl BodyEstimate {
         odometry_lifted: false,
         head_wxyz: [1.0, 0.0, 0.0, 0.0],
         fix: crate::estimation::external_pose::FixState::NONE,
+        world: crate::estimation::world_position::WorldPosition::NONE,
     };
 }
 

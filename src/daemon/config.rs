@@ -8,6 +8,7 @@ use serde::Deserialize;
 use crate::gait::{GaitKind, Plane};
 
 pub use super::config_bus::{BusChoice, BusSection, HebiConfig, HebiGains};
+pub use super::config_pose::PoseConfig;
 pub use super::config_record::{FoxgloveConfig, RecordConfig};
 pub use super::config_ros2::Ros2Config;
 
@@ -27,6 +28,7 @@ pub struct Config {
     pub record: RecordConfig,
     pub foxglove: FoxgloveConfig,
     pub ros2: Ros2Config,
+    pub pose: PoseConfig,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]

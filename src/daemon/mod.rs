@@ -4,6 +4,7 @@
 pub mod bus_setup;
 pub mod config;
 mod config_bus;
+mod config_pose;
 mod config_record;
 mod config_ros2;
 pub mod files;
@@ -23,6 +24,7 @@ use crate::controller_interface::catalog::Catalog;
 use crate::controller_interface::registry;
 use crate::controllers::REGISTRY;
 use crate::estimation::external_pose;
+use crate::estimation::world_position::WorldPositionEstimator;
 use crate::gait::{BodyLayout, GaitKind, GaitSelector, GaitTable};
 use crate::live::LiveOptions;
 use crate::record::{LoopRecorder, LoopRecording};
@@ -230,8 +232,9 @@ pub fn run(cfg: Config, emulated: bool) -> Result<()> {
     // The pose input (`pose.external`, ROS 2's pose topic): sources write, the loop's
     // last estimator reads.
     let (pose, pose_reader) = external_pose::pose_input(pacer.epoch_monotonic_ns());
-    estimators.push(Box::new(external_pose::ExternalFixEstimator::new(
+    estimators.push(Box::new(WorldPositionEstimator::new(
         pose_reader,
+        cfg.pose.fusion(),
     )));
     let (control_ends, loop_ends) =
         crate::rt::channels::loop_channels(cfg.control.channel_capacity);

@@ -234,17 +234,27 @@ impl PoseReader {
 /// after the estimators of the body's own sensors; allocation-free.
 pub struct ExternalFixEstimator {
     reader: PoseReader,
+    latest: Fix,
 }
 
 impl ExternalFixEstimator {
     pub fn new(reader: PoseReader) -> Self {
-        Self { reader }
+        Self {
+            reader,
+            latest: Fix::NONE,
+        }
+    }
+
+    /// The newest fix taken (`number` 0: none yet).
+    pub fn latest(&self) -> Fix {
+        self.latest
     }
 }
 
 impl Estimator for ExternalFixEstimator {
     fn update(&mut self, t_s: f64, _obs: &Observation<'_>, out: &mut BodyEstimate) {
         let f = self.reader.latest();
+        self.latest = f;
         out.fix = if f.number == 0 {
             FixState::NONE
         } else {

@@ -16,6 +16,7 @@ pub mod attitude;
 pub mod chassis;
 pub mod external_pose;
 pub mod odometry;
+pub mod world_position;
 
 use nalgebra::{Isometry3, UnitQuaternion, Vector3};
 
@@ -132,6 +133,7 @@ impl Estimator for VirtualChassisEstimator {
             head_wxyz: [head.w, head.i, head.j, head.k],
             // The external fix's estimator, which runs after this one, keeps it.
             fix: out.fix,
+            world: out.world,
         };
     }
 }

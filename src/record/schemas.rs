@@ -73,6 +73,7 @@ pub fn body_estimate() -> Value {
             "odometry_m": numbers("the chassis origin's ground-plane position from contact odometry (the links on the ground taken to stay put), estimate's world, m"),
             "odometry_lifted": {"type": "boolean", "description": "part of the body was lifted, so odometry_m stood on contacts (false: the whole body down, it assumes no drift)"},
             "head_wxyz": numbers("the head link's orientation on the same world axes (with position_m and orientation_wxyz: the head in the chassis frame)"),
+            "world": {"type": "object", "description": "the chassis in the external source's world (estimation::world_position): state (none, aligning, tracking, stale), position_m, velocity_m_s, heading_rad, sd_m, age_s, accepted, rejected, late, alignments, yaw_offset_rad"},
             "fix": {"type": "object", "description": "the newest external fix (pose.external, ROS 2's pose topic): number (0: none yet), position_m and orientation_wxyz in the source's world, age_s (loop time since it was measured; null: none)"},
         }),
     )

@@ -27,6 +27,7 @@ pub(crate) fn status(s: &Snapshot, info: &DaemonInfo, catalog: &Catalog) -> Valu
         "controller": telemetry_view(&s.controller, catalog),
         "body": body_view(&s.body),
         "external_pose": s.body.fix,
+        "world": s.body.world,
         "progress": s.progress,
         "navigator": s.navigator,
         "guard": s.guard,

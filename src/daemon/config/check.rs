@@ -102,6 +102,7 @@ impl Config {
         self.foxglove_checks(path)?;
         self.bus_checks(path)?;
         self.ros2_checks(path)?;
+        self.pose_checks(path)?;
         let cap = crate::rt::control_loop::MAX_REQUESTS_PER_CYCLE;
         if self.control.channel_capacity < cap {
             return Err(bad(

@@ -1,6 +1,7 @@
 //! `pose.external` through `snaked --emulated`: a fix from an outside source reaches the
 //! loop's estimators with its stamp as loop time, shows in `status` and the recording,
-//! and bad fixes are refused with the reason.
+//! and bad fixes are refused with the reason; a source that follows the body is fused
+//! into its position in the source's world, which goes stale when the source stops.
 use std::time::{Duration, SystemTime, UNIX_EPOCH};
 
 use serde_json::{Value, json};
@@ -107,6 +108,59 @@ fn an_external_fix_reaches_the_loop_as_loop_time_and_a_bad_one_is_refused() {
     );
     let s = c.call("status", json!({}));
     assert_eq!(s["external_pose"]["number"], 1, "{s}");
+    // A source whose world is the estimate's turned by 0.3 rad and shifted by (2, 1),
+    // tracking the chassis: the fused position follows it (the first fix above was
+    // somewhere else: the gate rejects what disagrees, then the worlds align afresh).
+    let (psi, shift) = (0.3f64, [2.0, 1.0]);
+    let to_source = |p: [f64; 2]| {
+        let (sn, cs) = psi.sin_cos();
+        [
+            cs * p[0] - sn * p[1] + shift[0],
+            sn * p[0] + cs * p[1] + shift[1],
+        ]
+    };
+    let mut last = Value::Null;
+    for _ in 0..150 {
+        let s = c.call("status", json!({}));
+        let b = &s["body"];
+        if b["valid"] != true {
+            std::thread::sleep(Duration::from_millis(10));
+            continue;
+        }
+        let odo = [
+            b["odometry_m"][0].as_f64().unwrap(),
+            b["odometry_m"][1].as_f64().unwrap(),
+        ];
+        let p = to_source(odo);
+        let yaw = b["heading_rad"].as_f64().unwrap() + psi;
+        c.call(
+            "pose.external",
+            json!({"position_m": p, "yaw_rad": yaw, "stamp_unix_s": now_s(), "source": "mocap"}),
+        );
+        last = json!({"expected": p, "world": s["world"]});
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    let s = c.call("status", json!({}));
+    let w = &s["world"];
+    assert_eq!(w["state"], "tracking", "{w} {last}");
+    assert!(
+        (w["yaw_offset_rad"].as_f64().unwrap() - psi).abs() < 0.05,
+        "{w}"
+    );
+    let odo = [
+        s["body"]["odometry_m"][0].as_f64().unwrap(),
+        s["body"]["odometry_m"][1].as_f64().unwrap(),
+    ];
+    let p = to_source(odo);
+    let err = (w["position_m"][0].as_f64().unwrap() - p[0])
+        .hypot(w["position_m"][1].as_f64().unwrap() - p[1]);
+    assert!(err < 0.02, "the fused position {w} against {p:?}: {err} m");
+    assert!(w["accepted"].as_u64().unwrap() > 50, "{w}");
+    // The source stops: stale after max_age_s (0.5 s), never a stale position as valid.
+    let s = c.wait_status(Duration::from_secs(10), "stale", |s| {
+        s["world"]["state"] == "stale"
+    });
+    assert!(s["world"]["age_s"].as_f64().unwrap() > 0.5, "{s}");
     proc.signal(libc::SIGTERM);
     assert!(proc.wait(Duration::from_secs(30)).success());
     // The recording's body estimate carries the fix.
