@@ -66,7 +66,7 @@ pub fn calibrate(
             duration_s: seconds,
         },
     };
-    let (mut lp, names, _, _) = trial_loop(controller, plant, config, None, &[request])?;
+    let (mut lp, names, _, _, _) = trial_loop(controller, plant, config, None, &[request])?;
     let Some(state) = names.iter().position(|n| n == "calibration") else {
         return Ok(None);
     };

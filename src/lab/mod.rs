@@ -34,6 +34,7 @@ pub mod odometry_check;
 pub mod pegboard;
 pub mod plots;
 pub mod pole;
+pub mod pose_source;
 pub mod protocol;
 pub mod registry;
 pub mod report;

@@ -41,7 +41,7 @@ fn jams_repeat_and_progress_does_not() {
         *config.gaits.get_mut(GaitKind::Slithering) = sleeve;
         config.limit_s = 1000.0;
         let plant = PhysicsPlant::new(&world, config.physics(seed)).unwrap();
-        let (mut lp, _, _, _) = trial_loop(&controller, plant, &config, None, &[]).unwrap();
+        let (mut lp, _, _, _, _) = trial_loop(&controller, plant, &config, None, &[]).unwrap();
         let steps = (TAU / sleeve.temporal_freq_rad_s * 1000.0).round() as usize;
         let n = plant_of(&lp).link_count() - 1;
         let mut last: Vec<f64> = vec![f64::NAN; steps * n];

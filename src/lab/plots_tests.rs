@@ -42,6 +42,7 @@ pub(crate) fn record(signals: usize) -> TrialRecord {
         strain: Default::default(),
         stuck_reported: Vec::new(),
         estimate: Vec::new(),
+        position_error_m: Vec::new(),
         gait_switches: 0,
     }
 }

@@ -7,7 +7,10 @@
 
 use super::aim::Aim;
 use super::aim::PendingHeading;
+use super::pose_source::{SimSource, SourceConfig};
 use super::trial_navigator::TrialNavigator;
+use crate::estimation::external_pose::{PoseInput, pose_input};
+use crate::estimation::world_position::{FusionConfig, WorldPositionEstimator};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU64};
 
@@ -60,6 +63,9 @@ pub struct TrialConfig {
     /// Aim the controller at a direction of travel (`controller.heading` at the takeover,
     /// as an operator would); `None`: its own heading.
     pub aim: Option<Aim>,
+    /// A simulated outside position source (`lab::pose_source`) fused into the pose
+    /// estimate; `None`: the body's own sensors only.
+    pub pose_source: Option<SourceConfig>,
 }
 
 impl Default for TrialConfig {
@@ -74,6 +80,7 @@ impl Default for TrialConfig {
             gaits: GaitTable::default(),
             lead_in: None,
             aim: None,
+            pose_source: None,
         }
     }
 }
@@ -153,6 +160,11 @@ pub struct TrialRecord {
     /// (rad), in the estimate's world; NaN while it is not valid.
     #[serde(default)]
     pub estimate: Vec<[f64; 3]>,
+    /// Per sample, how far the fused position (the chassis in the source's world) is
+    /// from the truth (the links' centroid), m; NaN while it is not valid; empty
+    /// without a source.
+    #[serde(default)]
+    pub position_error_m: Vec<f64>,
 }
 
 impl TrialRecord {
@@ -238,6 +250,7 @@ pub(crate) type TrialLoop = (
     Vec<String>,
     Option<Recorder>,
     crossbeam_channel::Sender<crate::rt::messages::Envelope>,
+    Option<PoseInput>,
 );
 
 /// The loop of one trial: `controller` installed for its gait, the selector starting
@@ -254,7 +267,19 @@ pub(crate) fn trial_loop(
     let n = config.modules;
     let gait = controller.gait;
     let layout = BodyLayout::alternating(n, Plane::Lateral, MODULE_LENGTH_M);
-    let estimators = crate::estimation::standard_estimators(&layout);
+    let mut estimators = crate::estimation::standard_estimators(&layout);
+    // The simulated source's fixes, fused as the daemon fuses a real one's.
+    let pose = config.pose_source.map(|s| {
+        let (input, reader) = pose_input(None);
+        let fusion = FusionConfig {
+            tracked: s.tracked,
+            marker_offset_m: s.marker_offset_m,
+            default_sd_m: s.noise_m.max(1e-4),
+            ..FusionConfig::default()
+        };
+        estimators.push(Box::new(WorldPositionEstimator::new(reader, fusion)));
+        input
+    });
     let table = config.gaits;
     let built = controller.build(&layout, table.get(gait))?;
     let names = built
@@ -340,7 +365,7 @@ pub(crate) fn trial_loop(
         estimators,
         observer: record,
     };
-    Ok((ControlLoop::new(parts), names, recorder, req_tx))
+    Ok((ControlLoop::new(parts), names, recorder, req_tx, pose))
 }
 
 /// Runs `controller` in `world` until `goal` is reached or the time limit.
@@ -365,8 +390,12 @@ pub fn run_trial(
         .as_ref()
         .map(|r| r.path.clone())
         .unwrap_or_default();
-    let (mut lp, mut signal_names, recorder, requests) =
+    let (mut lp, mut signal_names, recorder, requests, pose) =
         trial_loop(controller, plant, config, recording, &[])?;
+    let mut source = config
+        .pose_source
+        .zip(pose)
+        .map(|(s, input)| (SimSource::new(s, noise_seed), input));
     let mut nav = match controller.navigator {
         Some(mut cfg) => {
             // Aimed as the single controllers are.
@@ -421,8 +450,12 @@ pub fn run_trial(
         stuck_reported: Vec::with_capacity(samples),
         gait_switches: 0,
         estimate: Vec::with_capacity(samples),
+        position_error_m: Vec::new(),
     };
     record(&lp, &mut rec, nav.as_ref());
+    if source.is_some() {
+        record_position(&lp, &mut rec);
+    }
     for k in 1..=steps {
         if Some(k) == switch_step {
             let request = crate::rt::messages::LoopRequest::SetGait {
@@ -432,6 +465,9 @@ pub fn run_trial(
         }
         aim.send_when_engaged(&lp, &requests, 2 << 32);
         let guarded = lp.guard_counters().slew_limited_cycles;
+        if let Some((s, input)) = source.as_mut() {
+            s.step(k as f64 * config.dt_s, plant_of(&lp), input);
+        }
         if lp.step() == Flow::Finished {
             break;
         }
@@ -444,6 +480,9 @@ pub fn run_trial(
                 n.step(k as f64 * config.dt_s, &lp, &requests)?;
             }
             record(&lp, &mut rec, nav.as_ref());
+            if source.is_some() {
+                record_position(&lp, &mut rec);
+            }
             if goal.reached(plant_of(&lp)) {
                 rec.success = true;
                 break;
@@ -481,6 +520,17 @@ pub(crate) fn plant_of(lp: &ControlLoop) -> &dyn Plant {
     SimBus::of(lp.bus())
         .expect("a trial runs over a SimBus")
         .plant()
+}
+
+/// With a position source: how far the fused position is from the truth this sample.
+fn record_position(lp: &ControlLoop, rec: &mut TrialRecord) {
+    let w = lp.body().world;
+    let c = centre(plant_of(lp));
+    rec.position_error_m.push(if w.valid() {
+        (w.position_m[0] - c[0]).hypot(w.position_m[1] - c[1])
+    } else {
+        f64::NAN
+    });
 }
 
 fn record(lp: &ControlLoop, rec: &mut TrialRecord, nav: Option<&TrialNavigator>) {

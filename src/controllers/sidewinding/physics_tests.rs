@@ -35,7 +35,7 @@ fn run(gait: GaitKind, name: &str, seconds: f64, requests: &[LoopRequest]) -> Ve
     let controller = LabController::named(gait, name).unwrap();
     let config = TrialConfig::default();
     let plant = PhysicsPlant::new(&WorldSpec::default(), config.physics(7)).unwrap();
-    let (mut lp, _, _, _) = trial_loop(&controller, plant, &config, None, requests).unwrap();
+    let (mut lp, _, _, _, _) = trial_loop(&controller, plant, &config, None, requests).unwrap();
     let mut poses = vec![pose(plant_of(&lp))];
     for k in 1..=(seconds * 1000.0) as usize {
         lp.step();

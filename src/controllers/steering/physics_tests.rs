@@ -53,7 +53,7 @@ fn run(
     let mut config = TrialConfig::default();
     *config.gaits.get_mut(GaitKind::Slithering) = params;
     let plant = PhysicsPlant::new(world, config.physics(7)).unwrap();
-    let (mut lp, _, _, _) = trial_loop(&controller, plant, &config, None, requests).unwrap();
+    let (mut lp, _, _, _, _) = trial_loop(&controller, plant, &config, None, requests).unwrap();
     let mut headings = vec![true_heading(plant_of(&lp))];
     for k in 1..=(seconds * 1000.0) as usize {
         lp.step();

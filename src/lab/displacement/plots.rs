@@ -326,6 +326,7 @@ mod tests {
             strain: Default::default(),
             stuck_reported: Vec::new(),
             estimate: Vec::new(),
+            position_error_m: Vec::new(),
             gait_switches: 0,
         }
     }

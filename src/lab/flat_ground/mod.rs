@@ -263,6 +263,7 @@ mod tests {
             strain: Default::default(),
             stuck_reported: Vec::new(),
             estimate: Vec::new(),
+            position_error_m: Vec::new(),
             gait_switches: 0,
         };
         let m = e.metrics(&Never, &rec);

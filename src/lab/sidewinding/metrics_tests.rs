@@ -64,6 +64,7 @@ fn record(at: f64, through: bool, rev_s: Option<f64>) -> (Fence, TrialRecord) {
         strain: Default::default(),
         stuck_reported: Vec::new(),
         estimate: Vec::new(),
+        position_error_m: Vec::new(),
         gait_switches: 0,
     };
     (fence, rec)
