@@ -43,9 +43,9 @@ pub struct BodyEstimate {
     /// `position_m` and `orientation_wxyz`, where the head sits in the chassis frame.
     pub head_wxyz: [f64; 4],
     /// The newest external fix and its age (`estimation::external_pose`).
-    pub fix: crate::estimation::external_pose::FixState,
+    pub fix: super::position::FixState,
     /// The chassis in the external source's world (`estimation::world_position`).
-    pub world: crate::estimation::world_position::WorldPosition,
+    pub world: super::position::WorldPosition,
 }
 
 impl BodyEstimate {
@@ -59,8 +59,8 @@ impl BodyEstimate {
         odometry_m: [0.0; 2],
         odometry_lifted: false,
         head_wxyz: [1.0, 0.0, 0.0, 0.0],
-        fix: crate::estimation::external_pose::FixState::NONE,
-        world: crate::estimation::world_position::WorldPosition::NONE,
+        fix: super::position::FixState::NONE,
+        world: super::position::WorldPosition::NONE,
     };
 }
 

@@ -8,6 +8,7 @@ pub mod catalog;
 pub mod config;
 pub mod interface;
 pub mod nominal;
+pub mod position;
 pub mod registry;
 pub mod report;
 

@@ -12,6 +12,7 @@
 use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
 use std::sync::{Arc, Mutex};
 
+pub use crate::controller_interface::position::FixState;
 use crate::controller_interface::{BodyEstimate, Estimator, Observation};
 
 /// A fix stamped further ahead of the daemon's clock than this is refused, s.
@@ -56,28 +57,6 @@ impl Fix {
         position_m: [0.0; 3],
         orientation_wxyz: None,
         position_sd_m: f64::NAN,
-    };
-}
-
-/// What the body estimate says of the external fixes.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
-pub struct FixState {
-    /// Fixes the loop has taken (0: none yet).
-    pub number: u64,
-    /// The newest one's position in the source's world, m.
-    pub position_m: [f64; 3],
-    /// Its orientation (w, x, y, z), if the source gives one.
-    pub orientation_wxyz: Option<[f64; 4]>,
-    /// How old it is this cycle, s (loop time since it was measured; infinite: none).
-    pub age_s: f64,
-}
-
-impl FixState {
-    pub const NONE: FixState = FixState {
-        number: 0,
-        position_m: [0.0; 3],
-        orientation_wxyz: None,
-        age_s: f64::INFINITY,
     };
 }
 
