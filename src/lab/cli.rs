@@ -12,6 +12,7 @@ use super::LabError;
 use super::compared::LabController;
 use super::experiment::Experiment;
 use super::layout::Layout;
+use super::pose_source::SourceConfig;
 use super::report::{SummaryContext, write_report};
 use super::runner::{RunOptions, Setup, plan_fingerprint, run_share};
 use super::shard::{self, Shard, ShardFile, ShardHead};
@@ -78,6 +79,13 @@ pub struct CommonArgs {
     /// every gait, so e.g. `--nominal-gait sidewinding`).
     #[arg(long, value_name = "GAIT", requires = "nominal")]
     pub nominal_gait: Option<String>,
+    /// A simulated outside position source fused into the pose estimate, its error
+    /// reported (docs/estimation.md): `lab` (100 Hz, 2 mm, 15 ms), `degraded` (10 Hz,
+    /// 2 cm, 100 ms, 10 % of the time occluded), or a JSON object of its fields over
+    /// `lab`'s, e.g. '{"rate_hz":30,"latency_s":0.05,"occlusions_per_s":0.2,"occlusion_s":2}'
+    /// (default: none).
+    #[arg(long, value_name = "lab|degraded|JSON")]
+    pub pose_source: Option<String>,
     /// Run only the K-th of N shares of the trials (1 <= K <= N) and write
     /// OUT/shard-K-of-N.cbor; `snake-lab merge` writes the report from all N.
     #[arg(long, value_name = "K/N")]
@@ -153,6 +161,7 @@ impl<E: Experiment> Lab for Plugin<E> {
         let mut trial = TrialConfig {
             limit_s: common.seconds.unwrap_or(d.seconds),
             servo_loop: common.servo_loop,
+            pose_source: common.pose_source.as_deref().map(pose_source).transpose()?,
             ..TrialConfig::default()
         };
         let (module, layouts) = self.0.configure(&own, &mut trial)?;
@@ -439,5 +448,46 @@ mod tests {
             command_line(["snake-lab".into(), "--nominal".into(), "{\"a\":1}".into()]),
             "snake-lab --nominal '{\"a\":1}'"
         );
+    }
+}
+
+/// `--pose-source`: a named source, or fields over the lab's.
+pub fn pose_source(spec: &str) -> Result<SourceConfig, LabError> {
+    let bad = |why: String| LabError::BadValue(format!("--pose-source {spec:?}: {why}"));
+    let source = match spec.trim() {
+        "lab" => SourceConfig::LAB,
+        "degraded" => SourceConfig::DEGRADED,
+        json if json.starts_with('{') => {
+            let mut v = serde_json::to_value(SourceConfig::LAB).map_err(|e| bad(e.to_string()))?;
+            let patch: serde_json::Value =
+                serde_json::from_str(json).map_err(|e| bad(e.to_string()))?;
+            let (Some(base), Some(fields)) = (v.as_object_mut(), patch.as_object()) else {
+                return Err(bad("a JSON object of the source's fields".into()));
+            };
+            for (k, x) in fields {
+                base.insert(k.clone(), x.clone());
+            }
+            serde_json::from_value(v).map_err(|e| bad(e.to_string()))?
+        }
+        _ => return Err(bad("`lab`, `degraded` or a JSON object".into())),
+    };
+    source.check().map_err(bad)?;
+    Ok(source)
+}
+
+#[cfg(test)]
+mod pose_source_tests {
+    use super::*;
+
+    #[test]
+    fn pose_source_is_named_or_patched_and_checked() {
+        assert_eq!(pose_source("lab").unwrap(), SourceConfig::LAB);
+        assert_eq!(pose_source("degraded").unwrap(), SourceConfig::DEGRADED);
+        let s = pose_source(r#"{"rate_hz": 30, "latency_s": 0.05}"#).unwrap();
+        assert_eq!((s.rate_hz, s.latency_s, s.noise_m), (30.0, 0.05, 0.002));
+        for bad in ["mocap", r#"{"rate": 3}"#, r#"{"rate_hz": -1}"#, "[1]"] {
+            let e = pose_source(bad).unwrap_err().to_string();
+            assert!(e.contains("--pose-source"), "{bad}: {e}");
+        }
     }
 }

@@ -97,6 +97,9 @@ pub struct TrialResult<E: Experiment> {
     /// How the estimator's contact odometry did against the truth (every experiment).
     #[serde(default)]
     pub odometry: OdometryCheck,
+    /// How the fused position did against the truth (with `--pose-source`).
+    #[serde(default)]
+    pub position: super::position_check::PositionCheck,
     /// The world and the full record, kept for the trial the report plots (each
     /// controller's first layout and start).
     pub plotted: Option<(Arc<WorldSpec>, E::Goal, TrialRecord)>,

@@ -35,6 +35,7 @@ pub mod pegboard;
 pub mod plots;
 pub mod pole;
 pub mod pose_source;
+pub mod position_check;
 pub mod protocol;
 pub mod registry;
 pub mod report;

@@ -11,6 +11,7 @@ use super::experiment::Experiment;
 pub use super::experiment::SummaryContext;
 use super::experiment::{TrialResult, controller_names};
 use super::odometry_check::{OdometryCheck, odometry_markdown};
+use super::position_check::{PositionCheck, position_markdown};
 use super::strain::{Strain, StrainSummary};
 use super::stuck_check::{StuckCheck, stuck_markdown};
 
@@ -18,10 +19,11 @@ use super::stuck_check::{StuckCheck, stuck_markdown};
 /// strain's, the stuck check's and the odometry check's.
 pub fn with_common_header(own: &str) -> String {
     format!(
-        "{own},{},{},{}",
+        "{own},{},{},{},{}",
         Strain::CSV_HEADER,
         StuckCheck::CSV_HEADER,
-        OdometryCheck::CSV_HEADER
+        OdometryCheck::CSV_HEADER,
+        PositionCheck::CSV_HEADER
     )
 }
 
@@ -100,7 +102,7 @@ pub fn results_csv<E: Experiment>(module: &E, results: &[TrialResult<E>]) -> Str
     for r in results {
         let _ = writeln!(
             out,
-            "{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{}",
             csv_field(&r.controller),
             csv_field(&r.layout),
             r.start,
@@ -108,7 +110,8 @@ pub fn results_csv<E: Experiment>(module: &E, results: &[TrialResult<E>]) -> Str
             module.csv_row(r),
             r.strain.csv_row(),
             r.stuck.csv_row(),
-            r.odometry.csv_row()
+            r.odometry.csv_row(),
+            r.position.csv_row()
         );
     }
     out
@@ -142,6 +145,10 @@ pub fn summary_markdown<E: Experiment>(
     s.push_str(&odometry_markdown(pooled(
         results,
         |c: &mut OdometryCheck, r| c.add(&r.odometry),
+    )));
+    s.push_str(&position_markdown(pooled(
+        results,
+        |c: &mut PositionCheck, r| c.add(&r.position),
     )));
     let _ = writeln!(s, "\nPer trial: `results.csv`.");
     if !ctx.plots.is_empty() {

@@ -248,6 +248,7 @@ pub fn run_share<E: Experiment>(
             strain: rec.strain,
             stuck: StuckCheck::of(&rec),
             odometry: OdometryCheck::of(&rec),
+            position: super::position_check::PositionCheck::of(&rec),
             plotted: first.then(|| (Arc::clone(&w.world), w.goal.clone(), rec)),
         })
     };

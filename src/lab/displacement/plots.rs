@@ -352,6 +352,7 @@ mod tests {
                 strain: Default::default(),
                 stuck: Default::default(),
                 odometry: Default::default(),
+                position: Default::default(),
                 plotted: None,
             })
             .collect();
