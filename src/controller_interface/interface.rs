@@ -83,6 +83,17 @@ pub struct Observation<'a> {
     pub body: &'a BodyEstimate,
 }
 
+impl Observation<'static> {
+    /// No joints, no body estimate: for estimators that read none of it (tests).
+    pub const NONE: Observation<'static> = Observation {
+        position_rad: &[],
+        velocity_rad_s: &[],
+        torque_nm: &[],
+        imu: &[],
+        body: &BodyEstimate::NONE,
+    };
+}
+
 /// The time of one step, as ros2_control hands a controller `update(time, period)`:
 /// the loop's time and the time since this controller's previous step (0 at the first
 /// step after an engagement, never negative).

@@ -297,13 +297,7 @@ mod tests {
         let (input, reader) = pose_input(None);
         let mut e = ExternalFixEstimator::new(reader);
         let mut out = BodyEstimate::NONE;
-        let obs = Observation {
-            position_rad: &[],
-            velocity_rad_s: &[],
-            torque_nm: &[],
-            imu: &[],
-            body: &BodyEstimate::NONE,
-        };
+        let obs = Observation::NONE;
         e.update(1.0, &obs, &mut out);
         assert_eq!(out.fix, FixState::NONE);
         input.write_loop_time(0.9, &fix(0, 1.0), 0).unwrap();

@@ -90,13 +90,7 @@ impl Run {
                 };
                 self.input.write_loop_time(t_meas, &fix, 0).unwrap();
             }
-            let obs = Observation {
-                position_rad: &[],
-                velocity_rad_s: &[],
-                torque_nm: &[],
-                imu: &[],
-                body: &BodyEstimate::NONE,
-            };
+            let obs = Observation::NONE;
             self.e.update(self.t, &obs, &mut self.body);
             let w = self.body.world;
             if w.valid() {
@@ -208,13 +202,7 @@ fn a_marker_on_the_head_is_tracked_at_its_offset() {
     };
     let (input, reader) = pose_input(None);
     let mut e = WorldPositionEstimator::new(reader, config);
-    let obs = Observation {
-        position_rad: &[],
-        velocity_rad_s: &[],
-        torque_nm: &[],
-        imu: &[],
-        body: &BodyEstimate::NONE,
-    };
+    let obs = Observation::NONE;
     // The chassis at (1, 0) facing +y; the head 0.4 m ahead of it (+y), turned as it.
     let q = [
         std::f64::consts::FRAC_PI_4.cos(),
