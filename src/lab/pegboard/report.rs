@@ -169,7 +169,7 @@ mod tests {
             lines[1]
         );
         assert!(lines[2].contains(",false,-0.0500,"), "{}", lines[2]);
-        assert!(lines.iter().all(|l| l.split(',').count() == 30));
+        assert!(lines.iter().all(|l| l.split(',').count() == 34));
         assert_eq!(csv_field("a,b"), "\"a,b\"");
     }
 
