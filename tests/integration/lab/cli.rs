@@ -55,12 +55,18 @@ fn pegboard_writes_csv_summary_and_plots() {
             "odometry_direction_err_deg",
             "odometry_right_pct",
             "odometry_length_ratio",
-            "odometry_false_motion_pct"
+            "odometry_false_motion_pct",
+            "position_tracked_pct",
+            "position_err_mean_m",
+            "position_err_max_m",
+            "position_far_pct"
         ]
     );
     assert_eq!(rows.len(), 3, "header + 2 layouts x 1 start:\n{csv}");
     for (row, layout) in rows[1..].iter().zip(["seed1000", "seed1001"]) {
-        assert_eq!(row.len(), 30);
+        assert_eq!(row.len(), 34);
+        // No position source: its columns are empty (NaN).
+        assert_eq!(&row[30..], ["NaN", "NaN", "NaN", "NaN"], "{row:?}");
         // 2 s of open loop from rest: the blend and the wave stay within the motors.
         let guarded: f64 = row[14].parse().unwrap();
         assert_eq!(guarded, 0.0, "{row:?}");
