@@ -46,6 +46,7 @@ pub mod strain;
 pub mod stuck_check;
 pub mod trial;
 pub mod trial_navigator;
+pub mod truth;
 
 use std::path::PathBuf;
 

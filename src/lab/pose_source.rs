@@ -15,10 +15,13 @@ use nalgebra::Vector3;
 use rand::{RngExt, SeedableRng};
 use rand_pcg::Pcg64;
 
+use crate::controller_interface::Estimator;
 use crate::emu::Plant;
 use crate::estimation::chassis::{Chassis, chassis};
-use crate::estimation::external_pose::{ExternalFix, PoseInput};
-use crate::estimation::world_position::Tracked;
+use crate::estimation::external_pose::{ExternalFix, PoseInput, pose_input};
+use crate::estimation::world_position::{
+    FusionConfig, Tracked, WorldPosition, WorldPositionEstimator,
+};
 
 /// How the simulated source behaves.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -122,6 +125,29 @@ pub fn truth(
         }
     };
     (point, yaw, c)
+}
+
+/// A trial's pose input, its fixes fused as the daemon fuses a real source's: the
+/// fusion appended to `estimators`, set for what `source` tracks.
+pub fn fused_input(source: &SourceConfig, estimators: &mut Vec<Box<dyn Estimator>>) -> PoseInput {
+    let (input, reader) = pose_input(None);
+    let fusion = FusionConfig {
+        tracked: source.tracked,
+        marker_offset_m: source.marker_offset_m,
+        default_sd_m: source.noise_m.max(1e-4),
+        ..FusionConfig::default()
+    };
+    estimators.push(Box::new(WorldPositionEstimator::new(reader, fusion)));
+    input
+}
+
+/// How far the fused position is from the true centre `truth_m` (NaN: not valid), m.
+pub fn position_error(world: &WorldPosition, truth_m: [f64; 2]) -> f64 {
+    if world.valid() {
+        (world.position_m[0] - truth_m[0]).hypot(world.position_m[1] - truth_m[1])
+    } else {
+        f64::NAN
+    }
 }
 
 /// The source during one trial.

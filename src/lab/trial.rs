@@ -7,10 +7,11 @@
 
 use super::aim::Aim;
 use super::aim::PendingHeading;
-use super::pose_source::{SimSource, SourceConfig};
+use super::pose_source::{SimSource, SourceConfig, fused_input, position_error};
 use super::trial_navigator::TrialNavigator;
-use crate::estimation::external_pose::{PoseInput, pose_input};
-use crate::estimation::world_position::{FusionConfig, WorldPositionEstimator};
+pub use super::truth::{centre, front_half_centre, front_half_of};
+use super::truth::{ground, links};
+use crate::estimation::external_pose::PoseInput;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU64};
 
@@ -268,18 +269,7 @@ pub(crate) fn trial_loop(
     let gait = controller.gait;
     let layout = BodyLayout::alternating(n, Plane::Lateral, MODULE_LENGTH_M);
     let mut estimators = crate::estimation::standard_estimators(&layout);
-    // The simulated source's fixes, fused as the daemon fuses a real one's.
-    let pose = config.pose_source.map(|s| {
-        let (input, reader) = pose_input(None);
-        let fusion = FusionConfig {
-            tracked: s.tracked,
-            marker_offset_m: s.marker_offset_m,
-            default_sd_m: s.noise_m.max(1e-4),
-            ..FusionConfig::default()
-        };
-        estimators.push(Box::new(WorldPositionEstimator::new(reader, fusion)));
-        input
-    });
+    let pose = config.pose_source.map(|s| fused_input(&s, &mut estimators));
     let table = config.gaits;
     let built = controller.build(&layout, table.get(gait))?;
     let names = built
@@ -524,13 +514,8 @@ pub(crate) fn plant_of(lp: &ControlLoop) -> &dyn Plant {
 
 /// With a position source: how far the fused position is from the truth this sample.
 fn record_position(lp: &ControlLoop, rec: &mut TrialRecord) {
-    let w = lp.body().world;
-    let c = centre(plant_of(lp));
-    rec.position_error_m.push(if w.valid() {
-        (w.position_m[0] - c[0]).hypot(w.position_m[1] - c[1])
-    } else {
-        f64::NAN
-    });
+    rec.position_error_m
+        .push(position_error(&lp.body().world, centre(plant_of(lp))));
 }
 
 fn record(lp: &ControlLoop, rec: &mut TrialRecord, nav: Option<&TrialNavigator>) {
@@ -578,46 +563,6 @@ fn record(lp: &ControlLoop, rec: &mut TrialRecord, nav: Option<&TrialNavigator>)
                 .collect(),
         );
     }
-}
-
-/// Mean ground-plane position of the links (the body's geometric centre), m.
-pub fn centre(plant: &dyn Plant) -> [f64; 2] {
-    let n = plant.link_count().max(1);
-    let mut c = [0.0, 0.0];
-    for k in 0..plant.link_count() {
-        let p = plant.link_pose(k).position_m;
-        c = [c[0] + p[0], c[1] + p[1]];
-    }
-    [c[0] / n as f64, c[1] / n as f64]
-}
-
-/// Ground-plane positions of the links, head first, m.
-fn links(plant: &dyn Plant) -> Vec<[f64; 2]> {
-    (0..plant.link_count())
-        .map(|k| ground(plant.link_pose(k).position_m))
-        .collect()
-}
-
-fn ground([x, y, _]: [f64; 3]) -> [f64; 2] {
-    [x, y]
-}
-
-/// Mean ground-plane position of the front half of the links (`0 .. links/2`), m.
-pub fn front_half_centre(plant: &dyn Plant) -> [f64; 2] {
-    front_half_of((0..plant.link_count()).map(|k| {
-        let p = plant.link_pose(k).position_m;
-        [p[0], p[1]]
-    }))
-}
-
-/// The front half's centre of link positions given head first (as recorded).
-pub fn front_half_of(links: impl ExactSizeIterator<Item = [f64; 2]>) -> [f64; 2] {
-    let half = (links.len() / 2).max(1);
-    let mut c = [0.0, 0.0];
-    for p in links.take(half) {
-        c = [c[0] + p[0], c[1] + p[1]];
-    }
-    [c[0] / half as f64, c[1] / half as f64]
 }
 
 #[cfg(test)]
