@@ -4,20 +4,12 @@
 
 use super::*;
 use crate::emu::world::WorldSpec;
-use crate::emu::world::scenario::Region;
 use crate::gait::GaitKind;
 use crate::lab::compared::LabController;
-use crate::lab::pegboard::board::Board;
 use crate::lab::trial::{TrialConfig, run_trial};
 
 fn trial(source: Option<SourceConfig>, seconds: f64) -> crate::lab::trial::TrialRecord {
-    let board = Board::new(
-        Region {
-            x_m: [-5.0, 5.0],
-            y_m: [-5.0, 5.0],
-        },
-        std::f64::consts::PI,
-    );
+    let board = crate::lab::trial::tests::open_board();
     let config = TrialConfig {
         limit_s: seconds,
         pose_source: source,

@@ -512,10 +512,12 @@ pub(crate) fn plant_of(lp: &ControlLoop) -> &dyn Plant {
         .plant()
 }
 
-/// With a position source: how far the fused position is from the truth this sample.
+/// With a position source: how far the fused position is from the truth this sample
+/// (the centre [`record`] has just recorded).
 fn record_position(lp: &ControlLoop, rec: &mut TrialRecord) {
+    let truth = rec.centre_m.last().copied().unwrap_or_default();
     rec.position_error_m
-        .push(position_error(&lp.body().world, centre(plant_of(lp))));
+        .push(position_error(&lp.body().world, truth));
 }
 
 fn record(lp: &ControlLoop, rec: &mut TrialRecord, nav: Option<&TrialNavigator>) {
@@ -567,4 +569,4 @@ fn record(lp: &ControlLoop, rec: &mut TrialRecord, nav: Option<&TrialNavigator>)
 
 #[cfg(test)]
 #[path = "trial_tests.rs"]
-mod tests;
+pub(crate) mod tests;

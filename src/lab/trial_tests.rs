@@ -34,16 +34,21 @@ fn sampling_cadence() {
     assert!((c.sample_dt_s() - 0.05).abs() < 1e-12);
 }
 
-#[test]
-fn a_short_open_loop_trial_records_and_moves_the_joints() {
-    let world = WorldSpec::default();
-    let board = Board::new(
+/// A board far wider than any short trial goes: nothing ends it early.
+pub(crate) fn open_board() -> Board {
+    Board::new(
         Region {
             x_m: [-5.0, 5.0],
             y_m: [-5.0, 5.0],
         },
         std::f64::consts::PI,
-    );
+    )
+}
+
+#[test]
+fn a_short_open_loop_trial_records_and_moves_the_joints() {
+    let world = WorldSpec::default();
+    let board = open_board();
     let config = TrialConfig {
         limit_s: 0.5,
         ..TrialConfig::default()

@@ -50,11 +50,17 @@ fn motion_view(s: &Snapshot) -> Value {
 
 /// The body estimate (docs/estimation.md): its frame and heading while valid; only
 /// `valid: false` before the estimator has settled or when its input was not finite.
+/// The outside source's fix and position are `external_pose` and `world` of `status`.
 fn body_view(b: &crate::controller_interface::BodyEstimate) -> Value {
     if !b.valid {
         return json!({ "valid": false });
     }
-    json!(b)
+    let mut v = json!(b);
+    if let Some(o) = v.as_object_mut() {
+        o.remove("fix");
+        o.remove("world");
+    }
+    v
 }
 
 /// Extremes over the joints plus their positions and torques as plain arrays.
