@@ -19,6 +19,9 @@ pub struct Aim {
     /// Sidewinding's bend to the left among obstacles, made up for
     /// ([`crate::navigation::SIDEWINDING_DRIFT_RAD`]), rad.
     pub sidewind_drift_rad: f64,
+    /// A goal in the true world (the simulated source's), m: the navigator steers to it
+    /// by position when the trial has a pose source (`TrialConfig::pose_source`).
+    pub goal_m: Option<[f64; 2]>,
 }
 
 impl Aim {

@@ -399,9 +399,15 @@ pub fn run_trial(
             let first = crate::navigation::navigator::Choice::Sidewind;
             // The controllers' signals change with its choices: only its choice is kept.
             signal_names = vec![super::trial_navigator::CHOICE_SIGNAL.into()];
+            // By position to the aim's goal when the trial has a source.
+            let goal_m = config
+                .aim
+                .and_then(|a| a.goal_m)
+                .filter(|_| source.is_some());
             Some(TrialNavigator::new(
                 cfg,
                 travel,
+                goal_m,
                 layout,
                 config.gaits,
                 first,
@@ -466,7 +472,7 @@ pub fn run_trial(
         }
         add_strain(&lp, guarded, &mut rec.strain);
         if k % per_sample == 0 {
-            if let Some(n) = nav.as_mut() {
+            if let Some(n) = nav.as_mut().filter(|n| !n.arrived()) {
                 n.step(k as f64 * config.dt_s, &lp, &requests)?;
             }
             record(&lp, &mut rec, nav.as_ref());

@@ -11,7 +11,8 @@ use crate::controller_interface::registry;
 use crate::controllers::REGISTRY;
 use crate::gait::{BodyLayout, GaitTable};
 use crate::navigation::navigator::{Choice, NavView, Navigator, NavigatorConfig};
-use crate::navigation::state::NavigatorState;
+use crate::navigation::state::{NavigatorState, StopReason};
+use crate::navigation::steering::PositionView;
 use crate::operator::Act;
 use crate::operator::navigator_runner::{NavigatorRunner, RunnerView};
 use crate::rt::control_loop::ControlLoop;
@@ -36,16 +37,21 @@ pub struct TrialNavigator {
 }
 
 impl TrialNavigator {
-    /// For travel `travel_rad` in the estimate's world, the trial's controller being
-    /// `first`'s.
+    /// For travel `travel_rad` in the estimate's world, or to `goal_m` in the true world
+    /// (the simulated source's) by position while it is valid; the trial's controller
+    /// being `first`'s.
     pub fn new(
         config: NavigatorConfig,
         travel_rad: f64,
+        goal_m: Option<[f64; 2]>,
         layout: BodyLayout,
         table: GaitTable,
         first: Choice,
     ) -> Self {
-        let nav = Navigator::new(config, travel_rad);
+        let nav = match goal_m {
+            Some(g) => Navigator::to_goal(config, g, travel_rad),
+            None => Navigator::new(config, travel_rad),
+        };
         let runner = NavigatorRunner::new(nav, |gait, name| {
             gait == first.gait() && name == first.controller()
         });
@@ -87,6 +93,13 @@ impl TrialNavigator {
                 estimate_valid: lp.body().valid,
                 heading_rad: lp.body().heading_rad,
                 progress: lp.progress(),
+                position: {
+                    let w = &lp.body().world;
+                    w.valid().then_some(PositionView {
+                        position_m: w.position_m,
+                        yaw_offset_rad: w.yaw_offset_rad,
+                    })
+                },
             },
             gait: lp.gait(),
             driving: lp.controllers().engaged(),
@@ -98,11 +111,20 @@ impl TrialNavigator {
             self.carry_out(act, tx)?;
         }
         self.acts = acts;
-        if decided {
+        if self.runner.arrived() {
+            let state =
+                NavigatorState::of(self.runner.navigator(), false, Some(StopReason::Arrived));
+            self.send(tx, LoopRequest::Navigation { state }, None);
+        } else if decided {
             let state: NavigatorState = self.runner.state(true);
             self.send(tx, LoopRequest::Navigation { state }, None);
         }
         Ok(())
+    }
+
+    /// It reached its goal (and stopped the gait): it is not stepped again.
+    pub fn arrived(&self) -> bool {
+        self.runner.arrived()
     }
 
     /// One of the runner's acts, on the trial's queue.
@@ -126,6 +148,7 @@ impl TrialNavigator {
                 self.send(tx, LoopRequest::SetController { gait }, Some(installed));
             }
             Act::SetGait { gait } => self.send(tx, LoopRequest::SetGait { gait }, None),
+            Act::StopGait { within_s } => self.send(tx, LoopRequest::StopGait { within_s }, None),
             Act::SetHeading {
                 gait: Some(gait),
                 heading_rad,

@@ -1,12 +1,14 @@
 //! Getting across (issue 28): what the gait selector needs to pursue a direction on its
 //! own. So far: knowing the body is jammed from what the daemon senses ([`stuck`]),
 //! monitored by the loop over the gait it runs ([`progress`]); the navigator that picks
-//! and changes gaits and controllers ([`navigator`]) and its state as the loop reports
+//! and changes gaits and controllers ([`navigator`]), steering by position to a goal
+//! when an outside source gives one ([`steering`]), and its state as the loop reports
 //! it ([`state`]).
 
 pub mod navigator;
 pub mod progress;
 pub mod state;
+pub mod steering;
 pub mod stuck;
 
 use crate::gait::GaitKind;

@@ -18,6 +18,7 @@ use serde::{Deserialize, Serialize};
 
 use super::body_heading_for;
 use super::progress::ProgressReport;
+use super::steering::{Course, GoalSteering, PositionView, SteeringConfig};
 use crate::controller_interface::config::{ConfigError, check_range};
 use crate::gait::GaitKind;
 
@@ -91,6 +92,10 @@ pub enum Why {
     /// Sidewinding, the body was turned off course (by the obstacles) further than its
     /// own heading control corrects quickly.
     OffCourse,
+    /// Steering by position: the same choice re-aimed at the course to the goal.
+    Steer,
+    /// Steering by position: no nearer the goal over the progress window.
+    NoProgress,
 }
 
 /// The navigator's settings.
@@ -129,6 +134,8 @@ pub struct NavigatorConfig {
     pub slither: bool,
     /// Back off when sidewinding is stuck (false: sidewinding goes on).
     pub back_off: bool,
+    /// Steering by position to a goal (`navigation::steering`).
+    pub steering: SteeringConfig,
 }
 
 impl NavigatorConfig {
@@ -145,6 +152,7 @@ impl NavigatorConfig {
         slither_fails_within_s: 25.0,
         slither: true,
         back_off: true,
+        steering: SteeringConfig::DEFAULT,
     };
 
     pub fn check(&self) -> Result<(), ConfigError> {
@@ -183,7 +191,8 @@ impl NavigatorConfig {
             self.slither_fails_within_s,
             0.0,
             3600.0,
-        )
+        )?;
+        self.steering.check().map_err(|e| e.under("steering"))
     }
 }
 
@@ -191,6 +200,15 @@ impl Default for NavigatorConfig {
     fn default() -> Self {
         Self::DEFAULT
     }
+}
+
+/// Where to navigate.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Target {
+    /// A direction of travel, the pose estimate's world, rad.
+    Heading(f64),
+    /// A goal point, the position source's world, m (needs a valid position to start).
+    Goal([f64; 2]),
 }
 
 /// What the navigator wants done: run `choice` (its gait and controller) with the
@@ -212,6 +230,8 @@ pub struct NavView {
     /// Its heading (the body's head-ward axis, the estimate's world), rad.
     pub heading_rad: f64,
     pub progress: ProgressReport,
+    /// The position from an outside source, when it is valid (`WorldPosition::valid`).
+    pub position: Option<PositionView>,
 }
 
 /// The navigator's state.
@@ -225,6 +245,13 @@ pub struct Navigator {
     switches: u32,
     /// Slithering got stuck within `slither_fails_within_s`: it is not tried again.
     slither_fails: bool,
+    /// Going to a goal by position, when it has one.
+    goal: Option<GoalSteering>,
+    /// The last course by position (while it steers by position).
+    course: Option<Course>,
+    /// When it last re-aimed, and the heading it asked for then.
+    aimed: (f64, f64),
+    arrived: bool,
 }
 
 impl Navigator {
@@ -236,11 +263,41 @@ impl Navigator {
             since_s: 0.0,
             switches: 0,
             slither_fails: !config.slither,
+            goal: None,
+            course: None,
+            aimed: (f64::NEG_INFINITY, f64::NAN),
+            arrived: false,
         }
     }
 
+    /// To `goal_m` (the position source's world) by position; towards `travel_rad` (the
+    /// estimate's world) while it has no valid position.
+    pub fn to_goal(config: NavigatorConfig, goal_m: [f64; 2], travel_rad: f64) -> Self {
+        Self {
+            goal: Some(GoalSteering::new(config.steering, goal_m)),
+            ..Self::new(config, travel_rad)
+        }
+    }
+
+    /// The direction of travel now, the estimate's world, rad (by position: the last
+    /// course, turned into the estimate's world).
     pub fn travel_rad(&self) -> f64 {
         self.travel_rad
+    }
+
+    /// The goal, the source's world, m.
+    pub fn goal(&self) -> Option<[f64; 2]> {
+        self.goal.as_ref().map(GoalSteering::goal)
+    }
+
+    /// The course by position, while it steers by position (`None`: by heading only).
+    pub fn course(&self) -> Option<Course> {
+        self.course
+    }
+
+    /// It reached the goal (it decides nothing more).
+    pub fn arrived(&self) -> bool {
+        self.arrived
     }
 
     /// What it runs now and why (`None` before its first decision).
@@ -269,7 +326,11 @@ impl Navigator {
     /// Nothing is decided while the loop does not run the gait or the pose estimate is
     /// not valid (the runner reports that and may stop navigating).
     pub fn step(&mut self, t_s: f64, view: &NavView) -> Option<Decision> {
-        if !view.running || !view.estimate_valid {
+        if !view.running || !view.estimate_valid || self.arrived {
+            return None;
+        }
+        self.steer_by_position(t_s, view);
+        if self.arrived {
             return None;
         }
         let c = self.config;
@@ -289,9 +350,15 @@ impl Navigator {
             None => sidewind(Why::Start),
             Some((now, _)) => {
                 let age = t_s - self.since_s;
-                let stuck = view.progress.stuck && age >= c.settle_s;
+                let no_progress = self.course.is_some_and(|k| k.no_progress)
+                    && matches!(now, Choice::Sidewind | Choice::Slither);
+                let why_stuck = match view.progress.stuck {
+                    true => Why::Stuck,
+                    false => Why::NoProgress,
+                };
+                let stuck = (view.progress.stuck || no_progress) && age >= c.settle_s;
                 match now {
-                    Choice::Sidewind if stuck && c.back_off => (Choice::BackOff, Why::Stuck),
+                    Choice::Sidewind if stuck && c.back_off => (Choice::BackOff, why_stuck),
                     Choice::Sidewind
                         if age >= c.settle_s
                             && axis_error(view.heading_rad, across) > c.off_course_rad =>
@@ -304,7 +371,7 @@ impl Navigator {
                     Choice::BackOff if age >= c.back_off_s => sidewind(Why::BackedOff),
                     Choice::Slither if stuck => {
                         self.slither_fails |= age < c.slither_fails_within_s;
-                        sidewind(Why::Stuck)
+                        sidewind(why_stuck)
                     }
                     Choice::Slither if age >= c.slither_max_s => sidewind(Why::SlitherTimeUp),
                     Choice::Turn
@@ -313,7 +380,7 @@ impl Navigator {
                     {
                         (Choice::Sidewind, Why::Turned)
                     }
-                    _ => return None,
+                    _ => return self.reaim(t_s, now),
                 }
             }
         };
@@ -322,6 +389,9 @@ impl Navigator {
         }
         self.current = Some(next);
         self.since_s = t_s;
+        if let Some(g) = self.goal.as_mut() {
+            g.restart_progress();
+        }
         let (choice, why) = next;
         let travel = match choice {
             Choice::BackOff => self.travel_rad + std::f64::consts::PI,
@@ -332,9 +402,67 @@ impl Navigator {
             Choice::Turn => nearer_way(view.heading_rad, across),
             _ => body_heading_for(choice.gait(), travel, c.sidewind_drift_rad).unwrap_or(travel),
         };
+        self.aimed = (t_s, heading_rad);
         Some(Decision {
             choice,
             why,
+            heading_rad,
+        })
+    }
+
+    /// With a goal and a valid position: the course to it, and the direction of travel
+    /// turned into the estimate's world; without a valid position the last direction
+    /// stands (today's heading-only navigation) and the course is dropped.
+    fn steer_by_position(&mut self, t_s: f64, view: &NavView) {
+        let drift = self.config.sidewind_drift_rad;
+        let sidewinding = self
+            .current
+            .is_none_or(|(c, _)| c.gait() == GaitKind::Sidewinding);
+        let Some(g) = self.goal.as_mut() else {
+            return;
+        };
+        let Some(p) = view.position else {
+            if self.course.take().is_some() {
+                g.pause();
+            }
+            return;
+        };
+        // Sidewinding travels across its axis: how far the axis is from lying across
+        // the line decides how much cross-track correction it can take.
+        let authority = match sidewinding {
+            true => {
+                let line = g.line_rad(p.position_m) - p.yaw_offset_rad;
+                let across = body_heading_for(GaitKind::Sidewinding, line, drift).unwrap_or(line);
+                g.authority(axis_error(view.heading_rad, across))
+            }
+            false => 1.0,
+        };
+        let course = g.update(t_s, p.position_m, authority);
+        self.arrived = course.arrived;
+        self.travel_rad = crate::num::wrap_pi(course.travel_rad - p.yaw_offset_rad);
+        self.course = Some(course);
+    }
+
+    /// Steering by position, the same choice re-aimed when its heading has moved.
+    fn reaim(&mut self, t_s: f64, now: Choice) -> Option<Decision> {
+        let s = self.config.steering;
+        if self.course.is_none() || now == Choice::Turn || t_s - self.aimed.0 < s.reaim_s {
+            return None;
+        }
+        let travel = match now {
+            Choice::BackOff => self.travel_rad + std::f64::consts::PI,
+            _ => self.travel_rad,
+        };
+        let heading_rad =
+            body_heading_for(now.gait(), travel, self.config.sidewind_drift_rad).unwrap_or(travel);
+        let moved = crate::num::wrap_pi(heading_rad - self.aimed.1).abs();
+        if !(moved > s.reaim_above_rad) {
+            return None;
+        }
+        self.aimed = (t_s, heading_rad);
+        Some(Decision {
+            choice: now,
+            why: Why::Steer,
             heading_rad,
         })
     }
@@ -366,6 +494,7 @@ mod tests {
             running: true,
             estimate_valid: true,
             heading_rad: 2.0,
+            position: None,
             progress: ProgressReport {
                 stuck,
                 reason: if stuck {
@@ -506,6 +635,70 @@ mod tests {
         assert_eq!(d.choice, Choice::BackOff);
         let d = n.step(1.0 + c.settle_s + c.back_off_s, &v).unwrap();
         assert_eq!((d.choice, d.why), (Choice::Sidewind, Why::BackedOff));
+    }
+
+    /// To a goal by position: it starts towards the goal, re-aims as the body leaves
+    /// the line, falls back to the last direction (reported) when the position goes,
+    /// takes standing still as stuck, and stops deciding at the goal.
+    #[test]
+    fn to_a_goal_it_steers_by_position_falls_back_without_it_and_arrives() {
+        let c = NavigatorConfig {
+            slither: false,
+            ..NavigatorConfig::DEFAULT
+        };
+        // The source's world is the estimate's turned by ψ = 0.5.
+        let psi = 0.5;
+        let at = |x: f64, y: f64| PositionView {
+            position_m: [x, y],
+            yaw_offset_rad: psi,
+        };
+        let mut n = Navigator::to_goal(c, [3.0, 0.0], 0.0);
+        assert_eq!(n.goal(), Some([3.0, 0.0]));
+        let mut v = view(false);
+        // The body lies across the line (sidewinding travels +x of the source's world).
+        v.heading_rad = std::f64::consts::FRAC_PI_2 - psi;
+        v.position = Some(at(0.0, 0.0));
+        let d = n.step(0.0, &v).unwrap();
+        assert_eq!((d.choice, d.why), (Choice::Sidewind, Why::Start));
+        assert!((n.travel_rad() + psi).abs() < 1e-12, "{}", n.travel_rad());
+        assert!((d.heading_rad - (std::f64::consts::FRAC_PI_2 - psi)).abs() < 1e-12);
+        let course = n.course().unwrap();
+        assert!((course.distance_m - 3.0).abs() < 1e-12);
+        // Drifted 0.4 m left: re-aimed to the right, not a switch.
+        v.position = Some(at(1.0, 0.4));
+        assert_eq!(n.step(0.5, &v), None, "not before reaim_s");
+        let d = n.step(1.0, &v).unwrap();
+        assert_eq!((d.choice, d.why), (Choice::Sidewind, Why::Steer));
+        assert!(n.travel_rad() < -psi - 0.3, "{}", n.travel_rad());
+        assert_eq!(n.switches(), 0);
+        assert_eq!(n.current(), Some((Choice::Sidewind, Why::Start)));
+        // The position goes: by heading only, the last direction kept.
+        let travel = n.travel_rad();
+        v.position = None;
+        assert_eq!(n.step(2.0, &v), None);
+        assert!(n.course().is_none());
+        assert_eq!(n.travel_rad(), travel);
+        // Back, standing still for the progress window: stuck, backs off.
+        v.position = Some(at(1.0, 0.0));
+        let mut decided = None;
+        for k in 0..40 {
+            let t = 3.0 + k as f64;
+            if let Some(d) = n.step(t, &v)
+                && d.why != Why::Steer
+            {
+                decided = Some((t, d));
+                break;
+            }
+        }
+        let (t, d) = decided.expect("no progress seen");
+        assert_eq!((d.choice, d.why), (Choice::BackOff, Why::NoProgress));
+        assert!(t >= 3.0 + c.steering.progress_window_s, "{t}");
+        // At the goal: nothing more.
+        v.position = Some(at(2.9, 0.0));
+        assert_eq!(n.step(t + 1.0, &v), None);
+        assert!(n.arrived());
+        v.position = Some(at(0.0, 0.0));
+        assert_eq!(n.step(t + 20.0, &v), None);
     }
 
     #[test]

@@ -24,6 +24,8 @@ pub enum StopReason {
     NotRunning,
     /// The loop refused one of the navigator's requests.
     Refused,
+    /// It reached the goal (by position); the robot holds.
+    Arrived,
 }
 
 impl StopReason {
@@ -38,6 +40,7 @@ impl StopReason {
                 "the loop stopped running the gait (hold, limp, e-stop or the failsafe)"
             }
             StopReason::Refused => "the loop refused one of the navigator's requests",
+            StopReason::Arrived => "it reached the goal: the robot holds",
         }
     }
 }
@@ -59,6 +62,15 @@ pub struct NavigatorState {
     pub switches: u32,
     /// Why it stopped (while not active; none if it never ran).
     pub stopped: Option<StopReason>,
+    /// The goal, the position source's world, m (none: a direction only).
+    pub goal_m: Option<[f64; 2]>,
+    /// It steers by position now (a goal and a valid position); false: by heading only.
+    pub by_position: bool,
+    /// To the goal, and left of the line to it, m (null while not by position).
+    #[serde(with = "nan_as_null")]
+    pub distance_m: f64,
+    #[serde(with = "nan_as_null")]
+    pub cross_track_m: f64,
 }
 
 impl NavigatorState {
@@ -69,11 +81,16 @@ impl NavigatorState {
         why: None,
         switches: 0,
         stopped: None,
+        goal_m: None,
+        by_position: false,
+        distance_m: f64::NAN,
+        cross_track_m: f64::NAN,
     };
 
     /// What `nav` does: running (`active`) or stopped for `stopped`.
     pub fn of(nav: &Navigator, active: bool, stopped: Option<StopReason>) -> Self {
         let current = nav.current();
+        let course = nav.course();
         Self {
             active,
             travel_rad: nav.travel_rad(),
@@ -81,6 +98,10 @@ impl NavigatorState {
             why: current.map(|c| c.1),
             switches: nav.switches(),
             stopped,
+            goal_m: nav.goal(),
+            by_position: course.is_some(),
+            distance_m: course.map_or(f64::NAN, |c| c.distance_m),
+            cross_track_m: course.map_or(f64::NAN, |c| c.cross_track_m),
         }
     }
 
@@ -130,6 +151,10 @@ mod tests {
             why: Some(Why::Start),
             switches: 2,
             stopped: None,
+            goal_m: Some([3.0, -1.0]),
+            by_position: true,
+            distance_m: 2.5,
+            cross_track_m: -0.25,
         };
         let v = serde_json::to_value(on).unwrap();
         assert_eq!(v["choice"], "sidewind");

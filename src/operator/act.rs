@@ -6,7 +6,7 @@
 use crate::controller_interface::Selection;
 use crate::controller_interface::catalog::ControllerInfo;
 use crate::gait::{GaitKind, GaitParams, ParamPatch};
-use crate::navigation::navigator::NavigatorConfig;
+use crate::navigation::navigator::{NavigatorConfig, Target};
 use crate::rt::controller_slots::ControllerTelemetry;
 use crate::rt::messages::Continuity;
 
@@ -59,9 +59,10 @@ pub enum Act {
         gait: Option<GaitKind>,
         heading_rad: Option<f64>,
     },
-    /// Navigate towards `travel_rad` (rad, in the pose estimate's world).
+    /// Navigate in a direction (the pose estimate's world) or to a goal (the position
+    /// source's world).
     Navigate {
-        travel_rad: f64,
+        target: Target,
         config: NavigatorConfig,
     },
     /// Stop navigating (anyone may).
@@ -185,6 +186,7 @@ pub enum Done {
     },
     Navigating {
         travel_rad: f64,
+        goal_m: Option<[f64; 2]>,
         config: NavigatorConfig,
     },
     NavigationOff {
@@ -229,7 +231,7 @@ mod tests {
                 heading_rad: None,
             },
             Act::Navigate {
-                travel_rad: 0.0,
+                target: Target::Heading(0.0),
                 config: NavigatorConfig::DEFAULT,
             },
             Act::NavigateOff,

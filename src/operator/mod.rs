@@ -263,7 +263,7 @@ async fn carry_out(shared: &Arc<Shared>, who: &str, act: Act) -> Result<Done, Op
         Act::SetHeading { gait, heading_rad } => {
             controllers::set_heading(shared, gait, heading_rad).await
         }
-        Act::Navigate { travel_rad, config } => navigate::start(shared, travel_rad, config).await,
+        Act::Navigate { target, config } => navigate::start(shared, target, config).await,
         Act::NavigateOff => navigate::stop(shared).await,
         Act::TakeOver => {
             let from = shared.driver.take_over(who, now);

@@ -6,7 +6,10 @@
 //! tells the loop what it does (`LoopRequest::Navigation`) at each change, so `status`,
 //! telemetry, the recording and the live view report it.
 //!
-//! It stops, and says why in `status.navigator.stopped`: when the operator turns it off
+//! Given a goal point it steers by the outside position while that is valid
+//! (`navigation::steering`), and stops the gait when it arrives.
+//!
+//! It stops, and says why in `status.navigator.stopped`: when it arrives, when the operator turns it off
 //! or sends a request that drives the robot (theirs wins: [`TAKES_OVER`]), when the
 //! pose estimate stays invalid (it steers by it), when the loop stops running the gait,
 //! or when the loop refuses one of its requests.
@@ -23,8 +26,9 @@ use crate::controller_interface::Selection;
 use crate::controller_interface::registry;
 use crate::controllers::REGISTRY;
 use crate::gait::GaitKind;
-use crate::navigation::navigator::{NavView, Navigator, NavigatorConfig};
+use crate::navigation::navigator::{NavView, Navigator, NavigatorConfig, Target};
 use crate::navigation::state::{NavigatorState, StopReason};
+use crate::navigation::steering::PositionView;
 use crate::rt::controller_slots::Engagement;
 use crate::rt::messages::LoopRequest;
 use crate::rt::telemetry::Snapshot;
@@ -89,10 +93,10 @@ pub(crate) async fn stop(shared: &Arc<Shared>) -> Result<Done, OperatorError> {
     })
 }
 
-/// Starts navigating towards `travel_rad` (or restarts towards a new direction).
+/// Starts navigating to `target` (or restarts towards a new one).
 pub(crate) async fn start(
     shared: &Arc<Shared>,
-    travel_rad: f64,
+    target: Target,
     config: NavigatorConfig,
 ) -> Result<Done, OperatorError> {
     config
@@ -118,15 +122,49 @@ pub(crate) async fn start(
              steers by it: wait until `status.body.valid` is true",
         ));
     }
+    let nav = match target {
+        Target::Heading(travel_rad) => Navigator::new(config, travel_rad),
+        Target::Goal(goal_m) => {
+            let Some(p) = position(&s) else {
+                return Err(OperatorError::new(
+                    code::REFUSED,
+                    format!(
+                        "refused: no valid position to steer to a goal by (status.world.state \
+                         is {}): send fixes with `pose.external` (docs/estimation.md, \
+                         \"Where the body is\"), or navigate by `heading_rad`",
+                        serde_json::to_value(s.body.world.state)
+                            .ok()
+                            .and_then(|v| v.as_str().map(str::to_owned))
+                            .unwrap_or_default()
+                    ),
+                ));
+            };
+            let to = [goal_m[0] - p.position_m[0], goal_m[1] - p.position_m[1]];
+            let travel_rad = to[1].atan2(to[0]) - p.yaw_offset_rad;
+            Navigator::to_goal(config, goal_m, travel_rad)
+        }
+    };
     shared.navigation.abort();
-    let nav = Navigator::new(config, travel_rad);
     let travel = nav.travel_rad();
     report(shared, NavigatorState::of(&nav, true, None)).await?;
     let task = tokio::spawn(run(shared.clone(), nav));
     shared.navigation.set(task.abort_handle());
     Ok(Done::Navigating {
         travel_rad: travel,
+        goal_m: match target {
+            Target::Goal(g) => Some(g),
+            Target::Heading(_) => None,
+        },
         config,
+    })
+}
+
+/// The position the navigator steers by, while the outside source's is valid.
+pub fn position(s: &Snapshot) -> Option<PositionView> {
+    let w = &s.body.world;
+    w.valid().then_some(PositionView {
+        position_m: w.position_m,
+        yaw_offset_rad: w.yaw_offset_rad,
     })
 }
 
@@ -187,6 +225,7 @@ async fn drive(shared: &Shared, runner: &mut NavigatorRunner) -> StopReason {
                 estimate_valid: true,
                 heading_rad: s.body.heading_rad,
                 progress: s.progress,
+                position: position(&s),
             },
             gait: s.gait,
             driving: driving(&s),
@@ -197,6 +236,9 @@ async fn drive(shared: &Shared, runner: &mut NavigatorRunner) -> StopReason {
             if carry_out(shared, act).await.is_err() {
                 return StopReason::Refused;
             }
+        }
+        if runner.arrived() {
+            return StopReason::Arrived;
         }
         if decided && report(shared, runner.state(true)).await.is_err() {
             return StopReason::Refused;
@@ -225,6 +267,16 @@ async fn carry_out(shared: &Shared, act: Act) -> Result<Done, OperatorError> {
         Act::SetGait { gait } => {
             shared.router.call(LoopRequest::SetGait { gait }).await?;
             Ok(Done::Gait { gait })
+        }
+        Act::StopGait { within_s } => {
+            shared
+                .router
+                .call(LoopRequest::StopGait { within_s })
+                .await?;
+            Ok(Done::Motion {
+                stopping: true,
+                within_s,
+            })
         }
         other => unreachable!("the runner makes no {}", other.method()),
     }

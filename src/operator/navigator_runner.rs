@@ -30,7 +30,18 @@ pub struct NavigatorRunner {
     installed: [Option<&'static str>; KINDS],
     /// A heading to set once its gait's controller drives.
     pending: Option<(GaitKind, f64)>,
+    /// When it last asked to report its state, loop s.
+    reported_s: f64,
+    /// It has reached the goal and asked the gait to stop.
+    stopped_at_goal: bool,
 }
+
+/// While steering by position, the state (distance, cross-track) is reported this often
+/// even without a decision, s.
+const REPORT_EVERY_S: f64 = 1.0;
+
+/// On arrival the gait comes to rest within this, s.
+pub const ARRIVAL_STOP_S: f64 = 2.0;
 
 impl NavigatorRunner {
     /// Runs `nav`; `installed(gait, name)` says whether the controller named `name`
@@ -51,7 +62,14 @@ impl NavigatorRunner {
             nav,
             installed: known,
             pending: None,
+            reported_s: f64::NEG_INFINITY,
+            stopped_at_goal: false,
         }
+    }
+
+    /// It has reached the goal: the gait was asked to stop, and navigation ends.
+    pub fn arrived(&self) -> bool {
+        self.stopped_at_goal
     }
 
     pub fn navigator(&self) -> &Navigator {
@@ -63,9 +81,30 @@ impl NavigatorRunner {
         NavigatorState::of(&self.nav, active, None)
     }
 
-    /// One step: the acts to carry out, in order, into `out`; true when the navigator
-    /// decided (its state changed: report it).
+    /// One step: the acts to carry out, in order, into `out`; true when its state is to
+    /// be reported (a decision, steering by position begun or ended, or a second gone by
+    /// while steering by position).
     pub fn step(&mut self, view: &RunnerView, out: &mut Vec<Act>) -> bool {
+        let by_position = self.nav.course().is_some();
+        let decided = self.decide(view, out);
+        if self.nav.arrived() && !self.stopped_at_goal {
+            self.stopped_at_goal = true;
+            self.pending = None;
+            out.push(Act::StopGait {
+                within_s: ARRIVAL_STOP_S,
+            });
+            return true;
+        }
+        let report = decided
+            || by_position != self.nav.course().is_some()
+            || (self.nav.course().is_some() && view.t_s - self.reported_s >= REPORT_EVERY_S);
+        if report {
+            self.reported_s = view.t_s;
+        }
+        report
+    }
+
+    fn decide(&mut self, view: &RunnerView, out: &mut Vec<Act>) -> bool {
         if let Some((gait, h)) = self.pending
             && view.driving == Some(gait)
         {

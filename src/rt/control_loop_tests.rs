@@ -272,6 +272,10 @@ fn the_navigator_s_report_and_a_new_heading_do_not_restart_the_progress_monitor(
         why: Some(Why::Start),
         switches: 0,
         stopped: None,
+        goal_m: Some([2.0, 0.5]),
+        by_position: true,
+        distance_m: 1.5,
+        cross_track_m: 0.1,
     };
     assert_eq!(
         request(&mut h, 1, LoopRequest::Navigation { state }),

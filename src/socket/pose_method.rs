@@ -9,7 +9,8 @@ use super::api::{OperatorError, Params};
 use crate::estimation::external_pose::ExternalFix;
 use crate::operator::Operator;
 
-fn numbers<const N: usize>(
+/// `N` numbers from a JSON array (absent: `None`).
+pub(crate) fn numbers<const N: usize>(
     name: &str,
     v: Option<Value>,
 ) -> Result<Option<[f64; N]>, OperatorError> {

@@ -9,7 +9,7 @@ use super::controller_views::{self, info_view, telemetry_view, with_continuity};
 use super::methods::METHODS;
 use crate::controller_interface::Selection;
 use crate::gait::{BLEND_TIME_RANGE_S, GaitKind, ParamPatch};
-use crate::navigation::navigator::NavigatorConfig;
+use crate::navigation::navigator::{NavigatorConfig, Target};
 use crate::operator::{Act, CALIBRATION_MAX_S, Calibrated, Calibration, Done, Operator};
 use crate::rt::gait_clock::{DEFAULT_STOP_S, STOP_TIME_RANGE_S};
 
@@ -133,9 +133,14 @@ pub fn act_params(act: &Act) -> Value {
             Some(h) => json!({ "gait": gait, "heading_rad": h }),
             None => json!({ "gait": gait, "here": true }),
         },
-        Act::Navigate { travel_rad, config } => {
-            json!({ "heading_rad": travel_rad, "config": config })
-        }
+        Act::Navigate {
+            target: Target::Heading(h),
+            config,
+        } => json!({ "heading_rad": h, "config": config }),
+        Act::Navigate {
+            target: Target::Goal(g),
+            config,
+        } => json!({ "goal_m": g, "config": config }),
         Act::NavigateOff => json!({ "off": true }),
         Act::TakeOver | Act::Hold | Act::Limp | Act::EStop | Act::Arm => json!({}),
     }
@@ -201,8 +206,12 @@ pub fn answer_json(op: &Operator, done: Done) -> Value {
             "controller": controller,
             "heading_rad": heading_rad.map_or(json!("here"), |h| json!(h)),
         }),
-        Done::Navigating { travel_rad, config } => {
-            json!({ "navigating": true, "travel_rad": travel_rad, "config": config })
+        Done::Navigating {
+            travel_rad,
+            goal_m,
+            config,
+        } => {
+            json!({ "navigating": true, "travel_rad": travel_rad, "goal_m": goal_m, "config": config })
         }
         Done::NavigationOff { was_navigating } => {
             json!({ "navigating": false, "was_navigating": was_navigating })
@@ -283,42 +292,54 @@ fn params_set(op: &Operator, mut p: Params) -> Result<Act, OperatorError> {
     })
 }
 
-/// `navigate`: `{"heading_rad": h, "config": {..}}` starts (or restarts towards a new
-/// direction), `{"off": true}` stops.
+/// `navigate`: `{"heading_rad": h, "config": {..}}` (a direction, the pose estimate's
+/// world) or `{"goal_m": [x, y], ..}` (a goal, the position source's world) starts, or
+/// restarts towards a new target; `{"off": true}` stops.
 fn navigate(mut p: Params) -> Result<Act, OperatorError> {
     let lim = 2.0 * std::f64::consts::PI;
     let heading = p.take_f64_in("heading_rad", -lim, lim)?;
+    let goal = super::pose_method::numbers::<2>("goal_m", p.take_json("goal_m")?)?;
     let off = take_flag(&mut p, "off")?;
     let config = p.take_json("config")?;
-    p.finish(&["heading_rad", "off", "config"])?;
-    match (heading, off) {
-        (None, true) if config.is_none() => Ok(Act::NavigateOff),
-        (Some(h), false) => {
-            let config: NavigatorConfig = match config {
-                None => NavigatorConfig::DEFAULT,
-                // serde would read a struct from an array too (`[]`: every default).
-                Some(v) if !v.is_object() => {
-                    return Err(OperatorError::invalid_params(
-                        "config: an object of the navigator's settings, e.g. {\"slither_max_s\": 60}",
-                    ));
-                }
-                Some(v) => serde_json::from_value(v)
-                    .map_err(|e| OperatorError::invalid_params(format!("config: {e}")))?,
-            };
-            config
-                .check()
-                .map_err(|e| OperatorError::invalid_params(format!("config: {e}")))?;
-            Ok(Act::Navigate {
-                travel_rad: h,
-                config,
-            })
+    p.finish(&["heading_rad", "goal_m", "off", "config"])?;
+    let target = match (heading, goal, off) {
+        (None, None, true) if config.is_none() => return Ok(Act::NavigateOff),
+        (Some(h), None, false) => Target::Heading(h),
+        (None, Some(g), false) => {
+            if g.iter().any(|v| v.abs() > GOAL_LIMIT_M) {
+                return Err(OperatorError::invalid_params(format!(
+                    "`goal_m` {g:?}: each coordinate within ±{GOAL_LIMIT_M} m"
+                )));
+            }
+            Target::Goal(g)
         }
-        _ => Err(OperatorError::invalid_params(
-            "give `heading_rad` (the direction of travel, rad, in the pose estimate's world; \
-             optionally `config`) or `off: true`",
-        )),
-    }
+        _ => {
+            return Err(OperatorError::invalid_params(
+                "give one of `heading_rad` (the direction of travel, rad, in the pose \
+                 estimate's world) or `goal_m` ([x, y], m, in the position source's world), \
+                 optionally with `config`; or `off: true`",
+            ));
+        }
+    };
+    let config: NavigatorConfig = match config {
+        None => NavigatorConfig::DEFAULT,
+        // serde would read a struct from an array too (`[]`: every default).
+        Some(v) if !v.is_object() => {
+            return Err(OperatorError::invalid_params(
+                "config: an object of the navigator's settings, e.g. {\"slither_max_s\": 60}",
+            ));
+        }
+        Some(v) => serde_json::from_value(v)
+            .map_err(|e| OperatorError::invalid_params(format!("config: {e}")))?,
+    };
+    config
+        .check()
+        .map_err(|e| OperatorError::invalid_params(format!("config: {e}")))?;
+    Ok(Act::Navigate { target, config })
 }
+
+/// A goal further than this from the source's origin is refused, m.
+const GOAL_LIMIT_M: f64 = 10_000.0;
 
 /// An optional boolean param (absent: false).
 fn take_flag(p: &mut Params, name: &str) -> Result<bool, OperatorError> {

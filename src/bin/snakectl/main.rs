@@ -65,10 +65,13 @@ enum Cmd {
         #[command(subcommand)]
         cmd: ControllerCmd,
     },
-    /// Go that way on its own: the navigator picks and changes gaits and controllers
-    /// (docs/navigation.md). HEADING: the direction of travel, rad, in the pose
-    /// estimate's world; `off` stops it. Any command that drives the robot stops it too.
+    /// Go that way or there on its own: the navigator picks and changes gaits and
+    /// controllers (docs/navigation.md). HEADING: the direction of travel, rad, in the
+    /// pose estimate's world; or X,Y: a goal, m, in the position source's world (needs
+    /// fixes from `pose.external` or ROS 2); `off` stops it. Any command that drives the
+    /// robot stops it too.
     Navigate {
+        #[arg(allow_hyphen_values = true, value_name = "HEADING|X,Y|off")]
         heading: String,
         /// The navigator's settings as JSON, e.g. '{"slither_max_s": 60}'.
         #[arg(long)]
@@ -323,13 +326,18 @@ fn navigate(heading: &str, config: &Option<String>) -> Result<Value, Failure> {
         }
         return Ok(json!({ "off": true }));
     }
-    let h: f64 = heading
-        .trim()
-        .parse()
-        .ok()
-        .filter(|h: &f64| h.is_finite())
-        .ok_or_else(|| Failure::Usage(format!("heading {heading:?}: radians or `off`")))?;
-    let mut p = json!({ "heading_rad": h });
+    let number = |t: &str| t.trim().parse::<f64>().ok().filter(|v| v.is_finite());
+    let bad = || {
+        Failure::Usage(format!(
+            "{heading:?}: a heading (rad), a goal X,Y (m) or `off`"
+        ))
+    };
+    let mut p = match heading.split_once(',') {
+        Some((x, y)) => {
+            json!({ "goal_m": [number(x).ok_or_else(bad)?, number(y).ok_or_else(bad)?] })
+        }
+        None => json!({ "heading_rad": number(heading).ok_or_else(bad)? }),
+    };
     if let Some(c) = config {
         p["config"] = serde_json::from_str(c)
             .map_err(|e| Failure::Usage(format!("--config is not valid JSON: {e}")))?;
@@ -449,8 +457,14 @@ fn print_human(cmd: &Cmd, r: &Value) {
             r["heading_rad"]
         ),
         Cmd::Controller { .. } => controller::print_installed(r),
-        Cmd::Navigate { .. } => match r["navigating"].as_bool() {
-            Some(true) => println!("navigating towards {} rad", num(&r["travel_rad"], 3)),
+        Cmd::Navigate { .. } => match (r["navigating"].as_bool(), r["goal_m"].as_array()) {
+            (Some(true), Some(g)) if g.len() == 2 => println!(
+                "navigating to ({}, {}) m, by position; travelling {} rad now",
+                num(&g[0], 3),
+                num(&g[1], 3),
+                num(&r["travel_rad"], 3)
+            ),
+            (Some(true), _) => println!("navigating towards {} rad", num(&r["travel_rad"], 3)),
             _ => println!("navigation off"),
         },
         Cmd::Stats => print_stats(r),

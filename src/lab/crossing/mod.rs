@@ -127,6 +127,10 @@ pub struct CrossingArgs {
 /// switching directional compliance, anti-compliant sidewinding.
 pub const CONTROLLERS: &[&str] = &["open_loop", "a_ws_omega", "dc_switching", "ac_sfc"];
 
+/// With a position source the navigator steers to the far edge's middle, this far
+/// beyond it, m (the trial ends when the front half crosses the edge).
+pub const GOAL_BEYOND_M: f64 = 1.0;
+
 /// What ends a trial and what it was aimed at.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct CrossingGoal {
@@ -250,11 +254,14 @@ impl Experiment for Crossing {
         Ok((world, CrossingGoal { board, kind }))
     }
 
-    fn trial_config(&self, base: &TrialConfig, _goal: &CrossingGoal) -> TrialConfig {
+    fn trial_config(&self, base: &TrialConfig, goal: &CrossingGoal) -> TrialConfig {
+        let r = &goal.board.region;
         TrialConfig {
             aim: Some(Aim {
                 travel_rad: 0.0,
                 sidewind_drift_rad: self.sidewind_drift_rad,
+                // The far edge's middle, beyond it: the most room on either side.
+                goal_m: Some([r.x_m[1] + GOAL_BEYOND_M, 0.5 * (r.y_m[0] + r.y_m[1])]),
             }),
             ..*base
         }

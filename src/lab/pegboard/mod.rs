@@ -136,6 +136,7 @@ impl Experiment for Pegboard {
             aim: self.aim.then(|| Aim {
                 travel_rad: f[1].atan2(f[0]),
                 sidewind_drift_rad: 0.0,
+                goal_m: None,
             }),
             ..*base
         }

@@ -1,4 +1,5 @@
 mod cli;
+mod navigate_goal;
 mod operate;
 mod pose;
 mod record;

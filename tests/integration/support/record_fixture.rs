@@ -84,6 +84,10 @@ pub fn cycle(k: u64, controller_id: u64, links: bool) -> RecordItem {
             why: Some(snaked::navigation::navigator::Why::Start),
             switches: 0,
             stopped: None,
+            goal_m: Some([2.0, 0.5]),
+            by_position: true,
+            distance_m: 1.5,
+            cross_track_m: 0.1,
         };
     }
     if r.engaged {
