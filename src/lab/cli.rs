@@ -64,6 +64,10 @@ pub struct CommonArgs {
     /// No progress bar, no list of written files.
     #[arg(long)]
     pub quiet: bool,
+    /// Plot every trial (into trials/LAYOUT-sSTART-rREPEAT/ of the output), not only
+    /// each controller's first.
+    #[arg(long)]
+    pub plot_all: bool,
     /// The emulated servos' position loop: `profiled` (the default) or `speed-clamped`
     /// (the earlier loop, to reproduce results measured with it: docs/emulator.md, "The
     /// servo loop").
@@ -229,6 +233,7 @@ impl<E: Experiment> Lab for Plugin<E> {
             threads,
             progress: !common.quiet,
             shard: common.shard,
+            plot_all: common.plot_all,
         };
         let results = run_share(&module, &setup, opts)?;
         let context = SummaryContext {

@@ -193,13 +193,34 @@ pub fn write_report<E: Experiment>(
     write_text(&csv, &results_csv(module, results))?;
     written.push(csv);
     written.extend(module.run_plots(dir, results)?);
+    // The summary lists the run's plots and each controller's first trial's.
+    let mut shown: Vec<PathBuf> = written[1..].to_vec();
+    let mut seen = std::collections::BTreeSet::new();
     for r in results {
-        if let Some((world, goal, rec)) = &r.plotted {
-            written.extend(module.trial_plots(dir, r, (world, goal, rec))?);
+        let Some((world, goal, rec)) = &r.plotted else {
+            continue;
+        };
+        if seen.insert(r.controller.as_str()) {
+            let plots = module.trial_plots(dir, r, (world, goal, rec))?;
+            shown.extend(plots.iter().cloned());
+            written.extend(plots);
+        } else {
+            // `--plot-all`: the other trials' plots, a folder each.
+            let sub = dir.join("trials").join(format!(
+                "{}-s{}-r{}",
+                crate::lab::file_stem(&r.layout),
+                r.start,
+                r.repeat
+            ));
+            std::fs::create_dir_all(&sub).map_err(|source| LabError::Io {
+                path: sub.clone(),
+                source,
+            })?;
+            written.extend(module.trial_plots(&sub, r, (world, goal, rec))?);
         }
     }
     let mut ctx = ctx.clone();
-    ctx.plots = written[1..]
+    ctx.plots = shown
         .iter()
         .filter_map(|p| p.file_name().map(|n| n.to_string_lossy().into_owned()))
         .collect();

@@ -60,6 +60,8 @@ pub struct RunOptions {
     pub progress: bool,
     /// Run only this share of the plan.
     pub shard: Option<Shard>,
+    /// Keep every trial for its plots (`--plot-all`), not only each controller's first.
+    pub plot_all: bool,
 }
 
 /// Checks the experiment and generates every world of it (fails before any trial runs).
@@ -238,7 +240,7 @@ pub fn run_share<E: Experiment>(
             recording,
         )?;
         let metrics = module.metrics(&w.goal, &rec);
-        let first = w.layout == 0 && w.start == 0 && w.repeat == 0;
+        let first = opts.plot_all || (w.layout == 0 && w.start == 0 && w.repeat == 0);
         Ok(TrialResult {
             controller: controller.label.clone(),
             layout: exp.layouts[w.layout].name.clone(),
@@ -388,6 +390,7 @@ mod tests {
                 threads: 1,
                 progress: false,
                 shard: None,
+                plot_all: false,
             },
         )
         .unwrap();
@@ -398,6 +401,7 @@ mod tests {
                 threads: 2,
                 progress: false,
                 shard: None,
+                plot_all: false,
             },
         )
         .unwrap();

@@ -397,8 +397,12 @@ pub fn run_trial(
                 .map_or(0.0, |a| a.travel_in_estimate(world.start.yaw_rad));
             let layout = BodyLayout::alternating(config.modules, Plane::Lateral, MODULE_LENGTH_M);
             let first = crate::navigation::navigator::Choice::Sidewind;
-            // The controllers' signals change with its choices: only its choice is kept.
+            // The controllers' signals change with its choices: only its choice is kept,
+            // and with a source the position's error and the cross-track error.
             signal_names = vec![super::trial_navigator::CHOICE_SIGNAL.into()];
+            if source.is_some() {
+                signal_names.extend(super::trial_navigator::POSITION_SIGNALS.map(String::from));
+            }
             // By position to the aim's goal when the trial has a source.
             let goal_m = config
                 .aim
@@ -542,8 +546,11 @@ fn record(lp: &ControlLoop, rec: &mut TrialRecord, nav: Option<&TrialNavigator>)
     });
     if nav.is_some() {
         // As the loop reports it (the runner tells the loop at each decision).
-        if let Some(series) = rec.signals.first_mut() {
-            series.push(lp.navigator().choice_code());
+        let n = lp.navigator();
+        let error_mm = 1e3 * position_error(&b.world, centre(plant));
+        let values = [n.choice_code(), error_mm, n.cross_track_m];
+        for (series, v) in rec.signals.iter_mut().zip(values) {
+            series.push(v);
         }
         return;
     }

@@ -24,6 +24,11 @@ use crate::safety::failsafe::Mode;
 /// ([`crate::navigation::state::NavigatorState::choice_code`], 0 none).
 pub const CHOICE_SIGNAL: &str = "navigator_choice";
 
+/// With a pose source, also: the fused position's error against the truth (NaN while
+/// not valid), and the cross-track error as the navigator reports it (NaN while not
+/// steering by position).
+pub const POSITION_SIGNALS: [&str; 2] = ["position_error_mm", "cross_track_m"];
+
 /// Tickets of the navigator's requests (apart from the trial's own).
 const TICKETS: u64 = 3 << 32;
 

@@ -12,6 +12,8 @@
 //!   `estop`, `take_over`, `stop` / `resume` (the gait's controlled stop), `calibrate`
 //!   (the running gait's controller), `gait/<gait>` (switch to it);
 //!   `std_srvs/SetBool` `navigate` (true: along the heading now; false: off).
+//! - `goal_pose` (`geometry_msgs/PoseStamped`, rviz2's "2D Goal Pose"): navigate to its
+//!   x, y in the position source's world (`navigate` with `goal_m`).
 //! - the parameters (`super::parameters`).
 
 use std::sync::Arc;
@@ -23,7 +25,7 @@ use serde_json::{Value, json};
 use tokio::task::JoinSet;
 
 use super::Ros2Options;
-use super::msg::{Empty, ServiceAnswer, SetBoolRequest, Twist};
+use super::msg::{Empty, PoseStamped, ServiceAnswer, SetBoolRequest, Twist};
 use super::node::{Ros2Error, err, reliable_qos, sensor_qos, subscription, unix_ns};
 use super::parameters::ParameterServers;
 use crate::gait::GaitKind;
@@ -66,6 +68,7 @@ type Trigger = Server<Empty, ServiceAnswer>;
 /// The operator's edges, made with the node, started once the operator API is bound.
 pub(super) struct Edges {
     cmd_vel: Subscription<Twist>,
+    goal: Subscription<PoseStamped>,
     triggers: Vec<(Trigger, &'static str, Value)>,
     navigate: Server<SetBoolRequest, ServiceAnswer>,
     parameters: ParameterServers,
@@ -108,6 +111,13 @@ impl Edges {
             ("geometry_msgs", "Twist"),
             &sensor_qos(),
         )?;
+        let goal = subscription(
+            node,
+            ns,
+            "goal_pose",
+            ("geometry_msgs", "PoseStamped"),
+            &sensor_qos(),
+        )?;
         let triggers = triggers()
             .into_iter()
             .map(|(name, method, params)| {
@@ -116,6 +126,7 @@ impl Edges {
             .collect::<Result<_, _>>()?;
         Ok(Self {
             cmd_vel,
+            goal,
             triggers,
             navigate: server(node, private, "navigate", ("std_srvs", "SetBool"))?,
             parameters: ParameterServers::create(node, private)?,
@@ -140,6 +151,7 @@ impl Edges {
             tasks.spawn(serve_trigger(server, op.clone(), method, params));
         }
         tasks.spawn(serve_navigate(self.navigate, op.clone()));
+        tasks.spawn(read_goals(self.goal, op.clone()));
         self.parameters.start(op.clone(), tasks);
         tasks.spawn(drive(self.cmd_vel, op));
     }
@@ -202,6 +214,25 @@ async fn serve_navigate(server: Server<SetBoolRequest, ServiceAnswer>, op: Arc<O
         }
     })
     .await;
+}
+
+/// `goal_pose`: each goal starts navigating to its x, y (the position source's world;
+/// its frame is logged, not checked: the daemon knows no frame but the source's).
+async fn read_goals(sub: Subscription<PoseStamped>, op: Arc<Operating>) {
+    loop {
+        let Ok((m, _)) = sub.async_take().await else {
+            continue;
+        };
+        let (x, y) = (m.pose.position.x, m.pose.position.y);
+        let params = json!({ "goal_m": [x, y] });
+        match op.call_as(WHO, "navigate", params).await {
+            Ok(_) => tracing::info!(
+                "navigating to the goal ({x:.3}, {y:.3}) from goal_pose (frame {:?})",
+                m.header.frame_id
+            ),
+            Err(e) => tracing::warn!("goal_pose ({x}, {y}): {e}"),
+        }
+    }
 }
 
 /// `/cmd_vel`'s client: every ROS 2 publisher is [`WHO`]; a refusal is logged, at most

@@ -232,6 +232,15 @@ fn rclpy_drives_and_tunes_the_robot_through_the_operator_api() {
     assert!(r["held_after_s"].is_number(), "{r}");
     assert_eq!(r["arm"]["success"], true, "{r}");
     assert!(r["armed_after_s"].is_number(), "{r}");
+    // goal_pose: navigating to it by the poses on external_pose.
+    assert!(r["goal_after_s"].is_number(), "steering by position: {r}");
+    let (goal, sent) = (&r["goal_state"]["goal_m"], &r["goal_sent_m"]);
+    for k in 0..2 {
+        let (g, s) = (goal[k].as_f64().unwrap(), sent[k].as_f64().unwrap());
+        assert!((g - s).abs() < 1e-9, "the goal as sent: {r}");
+    }
+    let d = r["goal_state"]["distance_m"].as_f64().unwrap();
+    assert!((3.0..5.0).contains(&d), "about 4 m to go: {r}");
     assert_eq!(r["navigate_off"], true, "{r}");
     // /cmd_vel: linear.x 0.8 is 0.8 rad/s of temporal frequency (the station's mapping).
     assert!(

@@ -1,7 +1,8 @@
 """Runs in a network namespace with rclpy (scripts/ros2-peers.sh run): starts snaked
 (argv[1], config argv[2], `[ros2] operate = true`, node `snaked`) and drives and tunes it
 as a ROS 2 system would: the parameter services (list, get, set, refusals), Trigger
-services, /cmd_vel and its dead-man, watching /snaked/state. Prints one JSON line."""
+services, a goal on /goal_pose steered to by poses on /external_pose, /cmd_vel and its
+dead-man, watching /snaked/state. Prints one JSON line."""
 import json
 import os
 import signal
@@ -10,11 +11,12 @@ import sys
 import time
 
 import rclpy
-from geometry_msgs.msg import Twist
+from geometry_msgs.msg import PoseStamped, Twist
+from nav_msgs.msg import Odometry
 from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue
 from rcl_interfaces.srv import GetParameters, ListParameters, SetParameters
 from rclpy.node import Node
-from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
 from std_msgs.msg import String
 from std_srvs.srv import SetBool, Trigger
 
@@ -96,6 +98,44 @@ def set_param(name, value):
     return None if r is None else {"ok": r.results[0].successful, "reason": r.results[0].reason}
 
 
+odom = {}
+node.create_subscription(Odometry, "/odom", lambda m: odom.update(pose=m.pose.pose),
+                         qos_profile_sensor_data)
+pose_pub = node.create_publisher(PoseStamped, "/external_pose", 10)
+goal_pub = node.create_publisher(PoseStamped, "/goal_pose", 10)
+SHIFT = (2.0, 1.0)
+
+
+def stamped(x, y, orientation=None):
+    m = PoseStamped()
+    m.header.stamp = node.get_clock().now().to_msg()
+    m.header.frame_id = "mocap"
+    m.pose.position.x, m.pose.position.y = x, y
+    if orientation is not None:
+        m.pose.orientation = orientation
+    return m
+
+
+def feed_until(cond, timeout, goal=None):
+    """A source following /odom (the estimate's world shifted by SHIFT) at about 50 Hz
+    until cond(); goal (x, y from where the body is, in the source's world) published
+    once the body's first pose has been sent a second."""
+    t0, sent, here = time.monotonic(), 0, None
+    while time.monotonic() - t0 < timeout:
+        spin_until(lambda: False, 0.02)
+        if "pose" in odom:
+            p = odom["pose"]
+            here = (p.position.x + SHIFT[0], p.position.y + SHIFT[1])
+            pose_pub.publish(stamped(*here, p.orientation))
+            sent += 1
+        if goal is not None and sent == 50:
+            goal_pub.publish(stamped(here[0] + goal[0], here[1] + goal[1]))
+            out["goal_sent_m"] = [here[0] + goal[0], here[1] + goal[1]]
+        if cond():
+            return round(time.monotonic() - t0, 3)
+    return None
+
+
 def drive(forward, seconds):
     t0 = time.monotonic()
     while time.monotonic() - t0 < seconds:
@@ -124,6 +164,10 @@ try:
     out["held_after_s"] = spin_until(lambda: state.get("mode") == "hold", 10)
     out["arm"] = trigger("arm")
     out["armed_after_s"] = spin_until(lambda: state.get("mode") == "running", 10)
+    # A goal 4 m ahead in x of the source's world: steered to by position.
+    by_position = lambda: (state.get("navigator") or {}).get("by_position") is True
+    out["goal_after_s"] = feed_until(by_position, 30, goal=(4.0, 0.0))
+    out["goal_state"] = dict(state.get("navigator") or {})
     out["navigate_off"] = call(SetBool, "/snaked/navigate", SetBool.Request(data=False)).success
     # Teleop: the gait's speed follows linear.x (1 rad/s per unit), then the dead-man.
     drive(0.8, 1.5)
