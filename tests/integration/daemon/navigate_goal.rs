@@ -4,21 +4,15 @@
 //! falls back to the heading only and says so; at the goal it stops the gait.
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::time::{Duration, SystemTime, UNIX_EPOCH};
+use std::time::Duration;
 
 use serde_json::{Value, json};
 
+use super::pose::now_s;
 use crate::support::rig::{Client, Proc, exe};
 
 /// The source's world is the estimate's shifted by this, m.
 const SHIFT: [f64; 2] = [2.0, 1.0];
-
-fn now_s() -> f64 {
-    SystemTime::now()
-        .duration_since(UNIX_EPOCH)
-        .unwrap()
-        .as_secs_f64()
-}
 
 /// Where the body is in the source's world, from its own odometry (None: not valid).
 fn source_position(s: &Value) -> Option<[f64; 2]> {

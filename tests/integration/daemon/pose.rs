@@ -8,7 +8,8 @@ use serde_json::{Value, json};
 
 use crate::support::rig::{Client, Proc, exe};
 
-fn now_s() -> f64 {
+/// Wall-clock time, s since the Unix epoch (a source's stamps).
+pub(super) fn now_s() -> f64 {
     SystemTime::now()
         .duration_since(UNIX_EPOCH)
         .unwrap()
