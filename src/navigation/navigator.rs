@@ -94,8 +94,11 @@ pub enum Why {
     OffCourse,
     /// Steering by position: the same choice re-aimed at the course to the goal.
     Steer,
-    /// Steering by position: no nearer the goal over the progress window.
+    /// Steering by position: no progress over the progress window (sidewinding: no
+    /// net motion; slithering: no nearer the goal).
     NoProgress,
+    /// Steering by position: sidewinding off the line, lying to travel across it.
+    OffLine,
 }
 
 /// The navigator's settings.
@@ -350,8 +353,22 @@ impl Navigator {
             None => sidewind(Why::Start),
             Some((now, _)) => {
                 let age = t_s - self.since_s;
-                let no_progress = self.course.is_some_and(|k| k.no_progress)
-                    && matches!(now, Choice::Sidewind | Choice::Slither);
+                // By position: sidewinding that does not move, slithering that comes no
+                // nearer (it steers quickly, so moving elsewhere is failing: on open
+                // ground with isotropic friction it drifts back).
+                let no_progress = self.course.is_some_and(|k| match now {
+                    Choice::Sidewind => k.no_progress,
+                    Choice::Slither => k.no_nearer,
+                    _ => false,
+                });
+                // By position: off the line further than sidewinding's slow turn makes
+                // up for, lying so that it travels across the line.
+                let off_line = self.course.is_some_and(|k| {
+                    let s = c.steering;
+                    s.off_line_m > 0.0
+                        && k.cross_track_m.abs() > s.off_line_m
+                        && axis_error(view.heading_rad, across) > s.authority_rad[1]
+                });
                 let why_stuck = match view.progress.stuck {
                     true => Why::Stuck,
                     false => Why::NoProgress,
@@ -364,6 +381,9 @@ impl Navigator {
                             && axis_error(view.heading_rad, across) > c.off_course_rad =>
                     {
                         (Choice::Turn, Why::OffCourse)
+                    }
+                    Choice::Sidewind if age >= c.settle_s && off_line => {
+                        (Choice::Turn, Why::OffLine)
                     }
                     Choice::BackOff if age >= c.back_off_s && !self.slither_fails => {
                         (Choice::Slither, Why::BackedOff)

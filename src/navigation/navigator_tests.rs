@@ -227,3 +227,59 @@ fn without_backing_off_a_stuck_sidewinding_goes_on() {
     assert_eq!((d.choice, d.why), (Choice::Sidewind, Why::Start));
     assert_eq!(n.step(100.0, &v), None);
 }
+
+/// By position: sidewinding far off the line while lying to travel across it turns in
+/// place first; slithering that comes no nearer gives way to sidewinding, for good.
+#[test]
+fn by_position_it_turns_when_off_the_line_and_drops_a_slithering_that_comes_no_nearer() {
+    let c = NavigatorConfig::DEFAULT;
+    let at = |x: f64, y: f64| PositionView {
+        position_m: [x, y],
+        yaw_offset_rad: 0.0,
+    };
+    // Lying along the line (+x): sidewinding would travel across it.
+    let mut n = Navigator::to_goal(c, [3.0, 0.0], 0.0);
+    let mut v = view(false);
+    v.heading_rad = 0.0;
+    v.position = Some(at(0.0, 0.0));
+    let d = n.step(0.0, &v).unwrap();
+    assert_eq!((d.choice, d.why), (Choice::Slither, Why::Start));
+    // Slithering drifts back: no nearer over the window, so sidewinding, and no more
+    // slithering.
+    let mut decided = None;
+    for k in 1..40 {
+        let t = k as f64;
+        v.position = Some(at(-0.01 * t, 0.0));
+        if let Some(d) = n.step(t, &v)
+            && d.why != Why::Steer
+        {
+            decided = Some((t, d));
+            break;
+        }
+    }
+    let (t, d) = decided.expect("slithering given up");
+    assert_eq!((d.choice, d.why), (Choice::Sidewind, Why::NoProgress));
+    assert!(n.slither_fails());
+    // Sidewinding across the line, 0.6 m off it after the settling time: turn.
+    let mut turned = None;
+    for k in 1..40 {
+        let s = t + k as f64;
+        v.position = Some(at(-0.4, 0.05 * k as f64));
+        if let Some(d) = n.step(s, &v)
+            && d.why != Why::Steer
+        {
+            turned = Some(d);
+            break;
+        }
+    }
+    let d = turned.expect("turned");
+    assert_eq!((d.choice, d.why), (Choice::Turn, Why::OffLine));
+    let off = NavigatorConfig {
+        steering: SteeringConfig {
+            off_line_m: 0.0,
+            ..SteeringConfig::DEFAULT
+        },
+        ..c
+    };
+    assert!(off.check().is_ok());
+}

@@ -40,6 +40,9 @@ pub struct SteeringConfig {
     /// Sidewinding: the whole cross-track correction while the body's axis lies within
     /// the first of where it must lie to travel the line, none beyond the second, rad.
     pub authority_rad: [f64; 2],
+    /// Sidewinding further than this off the line while it lies to travel across it
+    /// (its axis beyond `authority_rad[1]`): turn the body in place first, m (0: never).
+    pub off_line_m: f64,
     /// Arrived within this of the goal (or past it along the line), m.
     pub arrive_m: f64,
     /// No progress: moved under `progress_min_m` (net, any way) over this long, s (0:
@@ -56,6 +59,7 @@ impl SteeringConfig {
         reaim_s: 1.0,
         reaim_above_rad: 0.05,
         authority_rad: [0.5, 1.0],
+        off_line_m: 0.5,
         arrive_m: 0.25,
         progress_window_s: 20.0,
         progress_min_m: 0.10,
@@ -80,6 +84,7 @@ impl SteeringConfig {
             full + 0.01,
             std::f64::consts::FRAC_PI_2 + 0.01,
         )?;
+        check_range("off_line_m", self.off_line_m, 0.0, 100.0)?;
         check_range("arrive_m", self.arrive_m, 0.01, 100.0)?;
         check_range(
             "progress_window_s",
@@ -116,6 +121,8 @@ pub struct Course {
     pub arrived: bool,
     /// Moved less than `progress_min_m` over the last `progress_window_s`.
     pub no_progress: bool,
+    /// Came less than `progress_min_m` nearer the goal over it.
+    pub no_nearer: bool,
 }
 
 /// One position a second: a window of up to this many seconds.
@@ -131,8 +138,9 @@ pub struct GoalSteering {
     /// y_i.
     integral: f64,
     last_t: Option<f64>,
-    /// Positions, one a second, the newest at `head`.
+    /// Positions and distances to the goal, one a second, the newest at `head`.
     positions: [[f64; 2]; PROGRESS_SLOTS],
+    distances: [f64; PROGRESS_SLOTS],
     head: usize,
     filled: usize,
     next_sample_s: f64,
@@ -147,6 +155,7 @@ impl GoalSteering {
             integral: 0.0,
             last_t: None,
             positions: [[f64::NAN; 2]; PROGRESS_SLOTS],
+            distances: [f64::NAN; PROGRESS_SLOTS],
             head: 0,
             filled: 0,
             next_sample_s: f64::NEG_INFINITY,
@@ -227,35 +236,42 @@ impl GoalSteering {
         let arrived = distance <= c.arrive_m || along >= length;
         // Past the line's end the goal itself is aimed at.
         let travel = crate::num::wrap_pi(line - aim_off);
-        let no_progress = self.progress(t_s, p);
+        let (no_progress, no_nearer) = self.progress(t_s, p, distance);
         Course {
             travel_rad: travel,
             cross_track_m: e,
             distance_m: distance,
             arrived,
             no_progress,
+            no_nearer,
         }
     }
 
-    /// Records `p` once a second; whether it moved less than `progress_min_m` over the
-    /// whole window.
-    fn progress(&mut self, t_s: f64, p: [f64; 2]) -> bool {
+    /// Records `p` and `distance` once a second; whether, over the whole window, it
+    /// moved less than `progress_min_m`, and whether it came less than that nearer.
+    fn progress(&mut self, t_s: f64, p: [f64; 2], distance: f64) -> (bool, bool) {
         let c = self.config;
         if c.progress_window_s <= 0.0 {
-            return false;
+            return (false, false);
         }
         if t_s >= self.next_sample_s {
             self.next_sample_s = t_s + 1.0;
             self.head = (self.head + 1) % PROGRESS_SLOTS;
             self.positions[self.head] = p;
+            self.distances[self.head] = distance;
             self.filled = (self.filled + 1).min(PROGRESS_SLOTS);
         }
         let back = c.progress_window_s.round() as usize;
         if back == 0 || self.filled <= back {
-            return false;
+            return (false, false);
         }
-        let then = self.positions[(self.head + PROGRESS_SLOTS - back) % PROGRESS_SLOTS];
-        (p[0] - then[0]).hypot(p[1] - then[1]) < c.progress_min_m
+        let k = (self.head + PROGRESS_SLOTS - back) % PROGRESS_SLOTS;
+        let then = self.positions[k];
+        let moved = (p[0] - then[0]).hypot(p[1] - then[1]);
+        (
+            moved < c.progress_min_m,
+            self.distances[k] - distance < c.progress_min_m,
+        )
     }
 }
 
@@ -324,6 +340,8 @@ mod tests {
             let t = k as f64 * 0.05;
             let c = s.update(t, [0.0, 0.03 * t], 1.0);
             assert!(!c.no_progress, "{t}");
+            // ...but no nearer the goal.
+            assert_eq!(c.no_nearer, t > 4.99, "{t}");
         }
         // Standing: after the window, no progress.
         let mut seen = None;

@@ -93,7 +93,7 @@ pub fn navigation() -> Value {
             "active": {"type": "boolean", "description": "navigating now (`navigate`)"},
             "travel_rad": {"type": ["number", "null"], "description": "the direction of travel, the pose estimate's world, rad"},
             "choice": {"type": ["string", "null"], "enum": ["sidewind", "back_off", "slither", "turn", null], "description": "what it runs"},
-            "why": {"type": ["string", "null"], "enum": ["start", "stuck", "backed_off", "slither_time_up", "turned", "off_course", "steer", "no_progress", null]},
+            "why": {"type": ["string", "null"], "enum": ["start", "stuck", "backed_off", "slither_time_up", "turned", "off_course", "steer", "no_progress", "off_line", null]},
             "switches": {"type": "integer", "description": "changes of gait or controller since it started"},
             "stopped": {"type": ["string", "null"], "enum": ["off", "operator", "estimate_invalid", "not_running", "refused", "arrived", null], "description": "why it stopped (docs/navigation.md)"},
             "goal_m": {"type": ["array", "null"], "items": {"type": "number"}, "description": "the goal [x, y], the position source's world, m; null: a direction only"},
