@@ -59,7 +59,7 @@ impl SteeringConfig {
         reaim_s: 1.0,
         reaim_above_rad: 0.05,
         authority_rad: [0.5, 1.0],
-        off_line_m: 0.5,
+        off_line_m: 0.0,
         arrive_m: 0.25,
         progress_window_s: 20.0,
         progress_min_m: 0.10,
