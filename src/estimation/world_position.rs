@@ -54,6 +54,10 @@ pub struct FusionConfig {
     pub default_sd_m: f64,
     /// How fast odometry drifts between fixes, m per √s (the prediction's noise).
     pub drift_m_per_sqrt_s: f64,
+    /// And how much of what odometry reads between fixes may be wrong (among pegs
+    /// contact odometry reads the gait's open-ground motion, and jumps when the links'
+    /// contacts change): the prediction's deviation grows by this share of it.
+    pub drift_per_m: f64,
     /// Fixes farther than this, or `gate_sigmas` of the fix's deviation, are rejected, m.
     pub gate_m: f64,
     pub gate_sigmas: f64,
@@ -74,6 +78,7 @@ impl Default for FusionConfig {
             marker_offset_m: [0.0; 2],
             default_sd_m: 0.005,
             drift_m_per_sqrt_s: 0.05,
+            drift_per_m: 0.5,
             gate_m: 0.15,
             gate_sigmas: 5.0,
             realign_after: 10,
@@ -125,6 +130,8 @@ pub struct WorldPositionEstimator {
     /// The shift's variance, m².
     var: f64,
     last_accepted_t_s: f64,
+    /// Where the point was (the estimate's world) at the last accepted fix.
+    last_accepted_point: Option<[f64; 2]>,
     rejections_in_row: u32,
     /// Without an orientation: the first fix and where the point was then.
     anchor: Option<([f64; 2], [f64; 2])>,
@@ -145,6 +152,7 @@ impl WorldPositionEstimator {
             shift: [0.0; 2],
             var: 0.0,
             last_accepted_t_s: f64::NEG_INFINITY,
+            last_accepted_point: None,
             rejections_in_row: 0,
             anchor: None,
             out: WorldPosition::NONE,
@@ -255,9 +263,14 @@ impl WorldPositionEstimator {
     fn correct(&mut self, fix: &Fix, then: &Sample) {
         let c = self.config;
         let sd = self.fix_sd(fix);
-        // The shift's variance has grown with odometry's drift since the last fix.
+        // The shift's variance has grown with odometry's drift since the last fix, in
+        // time and with what it read: a jump of the odometry widens the gate, so the
+        // next fixes correct it instead of being rejected as outliers.
         let dt = (fix.t_s - self.last_accepted_t_s).max(0.0);
-        let var = self.var + c.drift_m_per_sqrt_s.powi(2) * dt;
+        let read = self
+            .last_accepted_point
+            .map_or(0.0, |p| (then.point[0] - p[0]).hypot(then.point[1] - p[1]));
+        let var = self.var + c.drift_m_per_sqrt_s.powi(2) * dt + (c.drift_per_m * read).powi(2);
         if let Some(q) = fix.orientation_wxyz {
             // Turn about the point as it was then, so ψ's correction moves nothing there.
             let psi = self.psi + c.yaw_gain * wrap_pi(yaw_of(q) - then.yaw - self.psi);
@@ -279,7 +292,7 @@ impl WorldPositionEstimator {
                 // The worlds moved apart: align afresh on this fix.
                 self.rejections_in_row = 0;
                 if self.align(fix, then) {
-                    self.accepted(fix.t_s);
+                    self.accepted(fix.t_s, then.point);
                 }
             }
             return;
@@ -288,12 +301,13 @@ impl WorldPositionEstimator {
         self.shift[0] += k * innovation[0];
         self.shift[1] += k * innovation[1];
         self.var = (1.0 - k) * var;
-        self.accepted(fix.t_s);
+        self.accepted(fix.t_s, then.point);
     }
 
-    fn accepted(&mut self, t_s: f64) {
+    fn accepted(&mut self, t_s: f64, point: [f64; 2]) {
         self.rejections_in_row = 0;
         self.last_accepted_t_s = t_s;
+        self.last_accepted_point = Some(point);
         self.out.accepted += 1;
     }
 
@@ -312,7 +326,7 @@ impl WorldPositionEstimator {
             PositionState::None | PositionState::Aligning => {
                 self.out.state = PositionState::Aligning;
                 if self.align(f, &then) {
-                    self.accepted(f.t_s);
+                    self.accepted(f.t_s, then.point);
                     self.out.state = PositionState::Tracking;
                 }
             }
