@@ -98,13 +98,7 @@ impl TrialNavigator {
                 estimate_valid: lp.body().valid,
                 heading_rad: lp.body().heading_rad,
                 progress: lp.progress(),
-                position: {
-                    let w = &lp.body().world;
-                    w.valid().then_some(PositionView {
-                        position_m: w.position_m,
-                        yaw_offset_rad: w.yaw_offset_rad,
-                    })
-                },
+                position: PositionView::of(&lp.body().world),
             },
             gait: lp.gait(),
             driving: lp.controllers().engaged(),

@@ -110,6 +110,16 @@ pub struct PositionView {
     pub yaw_offset_rad: f64,
 }
 
+impl PositionView {
+    /// The fused position while it may be steered by (`WorldPosition::valid`).
+    pub fn of(w: &crate::controller_interface::position::WorldPosition) -> Option<Self> {
+        w.valid().then_some(Self {
+            position_m: w.position_m,
+            yaw_offset_rad: w.yaw_offset_rad,
+        })
+    }
+}
+
 /// What steering makes of a position.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Course {

@@ -160,12 +160,8 @@ pub(crate) async fn start(
 }
 
 /// The position the navigator steers by, while the outside source's is valid.
-pub fn position(s: &Snapshot) -> Option<PositionView> {
-    let w = &s.body.world;
-    w.valid().then_some(PositionView {
-        position_m: w.position_m,
-        yaw_offset_rad: w.yaw_offset_rad,
-    })
+fn position(s: &Snapshot) -> Option<PositionView> {
+    PositionView::of(&s.body.world)
 }
 
 /// Tells the loop what the navigator does.
