@@ -29,15 +29,23 @@
 #               binary when B is not set);
 #   C=PATH, C_LOOP=TOML a third variant, likewise;
 #   A_LOOP=TOML extra `[loop]` lines for the first variant (and the load daemon).
+#   A key given there replaces RT=1's (e.g. B_LOOP='lock_memory = false').
+#   B_PREFIX, C_PREFIX: a command the variant runs under (e.g. 'taskset -c 1': every
+#               thread of the daemon on the loop's CPU).
+# BG=N: N busy loops at nice 19 run throughout (cyclictest's rounds and snaked's): the
+# loaded machine. The per-thread minor page faults of the loop thread (snaked-rt) from
+# 2 s after start to the end are printed for each snaked round.
 # cyclictest holds /dev/cpu_dma_latency at 0 while it runs (idle CPUs poll instead of
-# halting); snaked does so with `cpu_dma_latency_s = 0.0` (e.g. in A_LOOP).
+# halting); so does snaked under SCHED_FIFO (RT=1) unless `cpu_dma_latency_s` says
+# otherwise (B_LOOP='cpu_dma_latency_s = 0.1': let the CPUs halt).
 # CT_ARGS="--laptop" runs cyclictest without it.
 # CT_IDLE=1 adds a cyclictest round with the emulator idle to each round (what the load
 # changes). BIN=DIR takes snaked, snake-emu and snakectl from DIR without building.
-# cyclictest measures wake-up latency; snaked's period error is |cycle start - deadline|
-# (docs/architecture.md): the same quantity for a loop on absolute deadlines. snaked
-# reports the upper edge of a 12.5 % bucket; the ratios use cyclictest's quantiles
-# rounded up to the same bucket edges (its raw 1 µs figures are printed too).
+# cyclictest measures wake-up latency against an absolute schedule; so does snaked's
+# `wakeup_latency` (cycle start - deadline, docs/architecture.md), in the same 1 µs
+# buckets below 200 µs, truncated as cyclictest's histogram counts them, so the ratios
+# compare like with like. snaked's period error (the jitter between successive cycle
+# starts) and its compute time are printed beside it.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 # shellcheck source=scripts/emu-config.sh
@@ -55,14 +63,19 @@ else
 fi
 a_bin=$bins/snaked
 b_bin=${B:-}
-if [ -z "$b_bin" ] && [ -n "${B_LOOP:-}" ]; then b_bin=$a_bin; fi
+if [ -z "$b_bin" ] && [ -n "${B_LOOP:-}${B_PREFIX:-}" ]; then b_bin=$a_bin; fi
 c_bin=${C:-}
-if [ -z "$c_bin" ] && [ -n "${C_LOOP:-}" ]; then c_bin=$a_bin; fi
+if [ -z "$c_bin" ] && [ -n "${C_LOOP:-}${C_PREFIX:-}" ]; then c_bin=$a_bin; fi
 snakectl=$bins/snakectl
 dir=$(mktemp -d)
 emu=""
 load=""
-trap 'kill $emu $load 2>/dev/null || true' EXIT
+bg=()
+trap 'kill $emu $load ${bg[*]} 2>/dev/null || true' EXIT
+for _ in $(seq 1 "${BG:-0}"); do
+    nice -n 19 sh -c 'while :; do :; done' &
+    bg+=($!)
+done
 base=$((30000 + RANDOM % 20000))
 emu_cmd=("$bins/snake-emu" --modules "$n" --base-port "$base")
 if [ "${GATEWAY:-0}" = 1 ]; then emu_cmd+=(--gateway); fi
@@ -80,10 +93,24 @@ if [ "${RT:-0}" = 1 ]; then
 fi
 "${emu_cmd[@]}" 2> "$dir/emu.log" &
 emu=$!
-emu_config "$dir/a.toml" "$base" "$n" "$dir/a" "$loop_toml"$'\n'"${A_LOOP:-}"
-emu_config "$dir/b.toml" "$base" "$n" "$dir/b" "$loop_toml"$'\n'"${B_LOOP:-}"
-emu_config "$dir/c.toml" "$base" "$n" "$dir/c" "$loop_toml"$'\n'"${C_LOOP:-}"
-emu_config "$dir/load.toml" "$base" "$n" "$dir/load" "$load_toml"$'\n'"${A_LOOP:-}"
+# BASE's `[loop]` lines with EXTRA's after them, a key in EXTRA replacing BASE's.
+merge_loop() {
+    local base=$1 extra=$2 line key out=""
+    while IFS= read -r line; do
+        key=${line%%=*}
+        key=${key// /}
+        if [ "$line" != "[loop]" ] && [ -n "$key" ] \
+            && printf '%s\n' "$extra" | grep -q "^ *$key *="; then
+            continue
+        fi
+        out+="$line"$'\n'
+    done <<< "$base"
+    printf '%s%s' "$out" "$extra"
+}
+emu_config "$dir/a.toml" "$base" "$n" "$dir/a" "$(merge_loop "$loop_toml" "${A_LOOP:-}")"
+emu_config "$dir/b.toml" "$base" "$n" "$dir/b" "$(merge_loop "$loop_toml" "${B_LOOP:-}")"
+emu_config "$dir/c.toml" "$base" "$n" "$dir/c" "$(merge_loop "$loop_toml" "${C_LOOP:-}")"
+emu_config "$dir/load.toml" "$base" "$n" "$dir/load" "$(merge_loop "$load_toml" "${A_LOOP:-}")"
 mkdir -p "$dir/a" "$dir/b" "$dir/c" "$dir/load"
 sleep 1
 
@@ -101,13 +128,32 @@ start_daemon() {
     done
 }
 
-# One measured snaked round: VARIANT (a or b), BIN, ROUND.
+# Minor page faults of the loop thread (snaked-rt) of process PID.
+loop_minflt() {
+    local t
+    for t in /proc/"$1"/task/*; do
+        if [ "$(cat "$t/comm" 2>/dev/null)" = snaked-rt ]; then
+            # Field 10 of stat, after the parenthesised name.
+            sed 's/.*) //' "$t/stat" | awk '{print $8}'
+            return
+        fi
+    done
+    echo 0
+}
+
+# One measured snaked round: VARIANT (a or b), BIN, ROUND, then a command prefix.
 snaked_round() {
-    local v=$1 bin=$2 r=$3
+    local v=$1 bin=$2 r=$3 f0 pid
+    shift 3
     echo "round $r/$rounds: snaked ($v) ${secs} s" >&2
-    start_daemon "$bin" "$dir/$v.toml" "$dir/snaked-$v-$r.log"
-    sleep "$secs"
+    start_daemon "$bin" "$dir/$v.toml" "$dir/snaked-$v-$r.log" "$@"
+    # With a prefix (taskset) the daemon is its child or the exec'd process itself.
+    pid=$(pgrep -n -f -- "--config $dir/$v.toml" || echo "$started")
+    sleep 2
+    f0=$(loop_minflt "$pid")
+    sleep "$((secs - 2))"
     "$snakectl" --socket "$dir/$v/snaked.sock" --json stats > "$dir/sd-$v-$r.json"
+    echo $(( $(loop_minflt "$pid") - f0 )) > "$dir/minflt-$v-$r.txt"
     kill -TERM "$started"; wait "$started" || true
 }
 
@@ -127,22 +173,16 @@ for r in $(seq 1 "$rounds"); do
         kill -TERM "$load"; wait "$load" || true
         load=""
     fi
-    snaked_round a "$a_bin" "$r"
-    if [ -n "$b_bin" ]; then snaked_round b "$b_bin" "$r"; fi
-    if [ -n "$c_bin" ]; then snaked_round c "$c_bin" "$r"; fi
+    read -r -a a_pre <<< "${A_PREFIX:-}"
+    read -r -a b_pre <<< "${B_PREFIX:-}"
+    read -r -a c_pre <<< "${C_PREFIX:-}"
+    snaked_round a "$a_bin" "$r" "${a_pre[@]}"
+    if [ -n "$b_bin" ]; then snaked_round b "$b_bin" "$r" "${b_pre[@]}"; fi
+    if [ -n "$c_bin" ]; then snaked_round c "$c_bin" "$r" "${c_pre[@]}"; fi
 done
 python3 - "$dir" "$rounds" <<'PY'
 import json, os, statistics, sys
 d, rounds = sys.argv[1], int(sys.argv[2])
-
-def upper_edge_us(us):
-    # snaked's histogram (rt::stats): 8 sub-buckets per power of two of ns; the upper edge.
-    v = int(round(us * 1000))
-    if v < 8:
-        return v / 1000
-    msb = v.bit_length() - 1
-    shift = msb - 3
-    return ((((v >> shift) & 7) + 8 + 1) << shift) / 1000 - 0.001
 
 def ct(path):
     hist = []
@@ -163,16 +203,19 @@ def ct(path):
 
 def sd(path):
     s = json.load(open(path))["loop"]
-    e, c = s["period_error"], s["compute"]
-    return {"p50": e["p50_us"], "p99": e["p99_us"], "p999": e["p999_us"], "max": e["max_us"],
-            "c50": c["p50_us"], "c99": c["p99_us"], "over": s["overruns"]}
+    w, e, c = s["wakeup_latency"], s["period_error"], s["compute"]
+    return {"p50": w["p50_us"], "p99": w["p99_us"], "p999": w["p999_us"], "max": w["max_us"],
+            "e99": e["p99_us"], "c50": c["p50_us"], "c99": c["p99_us"], "over": s["overruns"],
+            "flt": int(open(path.replace("sd-", "minflt-").replace(".json", ".txt")).read())}
 
 variants = [v for v in "abc" if os.path.exists(f"{d}/sd-{v}-1.json")]
 rows = []
 head = f"{'round':>5} | {'cyclictest p50':>14} {'p99':>6} {'p99.9':>6} {'max':>6}"
 for v in variants:
-    head += f" | snaked {v} p50 {'p99':>6} {'p99.9':>6} {'max':>7} (compute p50/p99, overruns)"
-print(head + "  µs")
+    head += (f" | snaked {v} p50 {'p99':>6} {'p99.9':>6} {'max':>7}"
+             " (period error p99; compute p50/p99; overruns; minor faults)")
+print("wake-up latency, µs")
+print(head)
 for r in range(1, rounds + 1):
     c = ct(f"{d}/ct-{r}.txt")
     ss = {v: sd(f"{d}/sd-{v}-{r}.json") for v in variants}
@@ -181,7 +224,7 @@ for r in range(1, rounds + 1):
     for v in variants:
         s = ss[v]
         line += (f" | {s['p50']:>14.1f} {s['p99']:>6.1f} {s['p999']:>6.1f} {s['max']:>7.1f}"
-                 f" ({s['c50']:.1f}/{s['c99']:.1f}, {s['over']})")
+                 f" ({s['e99']:.1f}; {s['c50']:.1f}/{s['c99']:.1f}; {s['over']}; {s['flt']})")
     print(line)
 if os.path.exists(f"{d}/ct-idle-1.txt"):
     idle = [ct(f"{d}/ct-idle-{r}.txt") for r in range(1, rounds + 1)]
@@ -192,11 +235,10 @@ if os.path.exists(f"{d}/ct-idle-1.txt"):
         f"{k} {statistics.median(c[k] for c in idle):.1f}" for k in ["p50", "p99", "p999"]))
 for k in ["p50", "p99", "p999"]:
     cm = statistics.median(c[k] for c, _ in rows)
-    cb = statistics.median(upper_edge_us(c[k]) for c, _ in rows)
-    line = f"median {k}: cyclictest {cm:.1f} µs ({cb:.1f} in snaked's buckets)"
+    line = f"median {k}: cyclictest {cm:.1f} µs"
     for v in variants:
         sm = statistics.median(s[v][k] for _, s in rows)
-        ratio = sm / cb if cb > 0 else float("inf")
+        ratio = sm / cm if cm > 0 else float("inf")
         line += f"; snaked {v} {sm:.1f} µs, ratio {ratio:.2f}"
     print(line)
 PY

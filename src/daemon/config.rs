@@ -54,10 +54,23 @@ pub struct LoopConfig {
     /// until the deadline). Less than half a period.
     pub busy_wait_s: f64,
     /// Keep every CPU's wake-up latency within this while the daemon runs
-    /// (`/dev/cpu_dma_latency`, needs root), s; 0 keeps idle CPUs polling; absent = no limit.
+    /// (`/dev/cpu_dma_latency`, needs root), s; 0 keeps idle CPUs polling. Absent: 0
+    /// when the loop runs under SCHED_FIFO (as cyclictest does), no limit otherwise;
+    /// see [`LoopConfig::cpu_latency_limit_s`].
     pub cpu_dma_latency_s: Option<f64>,
     /// Send the gait's joint velocities as feed-forward with the positions.
     pub velocity_feedforward: bool,
+}
+
+impl LoopConfig {
+    /// The wake-up latency limit the daemon holds, s, if any. A loop under SCHED_FIFO
+    /// asked for real time, and an idle CPU that halts (rather than polls) wakes it tens
+    /// of µs late on a quiet machine (docs/measurements/loop-timing.md, "Wake-up
+    /// latency at the machine's floor"), so it holds 0 unless the key says otherwise.
+    pub fn cpu_latency_limit_s(&self) -> Option<f64> {
+        self.cpu_dma_latency_s
+            .or((self.sched_fifo_priority > 0).then_some(0.0))
+    }
 }
 
 impl Default for LoopConfig {
@@ -339,6 +352,18 @@ mod tests {
             Config::default(),
             "config/snaked.toml must document the defaults"
         );
+    }
+
+    #[test]
+    fn a_real_time_loop_holds_the_cpus_awake_unless_told_otherwise() {
+        let parse = |t: &str| Config::parse(t, Path::new("x.toml")).unwrap().loop_;
+        assert_eq!(parse("").cpu_latency_limit_s(), None);
+        let fifo = parse("[loop]\nsched_fifo_priority = 80\n");
+        assert_eq!(fifo.cpu_latency_limit_s(), Some(0.0));
+        let deep = parse("[loop]\nsched_fifo_priority = 80\ncpu_dma_latency_s = 0.1\n");
+        assert_eq!(deep.cpu_latency_limit_s(), Some(0.1));
+        let asked = parse("[loop]\ncpu_dma_latency_s = 0.00002\n");
+        assert_eq!(asked.cpu_latency_limit_s(), Some(0.00002));
     }
 
     #[test]

@@ -144,7 +144,7 @@ pub fn run(cfg: Config, emulated: bool) -> Result<()> {
         }
     }
     // Held until the daemon returns.
-    let _cpu_latency = cfg.loop_.cpu_dma_latency_s.and_then(|s| {
+    let _cpu_latency = cfg.loop_.cpu_latency_limit_s().and_then(|s| {
         let us = (s * 1e6).round() as i32;
         sys::limit_cpu_latency_us(us)
             .inspect_err(|e| {
@@ -348,6 +348,7 @@ pub fn run(cfg: Config, emulated: bool) -> Result<()> {
     }
     tracing::info!(
         cycles = report.cycles,
+        wakeup_latency_p99_us = report.wakeup_latency.p99_us,
         period_error_p99_us = report.period_error.p99_us,
         compute_p99_us = report.compute.p99_us,
         overruns = report.overruns,

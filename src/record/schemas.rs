@@ -189,6 +189,7 @@ pub fn stats() -> Value {
         json!({"t_ns": {"type": "integer"}}),
         json!({
             "cycles": {"type": "integer"},
+            "wakeup_latency": summary,
             "period_error": summary,
             "compute": summary,
             "feedback_age": summary,

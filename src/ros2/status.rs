@@ -97,11 +97,13 @@ impl Diagnostics {
             if grew(|g| g.overruns) { WARN } else { OK },
             "loop",
             format!(
-                "period error p99 {:.0} µs, {} overruns",
-                report.period_error.p99_us, report.overruns
+                "wake-up latency p99 {:.0} µs, {} overruns",
+                report.wakeup_latency.p99_us, report.overruns
             ),
             json!({
                 "cycles": report.cycles,
+                "wakeup_latency_p50_us": report.wakeup_latency.p50_us,
+                "wakeup_latency_p99_us": report.wakeup_latency.p99_us,
                 "period_error_p50_us": report.period_error.p50_us,
                 "period_error_p99_us": report.period_error.p99_us,
                 "compute_p99_us": report.compute.p99_us,

@@ -112,6 +112,71 @@ impl Histogram {
     }
 }
 
+/// Values below this have a bucket of their own 1 µs wide in a [`LatencyHistogram`].
+pub const FINE_LIMIT_NS: u64 = 200_000;
+const FINE_BUCKETS: usize = (FINE_LIMIT_NS / 1000) as usize;
+
+/// A wake-up latency histogram fine enough to compare with cyclictest's: 1 µs buckets
+/// up to 200 µs (where a loop's p99 lies), the log-linear [`Histogram`] above. Its
+/// quantiles below 200 µs are whole µs, truncated, as cyclictest's `-h` histogram
+/// counts them, so the two compare bucket for bucket.
+#[derive(Clone, Copy)]
+pub struct LatencyHistogram {
+    fine: [u32; FINE_BUCKETS],
+    /// Every value (count, sum, min, max, and the ranks beyond the fine range).
+    all: Histogram,
+}
+
+impl Default for LatencyHistogram {
+    fn default() -> Self {
+        Self {
+            fine: [0; FINE_BUCKETS],
+            all: Histogram::default(),
+        }
+    }
+}
+
+impl LatencyHistogram {
+    pub fn record(&mut self, v_ns: u64) {
+        if v_ns < FINE_LIMIT_NS {
+            let b = (v_ns / 1000) as usize;
+            self.fine[b] = self.fine[b].saturating_add(1);
+        }
+        self.all.record(v_ns);
+    }
+
+    pub fn count(&self) -> u64 {
+        self.all.count
+    }
+
+    /// The `q` quantile: a whole µs (the lower edge of its 1 µs bucket) below 200 µs,
+    /// the coarse histogram's upper bucket edge above.
+    pub fn quantile_ns(&self, q: f64) -> u64 {
+        if self.all.count == 0 {
+            return 0;
+        }
+        let rank = ((q.clamp(0.0, 1.0) * self.all.count as f64).ceil() as u64).max(1);
+        let mut seen = 0u64;
+        for (i, &c) in self.fine.iter().enumerate() {
+            seen += c as u64;
+            if seen >= rank {
+                return i as u64 * 1000;
+            }
+        }
+        self.all.quantile_ns(q)
+    }
+
+    pub fn summary(&self) -> Summary {
+        let us = |ns: u64| ns as f64 / 1000.0;
+        Summary {
+            p50_us: us(self.quantile_ns(0.5)),
+            p99_us: us(self.quantile_ns(0.99)),
+            p999_us: us(self.quantile_ns(0.999)),
+            ..self.all.summary()
+        }
+    }
+}
+
 /// A histogram as the socket reports it, µs.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
 pub struct Summary {
@@ -128,8 +193,14 @@ pub struct Summary {
 #[derive(Clone, Copy, Default)]
 pub struct LoopStats {
     pub cycles: u64,
-    /// |cycle start − deadline|.
+    /// Cycle start − its absolute deadline (`start + index × period`): what cyclictest
+    /// reports as latency, in 1 µs buckets.
+    pub wakeup_latency: LatencyHistogram,
+    /// |time between successive cycle starts − the periods between their deadlines|:
+    /// the jitter of the period (the first cycle has none).
     pub period_error: Histogram,
+    /// The previous cycle's (index, start), for the period error.
+    last_start: Option<(u64, u64)>,
     /// Time from cycle start to commands sent.
     pub compute: Histogram,
     /// Time in the bus's `receive` and `send` within a cycle (part of `compute`).
@@ -149,6 +220,7 @@ pub struct LoopStats {
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
 pub struct StatsReport {
     pub cycles: u64,
+    pub wakeup_latency: Summary,
     pub period_error: Summary,
     pub compute: Summary,
     /// Time in the bus's `receive` and `send` per cycle.
@@ -161,9 +233,22 @@ pub struct StatsReport {
 }
 
 impl LoopStats {
+    /// A cycle's start (`start_ns` on the loop's clock, `lateness_ns` after its
+    /// deadline) into the wake-up latency and the period error.
+    pub fn record_start(&mut self, index: u64, start_ns: u64, lateness_ns: u64, period_ns: u64) {
+        self.wakeup_latency.record(lateness_ns);
+        if let Some((last_index, last_ns)) = self.last_start {
+            let expected = index.saturating_sub(last_index) * period_ns;
+            self.period_error
+                .record(start_ns.saturating_sub(last_ns).abs_diff(expected));
+        }
+        self.last_start = Some((index, start_ns));
+    }
+
     pub fn report(&self) -> StatsReport {
         StatsReport {
             cycles: self.cycles,
+            wakeup_latency: self.wakeup_latency.summary(),
             period_error: self.period_error.summary(),
             compute: self.compute.summary(),
             bus_io: self.bus_io.summary(),
@@ -208,6 +293,51 @@ mod tests {
         assert_eq!(s.count, 100_000);
         assert!((s.mean_us - 500.005).abs() < 1e-6);
         assert_eq!(s.max_us, 1000.0);
+    }
+
+    #[test]
+    fn latency_quantiles_are_whole_microseconds_below_200_and_coarse_above() {
+        let mut h = LatencyHistogram::default();
+        // 990 samples at 14.3-14.9 µs, 9 at 37.5 µs, one at 263 µs: cyclictest would
+        // give p50 14, p99 37 (the 990th sample is the last at 14), p99.9 263 → bucket.
+        for i in 0..990u64 {
+            h.record(14_300 + i % 7 * 100);
+        }
+        for _ in 0..9 {
+            h.record(37_500);
+        }
+        h.record(263_000);
+        assert_eq!(h.count(), 1000);
+        assert_eq!(h.quantile_ns(0.5), 14_000);
+        assert_eq!(h.quantile_ns(0.99), 14_000);
+        assert_eq!(h.quantile_ns(0.995), 37_000);
+        assert_eq!(
+            h.quantile_ns(1.0),
+            263_000,
+            "beyond 200 µs: the exact maximum caps it"
+        );
+        let s = h.summary();
+        assert_eq!((s.p50_us, s.max_us, s.min_us), (14.0, 263.0, 14.3));
+    }
+
+    #[test]
+    fn the_period_error_is_the_interval_jitter_and_the_latency_the_lateness() {
+        let mut s = LoopStats::default();
+        let period = 1_000_000;
+        // Every cycle 20 µs late: latency 20 µs each, yet the period is exact.
+        for i in 0..10u64 {
+            s.record_start(i, i * period + 20_000, 20_000, period);
+        }
+        assert_eq!(s.wakeup_latency.count(), 10);
+        assert_eq!(s.period_error.count(), 9, "the first cycle has no period");
+        assert_eq!(s.period_error.quantile_ns(1.0), 0);
+        assert_eq!(s.wakeup_latency.quantile_ns(0.5), 20_000);
+        // One cycle 50 µs late, then two periods skipped: the intervals around it err
+        // by 30 µs, and a skip is not an error.
+        s.record_start(10, 10 * period + 50_000, 50_000, period);
+        s.record_start(13, 13 * period + 20_000, 20_000, period);
+        assert_eq!(s.period_error.quantile_ns(1.0), 30_000);
+        assert_eq!(s.period_error.count(), 11);
     }
 
     #[test]

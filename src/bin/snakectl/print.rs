@@ -141,6 +141,7 @@ pub(crate) fn print_stats(r: &Value) {
     }
     println!();
     for (label, key) in [
+        ("wake-up", "wakeup_latency"),
         ("period error", "period_error"),
         ("compute", "compute"),
         ("feedback age", "feedback_age"),

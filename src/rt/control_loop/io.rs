@@ -90,9 +90,10 @@ impl ControlLoop {
     }
 
     pub(super) fn record(&mut self, c: &Cycle, compute_ns: u64) {
+        let period_ns = self.p.pacer.period_ns();
         let s = &mut self.stats;
         s.cycles += 1;
-        s.period_error.record(c.lateness_ns);
+        s.record_start(c.index, c.clock_ns, c.lateness_ns, period_ns);
         s.compute.record(compute_ns);
         if c.skipped > 0 {
             s.overruns += 1;

@@ -64,6 +64,7 @@ fn every_method_answers() {
         st["loop"]["period_error"]["p99_us"].as_f64().unwrap() > 0.0,
         "{st}"
     );
+    assert!(st["loop"]["wakeup_latency"]["p99_us"].is_number(), "{st}");
     assert!(st["bus"]["feedback_received"].as_u64().unwrap() > 0);
     assert!(st["cycles"].as_u64().unwrap() > 0);
 

@@ -185,6 +185,10 @@ pub fn fake_loop(spec: LoopSpec) -> (FakeLoop, LoopHandle) {
                 state.stats.cycles = state.cycle;
                 state
                     .stats
+                    .wakeup_latency
+                    .record(2_000 + state.cycle % 50 * 100);
+                state
+                    .stats
                     .period_error
                     .record(2_000 + state.cycle % 50 * 100);
                 state.bus.feedback_received += state.joints.len() as u64;
