@@ -8,8 +8,8 @@
 #   hebi: `[bus] kind = "hebi"` over HEBI's imitation group of MODULES modules (libhebi
 #         echoes each command as feedback; no lookup, no network),
 # the two in turn (udp first in odd rounds, hebi first in even ones, so drift over the
-# run falls on both), ROUNDS (default 3) times. Prints, per variant, each round's period
-# error, bus_io (time in the bus's receive + send) and compute p50 / p99 (µs), cycles
+# run falls on both), ROUNDS (default 3) times. Prints, per variant, each round's wake-up
+# latency, bus_io (time in the bus's receive + send) and compute p50 / p99 (µs), cycles
 # and overruns, the medians over the rounds, and the ratio hebi / udp of the medians.
 # libhebi comes from scripts/fetch-libhebi.sh (fetched once, into target/hebi/).
 # RT=1: the loop under SCHED_FIFO 80 with locked memory on CPU 1 and the emulator on
@@ -97,7 +97,7 @@ done
 python3 - "$dir" "$rounds" "$n" "$secs" <<'PY'
 import json, statistics, sys
 d, rounds, n, secs = sys.argv[1], int(sys.argv[2]), sys.argv[3], sys.argv[4]
-keys = [("period_error", "period error"), ("bus_io", "bus_io"), ("compute", "compute")]
+keys = [("wakeup_latency", "wake-up latency"), ("bus_io", "bus_io"), ("compute", "compute")]
 titles = {"udp": f"udp: snake-emu, {n} modules, one endpoint each (127.0.0.1)",
           "hebi": f"hebi: libhebi imitation group of {n}"}
 med = {}

@@ -233,6 +233,16 @@ if os.path.exists(f"{d}/ct-idle-1.txt"):
         for r, c in enumerate(idle)) + " (p50 / p99 / p99.9 / max)")
     print("  medians: " + ", ".join(
         f"{k} {statistics.median(c[k] for c in idle):.1f}" for k in ["p50", "p99", "p999"]))
+# Each round's snaked beside the cyclictest round just before it: the geometric mean of
+# those paired ratios and its standard error (the machine's drift falls on both sides).
+import math
+for v in variants:
+    for k in ["p50", "p99"]:
+        logs = [math.log(max(s[v][k], 1.0) / max(c[k], 1.0)) for c, s in rows]
+        m = statistics.mean(logs)
+        se = statistics.stdev(logs) / math.sqrt(len(logs)) if len(logs) > 1 else float("nan")
+        print(f"paired by round, snaked {v} / cyclictest {k}: {math.exp(m):.2f}× "
+              f"(±1 SE {math.exp(m - se):.2f}–{math.exp(m + se):.2f}, {len(logs)} rounds)")
 for k in ["p50", "p99", "p999"]:
     cm = statistics.median(c[k] for c, _ in rows)
     line = f"median {k}: cyclictest {cm:.1f} µs"

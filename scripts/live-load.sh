@@ -34,8 +34,8 @@ summary='
 import json, sys
 s = json.load(sys.stdin)
 l = s["loop"]
-pe, c = l["period_error"], l["compute"]
-print("period error us: p50 %.1f p99 %.1f p999 %.1f max %.1f; compute p99 %.1f; overruns %d; record_dropped %d"
+pe, c = l["wakeup_latency"], l["compute"]
+print("wake-up latency us: p50 %.1f p99 %.1f p999 %.1f max %.1f; compute p99 %.1f; overruns %d; record_dropped %d"
       % (pe["p50_us"], pe["p99_us"], pe["p999_us"], pe["max_us"], c["p99_us"], l["overruns"], s["record_dropped"]))'
 run() {
     local label=$1 n=$2

@@ -8,7 +8,7 @@
 #   on:  the same plus `[ros2]`, /joint_states at 1 kHz to one rclpy subscriber
 #        (scripts/ros2-timing-listener.py: Fast DDS, sensor-data QoS),
 # off first in odd rounds, on first in even ones (drift falls on both), ROUNDS (default
-# 3) times. Per arm: `snakectl stats`' period error p50 / p99 / p99.9 at the end (since
+# 3) times. Per arm: `snakectl stats`' wake-up latency p50 / p99 / p99.9 at the end (since
 # the daemon's start, warm-up included: stats has no reset or window; the window's mean
 # is worked out from mean and count at both ends), overruns in the window, the
 # recorder's dropped items; the node's published rate and drops (its /diagnostics); the
@@ -139,7 +139,7 @@ for arm in res:
     for r in range(1, rounds + 1):
         p = f"{d}/{arm}-{r}"
         s0, s1 = json.load(open(p + ".stats0.json")), json.load(open(p + ".stats1.json"))
-        pe0, pe1 = s0["loop"]["period_error"], s1["loop"]["period_error"]
+        pe0, pe1 = s0["loop"]["wakeup_latency"], s1["loop"]["wakeup_latency"]
         wall = (int(open(p + ".t1").read()) - int(open(p + ".t0").read())) / 1e9
         cpu = per_name(p + ".cpu0", p + ".cpu1", wall)
         tick = lambda f: int(open(f).read())
@@ -174,7 +174,7 @@ cell = lambda v, w, p: f"{'–':>{w}}" if v != v else f"{v:{w}.{p}f}"  # nan: no
 line = lambda name, row: "| " + " | ".join([name] + [cell(row[k], w, p) for k, _, w, p in cols]) + " |"
 sep = lambda: "|" + "|".join(["---"] * (len(cols) + 1)) + "|"
 print(f"\nsnaked --emulated, 18 modules, 1 kHz; {warm} s warm-up + {secs} s measured, {rounds} rounds;"
-      " period error since the daemon's start (stats has no window), (win) = the measured window;"
+      " wake-up latency since the daemon's start (stats has no window), (win) = the measured window;"
       f" rclpy subscriber in the on arm: {'no' if os.environ.get('NOSUB') == '1' else 'yes'};"
       f" RT: {'SCHED_FIFO 80 on CPU 1' if os.environ.get('RT') == '1' else 'no'}")
 print("\nEach round\n"); print(head("arm, round")); print(sep())
@@ -187,7 +187,7 @@ for arm in ("off", "on"):
 for k in ("p50", "p99"):
     diff = [b[k] - a[k] for a, b in zip(res["off"], res["on"])]
     se = st.stdev(diff) / len(diff) ** 0.5 if len(diff) > 1 else float("nan")
-    print(f"\nON − OFF period error {k}: {st.mean(diff):+.1f} ± {se:.1f} µs (mean ± standard error over"
+    print(f"\nON − OFF wake-up latency {k}: {st.mean(diff):+.1f} ± {se:.1f} µs (mean ± standard error over"
           f" {len(diff)} rounds; per round: {', '.join(f'{x:+.1f}' for x in diff)})")
 names = sorted({n for arm in res for x in res[arm] for n in x["cpu"]})
 print("\nCPU per thread name, % of one core over the window (median over rounds)\n")

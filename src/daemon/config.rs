@@ -53,6 +53,10 @@ pub struct LoopConfig {
     /// Real time: wake this long before each deadline and spin until it, s (0: sleep
     /// until the deadline). Less than half a period.
     pub busy_wait_s: f64,
+    /// The loop thread's timer slack, s (1 ns .. 1 ms): how late the kernel may end its
+    /// sleeps to batch wake-ups (50 µs by default for normal threads; ignored for
+    /// SCHED_FIFO threads by recent kernels).
+    pub timer_slack_s: f64,
     /// Keep every CPU's wake-up latency within this while the daemon runs
     /// (`/dev/cpu_dma_latency`, needs root), s; 0 keeps idle CPUs polling. Absent: 0
     /// when the loop runs under SCHED_FIFO (as cyclictest does), no limit otherwise;
@@ -83,6 +87,7 @@ impl Default for LoopConfig {
             cpu: None,
             lock_memory: false,
             busy_wait_s: 0.0,
+            timer_slack_s: 1e-9,
             cpu_dma_latency_s: None,
             velocity_feedforward: true,
         }

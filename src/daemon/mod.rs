@@ -509,7 +509,8 @@ fn server_config(cfg: &Config) -> ServerConfig {
 
 /// Each real-time setting is attempted; a refusal is a warning, not a failure.
 fn apply_realtime_settings(rt: &config::LoopConfig) {
-    if let Err(e) = sys::set_timer_slack_ns(1) {
+    let slack_ns = (rt.timer_slack_s * 1e9).round().max(1.0) as u64;
+    if let Err(e) = sys::set_timer_slack_ns(slack_ns) {
         tracing::warn!("timer slack refused ({e}); sleeps may end up to 50 µs late");
     }
     if rt.lock_memory

@@ -314,6 +314,7 @@ impl Config {
             0.0,
             99.0,
         )?;
+        range("loop.timer_slack_s", self.loop_.timer_slack_s, 1e-9, 1e-3)?;
         if let Some(s) = self.loop_.cpu_dma_latency_s {
             range("loop.cpu_dma_latency_s", s, 0.0, 0.1)?;
         }
