@@ -72,6 +72,7 @@ fn the_daemon_records_a_run_and_finishes_the_file_on_sigterm() {
             "/events",
             "/controller/signals",
             "/body/estimate",
+            "/stats",
         ],
     );
     let cycles: Vec<u64> = msgs
@@ -98,6 +99,12 @@ fn the_daemon_records_a_run_and_finishes_the_file_on_sigterm() {
         "{counts:?}"
     );
     assert!(counts["/stats"] >= 2, "once a second: {counts:?}");
+    // The loop's timing as `stats` gives it: the wake-up latency (one per cycle) and the
+    // period error (one fewer).
+    let (_, last_stats) = msgs.iter().rfind(|(t, _)| t == "/stats").unwrap();
+    let woke = last_stats["wakeup_latency"]["count"].as_u64().unwrap();
+    let periods = last_stats["period_error"]["count"].as_u64().unwrap();
+    assert!(woke > 1000 && periods + 1 == woke, "{last_stats}");
     assert!(counts["/controller/windows"] > 0, "the compliant windows");
     assert!(
         counts["/controller/info"] >= 2,

@@ -168,12 +168,13 @@ pub fn events_at(k: u64, controller_id: u64) -> Vec<RecordItem> {
 
 /// Stats of the scripted run at cycle `k` (every 100 cycles).
 pub fn stats_at(k: u64) -> Option<RecordItem> {
-    k.is_multiple_of(100).then(|| RecordItem::Stats {
-        t_ns: k * PERIOD_NS,
-        stats: LoopStats {
-            cycles: k,
-            ..LoopStats::default()
-        },
+    k.is_multiple_of(100).then(|| {
+        let mut stats = LoopStats::default();
+        stats.cycles = k;
+        RecordItem::Stats {
+            t_ns: k * PERIOD_NS,
+            stats,
+        }
     })
 }
 
