@@ -63,6 +63,11 @@ fn cli() -> Command {
 }
 
 fn main() -> ExitCode {
+    // Past a file-size limit (`ulimit -f`, a Slurm job's) a write of a result, a plot or a
+    // trial's recording must fail with EFBIG and be reported with its path, not kill the
+    // run with SIGXFSZ and lose what the other trials made.
+    // SAFETY: only sets the signal's disposition; no handler runs.
+    unsafe { libc::signal(libc::SIGXFSZ, libc::SIG_IGN) };
     let matches = cli().get_matches();
     let result = match matches.subcommand() {
         Some(("list", _)) => {

@@ -336,6 +336,43 @@ fn every_trial_can_be_recorded_and_the_file_holds_every_cycle() {
     assert!(counts["/tf"] >= 100, "{counts:?}");
 }
 
+/// Under a file-size limit with the default signal handling (`ulimit -f`, a batch job's
+/// limit), a trial's recording that outgrows it is an error naming the file, not a
+/// SIGXFSZ that kills the run without a word.
+#[test]
+fn a_recording_past_the_file_size_limit_is_reported_not_killed() {
+    use std::os::unix::process::{CommandExt, ExitStatusExt};
+    let dir = tempfile::tempdir().unwrap();
+    let rec = dir.path().join("runs");
+    let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_snake-lab"));
+    cmd.args(["pegboard", "--controllers", "open_loop", "--starts", "1"])
+        .args(["--seconds", "2", "--layouts", "1", "--quiet", "--out"])
+        .arg(dir.path().join("out"))
+        .arg("--record")
+        .arg(&rec);
+    // SAFETY: only async-signal-safe calls between fork and exec.
+    unsafe {
+        cmd.pre_exec(|| {
+            let lim = libc::rlimit {
+                rlim_cur: 100_000,
+                rlim_max: 100_000,
+            };
+            libc::setrlimit(libc::RLIMIT_FSIZE, &lim);
+            libc::signal(libc::SIGXFSZ, libc::SIG_DFL);
+            Ok(())
+        });
+    }
+    let o = cmd.output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.signal(), None, "killed by a signal: {err}");
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    let file = rec.join("open_loop-seed1000-s0.mcap");
+    assert!(
+        err.contains(&file.display().to_string()) && err.contains("File too large"),
+        "{err}"
+    );
+}
+
 #[test]
 fn peg_array_runs_poses_times_repeats_calibrated_and_reports_the_spread() {
     let dir = tempfile::tempdir().unwrap();
