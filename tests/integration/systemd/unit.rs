@@ -34,3 +34,29 @@ fn unit_file_verifies_without_warnings() {
         "warnings: {stderr}{stdout}"
     );
 }
+
+/// The udev rule lets the unit's group hold the CPU latency limit, and the unit lets the
+/// device into its private /dev with write access.
+#[test]
+fn the_cpu_latency_device_reaches_the_service() {
+    let root = env!("CARGO_MANIFEST_DIR");
+    let unit = std::fs::read_to_string(format!("{root}/systemd/snaked.service")).unwrap();
+    let rule =
+        std::fs::read_to_string(format!("{root}/systemd/60-snaked-cpu-latency.rules")).unwrap();
+    let group = unit
+        .lines()
+        .find_map(|l| l.strip_prefix("Group="))
+        .expect("the unit names its group");
+    let rule_line = rule
+        .lines()
+        .find(|l| !l.starts_with('#') && !l.trim().is_empty())
+        .unwrap();
+    assert!(
+        rule_line.contains("KERNEL==\"cpu_dma_latency\"")
+            && rule_line.contains(&format!("GROUP=\"{group}\""))
+            && rule_line.contains("MODE=\"0660\""),
+        "{rule_line}"
+    );
+    assert!(unit.contains("BindPaths=-/dev/cpu_dma_latency"));
+    assert!(unit.contains("DeviceAllow=/dev/cpu_dma_latency rw"));
+}
