@@ -67,7 +67,8 @@ impl Topic {
         self as usize
     }
 
-    fn json_schema(self) -> Option<serde_json::Value> {
+    /// The JSON schema of a JSON-encoded topic (`None`: one of Foxglove's own types).
+    pub fn json_schema(self) -> Option<serde_json::Value> {
         Some(match self {
             Topic::Joints => schemas::joints(),
             Topic::Commands => schemas::commands(),

@@ -11,6 +11,36 @@ use std::time::Duration;
 use rig::{Client, Proc, exe};
 use serde_json::{Value, json};
 
+/// Every key of `v` in `schema`: a property, or one of a map's `additionalProperties`;
+/// arrays by their `items`. Structure only, not types: what a viewer's path completion
+/// and the layout test rely on.
+fn conforms(schema: &Value, v: &Value, at: &str) -> Result<(), String> {
+    match v {
+        Value::Object(m) => {
+            for (k, x) in m {
+                let sub = schema
+                    .get("properties")
+                    .and_then(|p| p.get(k))
+                    .or_else(|| schema.get("additionalProperties").filter(|a| a.is_object()));
+                match sub {
+                    Some(sub) => conforms(sub, x, &format!("{at}.{k}"))?,
+                    // An object the schema leaves open (a controller's own config).
+                    None if schema.get("properties").is_none() => {}
+                    None => return Err(format!("{at}.{k} is not in the schema")),
+                }
+            }
+            Ok(())
+        }
+        Value::Array(xs) => match schema.get("items") {
+            Some(items) => xs
+                .iter()
+                .try_for_each(|x| conforms(items, x, &format!("{at}[]"))),
+            None => Ok(()),
+        },
+        _ => Ok(()),
+    }
+}
+
 /// Per-topic message counts and the JSON messages of `topics`.
 fn read(path: &std::path::Path, topics: &[&str]) -> (BTreeMap<String, u64>, Vec<(String, Value)>) {
     let bytes = std::fs::read(path).expect("the recording exists");
@@ -73,6 +103,11 @@ fn the_daemon_records_a_run_and_finishes_the_file_on_sigterm() {
             "/controller/signals",
             "/body/estimate",
             "/stats",
+            "/commands",
+            "/imu",
+            "/navigation",
+            "/controller/windows",
+            "/controller/info",
         ],
     );
     let cycles: Vec<u64> = msgs
@@ -99,6 +134,15 @@ fn the_daemon_records_a_run_and_finishes_the_file_on_sigterm() {
         "{counts:?}"
     );
     assert!(counts["/stats"] >= 2, "once a second: {counts:?}");
+    // Every message as its channel's schema says.
+    for (topic, v) in &msgs {
+        let schema = snaked::record::Topic::ALL
+            .iter()
+            .find(|t| t.name() == topic)
+            .and_then(|t| t.json_schema())
+            .expect("a JSON topic");
+        conforms(&schema, v, topic).unwrap_or_else(|e| panic!("{e}: {v}"));
+    }
     // The loop's timing as `stats` gives it: the wake-up latency (one per cycle) and the
     // period error (one fewer).
     let (_, last_stats) = msgs.iter().rfind(|(t, _)| t == "/stats").unwrap();

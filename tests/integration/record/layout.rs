@@ -1,8 +1,8 @@
 //! The shipped Foxglove layout (`docs/foxglove/snaked.layout.json`) against what the
 //! daemon serves: every panel placed and every placed panel configured, every topic one
 //! the recorder or the station publishes, every service one the station offers, the
-//! teleop panel publishing faster than the dead-man expires, and the signals it plots
-//! ones the controllers report.
+//! teleop panel publishing faster than the dead-man expires, every message path's fields
+//! in its topic's schema, and the signals it plots ones the controllers report.
 use std::collections::BTreeSet;
 
 use serde_json::Value;
@@ -35,6 +35,32 @@ fn placed(node: &Value, out: &mut BTreeSet<String>) {
 /// The topic of a message path (`/joints.torque_nm[0]` → `/joints`).
 fn topic_of(path: &str) -> &str {
     path.split(['.', '[']).next().unwrap_or(path)
+}
+
+/// Whether the fields of a message path (`.world.position_m[0]`, `.fields[0].windows[:]`)
+/// are in the topic's JSON schema: each name a property (or one of a map's
+/// `additionalProperties`), each index an array's items.
+fn schema_has(schema: &Value, fields: &str) -> bool {
+    let mut s = schema;
+    for part in fields.split('.').filter(|p| !p.is_empty()) {
+        let (name, indices) = part.split_once('[').unwrap_or((part, ""));
+        if !name.is_empty() {
+            match s.get("properties").and_then(|p| p.get(name)) {
+                Some(next) => s = next,
+                None => match s.get("additionalProperties") {
+                    Some(next) if next.is_object() => s = next,
+                    _ => return false,
+                },
+            }
+        }
+        for _ in indices.matches(']') {
+            match s.get("items") {
+                Some(items) => s = items,
+                None => return false,
+            }
+        }
+    }
+    true
 }
 
 #[test]
@@ -95,6 +121,18 @@ fn the_layout_shows_what_the_daemon_serves() {
             topics.contains(topic_of(p)),
             "{p}: no such topic; served: {topics:?}"
         );
+        // The fields too, where the topic is one of the daemon's JSON ones.
+        let schema = Topic::ALL
+            .iter()
+            .find(|t| t.name() == topic_of(p))
+            .and_then(|t| t.json_schema());
+        if let Some(schema) = schema {
+            let fields = &p[topic_of(p).len()..];
+            assert!(
+                schema_has(&schema, fields),
+                "{p}: no such field in {schema}"
+            );
+        }
     }
     let steering: Vec<&str> = HeadingHold::SIGNALS.iter().map(|s| s.0).collect();
     for p in paths
