@@ -206,9 +206,16 @@ fn imitation_group_echoes_the_commands_through_libhebi() {
         })
         .collect();
     bus.send(&cmds).unwrap();
-    // The imitation echoes the last command at the next feedback request.
-    std::thread::sleep(Duration::from_millis(5));
-    wait_fresh(&mut bus, &mut g);
+    // The imitation echoes the last command at the next feedback request; one requested
+    // before the command reached libhebi may still arrive after it (seen under nextest's
+    // parallel processes), so wait for a feedback with the echo, up to 400 ms.
+    for _ in 0..20 {
+        wait_fresh(&mut bus, &mut g);
+        if g.modules[0].feedback.velocity_rad_s == 0.5 {
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
     for (m, c) in g.modules.iter().zip(&cmds) {
         let f = m.feedback;
         assert!((f.position_rad - c.position_rad).abs() < 1e-5, "{f:?}");
