@@ -30,7 +30,7 @@
 #   C=PATH, C_LOOP=TOML a third variant, likewise;
 #   A_LOOP=TOML extra `[loop]` lines for the first variant (and the load daemon).
 #   A key given there replaces RT=1's (e.g. B_LOOP='lock_memory = false').
-#   B_PREFIX, C_PREFIX: a command the variant runs under (e.g. 'taskset -c 1': every
+#   A_PREFIX, B_PREFIX, C_PREFIX: a command the variant runs under (e.g. 'taskset -c 1': every
 #               thread of the daemon on the loop's CPU).
 # BG=N: N busy loops at nice 19 run throughout (cyclictest's rounds and snaked's): the
 # loaded machine. The per-thread minor page faults of the loop thread (snaked-rt) from
@@ -157,6 +157,9 @@ snaked_round() {
     kill -TERM "$started"; wait "$started" || true
 }
 
+read -r -a a_pre <<< "${A_PREFIX:-}"
+read -r -a b_pre <<< "${B_PREFIX:-}"
+read -r -a c_pre <<< "${C_PREFIX:-}"
 for r in $(seq 1 "$rounds"); do
     if [ "${CT_IDLE:-0}" = 1 ]; then
         echo "round $r/$rounds: cyclictest ${secs} s (emulator idle)" >&2
@@ -173,9 +176,6 @@ for r in $(seq 1 "$rounds"); do
         kill -TERM "$load"; wait "$load" || true
         load=""
     fi
-    read -r -a a_pre <<< "${A_PREFIX:-}"
-    read -r -a b_pre <<< "${B_PREFIX:-}"
-    read -r -a c_pre <<< "${C_PREFIX:-}"
     snaked_round a "$a_bin" "$r" "${a_pre[@]}"
     if [ -n "$b_bin" ]; then snaked_round b "$b_bin" "$r" "${b_pre[@]}"; fi
     if [ -n "$c_bin" ]; then snaked_round c "$c_bin" "$r" "${c_pre[@]}"; fi

@@ -55,6 +55,11 @@ fn bucket_upper(i: usize) -> u64 {
     ((SUB + sub + 1) << shift) - 1
 }
 
+/// The 1-based rank of the `q` quantile (0..=1) among `count` samples.
+fn rank_of(q: f64, count: u64) -> u64 {
+    ((q.clamp(0.0, 1.0) * count as f64).ceil() as u64).max(1)
+}
+
 impl Histogram {
     pub fn record(&mut self, v_ns: u64) {
         let b = bucket_of(v_ns);
@@ -75,7 +80,7 @@ impl Histogram {
         if self.count == 0 {
             return 0;
         }
-        let rank = ((q.clamp(0.0, 1.0) * self.count as f64).ceil() as u64).max(1);
+        let rank = rank_of(q, self.count);
         let mut seen = 0u64;
         for (i, &c) in self.counts.iter().enumerate() {
             seen += c as u64;
@@ -155,7 +160,7 @@ impl LatencyHistogram {
         if self.all.count == 0 {
             return 0;
         }
-        let rank = ((q.clamp(0.0, 1.0) * self.all.count as f64).ceil() as u64).max(1);
+        let rank = rank_of(q, self.all.count);
         let mut seen = 0u64;
         for (i, &c) in self.fine.iter().enumerate() {
             seen += c as u64;
@@ -298,8 +303,9 @@ mod tests {
     #[test]
     fn latency_quantiles_are_whole_microseconds_below_200_and_coarse_above() {
         let mut h = LatencyHistogram::default();
-        // 990 samples at 14.3-14.9 µs, 9 at 37.5 µs, one at 263 µs: cyclictest would
-        // give p50 14, p99 37 (the 990th sample is the last at 14), p99.9 263 → bucket.
+        // 990 samples at 14.3-14.9 µs, 9 at 37.5 µs, one at 263 µs: as cyclictest counts
+        // them, p50 and p99 are 14 (the 990th sample is the last at 14), p99.5 is 37,
+        // and the maximum lies beyond the fine range.
         for i in 0..990u64 {
             h.record(14_300 + i % 7 * 100);
         }
